@@ -1,0 +1,9 @@
+//! Analytic solutions used as ground truth.
+//!
+//! This module never calls the chain or the estimators, so a check against it
+//! stays independent of the Monte Carlo code.
+
+pub mod sobolev;
+pub mod quadrature;
+
+pub use sobolev::{Sobolev, SobolevValue};

@@ -1,0 +1,1 @@
+//! Oscillatory Hankel-type quadrature (written in the project: no crate does it).

@@ -1,0 +1,1 @@
+//! Heavy validation of lumest (see README).
