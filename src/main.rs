@@ -1,1 +1,43 @@
-fn main() {}
+//! The `lumest` command line: arguments in, library calls, exit code out.
+
+use clap::{Parser, Subcommand};
+use lumest::commands::{bench, illuminance, sobolev, validate};
+use std::process::ExitCode;
+
+/// Monte Carlo illumination by local estimation, with exact references.
+#[derive(Parser)]
+#[command(name = "lumest", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Illuminance [lx] at CSV points by light-tracing chains and the local estimate.
+    Illuminance(illuminance::IlluminanceArgs),
+    /// Exact Sobolev solution (two Lambertian planes, isotropic point source) as CSV.
+    Sobolev(sobolev::SobolevArgs),
+    /// Monte Carlo against exact solutions: error against run time, table and plot.
+    #[command(subcommand)]
+    Validate(validate::ValidateCase),
+    /// Throughput and figure of merit on the Sobolev scene.
+    Bench(bench::BenchArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let res = match &cli.command {
+        Command::Illuminance(a) => illuminance::illuminance(a),
+        Command::Sobolev(a) => sobolev::sobolev(a),
+        Command::Validate(validate::ValidateCase::Sobolev(a)) => validate::validate_sobolev(a),
+        Command::Bench(a) => bench::bench(a),
+    };
+    match res {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("lumest: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,105 @@
+//! Light-tracing Markov chains: emission -> collisions -> Russian roulette.
+//!
+//! A chain starts at a light picked in proportion to its power, with weight
+//! `Q_1` equal to the flux of the sampled ray [lm] divided by the pick
+//! probability, so that `E[sum_n Q_n delta(x - x_n)]` is the collision density
+//! (the illuminance arriving at surface points, all orders). At each collision
+//! on a front side the chain reports a [`Collision`], then continues by
+//! sampling the material (weight times `f_r cos / pdf`, the albedo for
+//! Lambertian surfaces). Back sides absorb; rays that leave the scene end.
+//!
+//! Termination is unbiased: when the weight falls below `rr_weight * Q_1` the
+//! chain survives with probability `Q / (rr_weight * Q_1)` and, if it does,
+//! its weight is raised to `rr_weight * Q_1`. With `rr_weight = 1` this is the
+//! analog game (absorption with probability `1 - albedo`). There is no bounce
+//! cap unless `max_order` is set, which truncates (biases) on purpose for
+//! order-resolved studies.
+
+use crate::geometry::Ray;
+use crate::sampling::Philox4x32;
+use crate::sampling::warp::Frame;
+use crate::scene::Scene;
+use glam::DVec3;
+
+/// One collision of a chain with a surface's front side.
+#[derive(Clone, Copy, Debug)]
+pub struct Collision {
+    /// Collision point [m].
+    pub p: DVec3,
+    /// Unit front normal at `p`.
+    pub n: DVec3,
+    /// Unit direction towards where the light came from (away from the surface).
+    pub wi: DVec3,
+    /// Flux weight arriving at the collision [lm].
+    pub q: f64,
+    /// Surface index.
+    pub surface: u32,
+    /// Collision number: 1 for the first hit after emission. Light reflected
+    /// here and scored at a point is of reflection order `order`.
+    pub order: u32,
+}
+
+/// Parameters of the random walk.
+#[derive(Clone, Copy, Debug)]
+pub struct ChainParams {
+    /// Roulette threshold and survival weight, relative to the starting weight (0, 1].
+    pub rr_weight: f64,
+    /// Stop after this many collisions (biased truncation, for studies only).
+    pub max_order: Option<u32>,
+}
+
+impl Default for ChainParams {
+    fn default() -> Self {
+        Self { rr_weight: 0.25, max_order: None }
+    }
+}
+
+/// Trace one chain, calling `on_collision` at every front-side collision.
+/// Returns the number of collisions.
+#[inline]
+pub fn trace<F: FnMut(&Collision)>(
+    scene: &Scene,
+    rng: &mut Philox4x32,
+    params: &ChainParams,
+    mut on_collision: F,
+) -> u32 {
+    let light = scene.pick_light(rng.next_f64());
+    let e = light.sample_emission(rng.next_2d());
+    let q0 = scene.total_power();
+    // A point light picked with probability power/total carries total power per chain.
+    let mut q = e.phi / light.power() * q0;
+    let mut ray = Ray { o: e.o, d: e.d };
+    let mut skip = None;
+    let rr = params.rr_weight * q0;
+    let mut order = 0;
+    while q > 0.0 {
+        let Some(hit) = scene.intersect(&ray, skip) else { break };
+        if ray.d.dot(hit.n) >= 0.0 {
+            break; // back side: absorbed
+        }
+        order += 1;
+        let wi = -ray.d;
+        on_collision(&Collision { p: hit.p, n: hit.n, wi, q, surface: hit.surface, order });
+        if params.max_order.is_some_and(|m| order >= m) {
+            break;
+        }
+        let m = &scene.surfaces[hit.surface as usize].material;
+        let frame = Frame::from_normal(hit.n);
+        let wi_local = frame.to_local(wi);
+        let s = m.sample(wi_local, rng.next_2d());
+        if s.pdf <= 0.0 || s.w.z <= 0.0 {
+            break;
+        }
+        q *= m.eval(wi_local, s.w) * s.w.z / s.pdf;
+        if q < rr {
+            let survive = q / rr;
+            if rng.next_f64() >= survive {
+                break;
+            }
+            q = rr;
+        }
+        ray = Ray { o: hit.p, d: frame.to_world(s.w) };
+        skip = Some(hit.surface);
+    }
+    order
+}

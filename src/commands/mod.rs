@@ -1,0 +1,115 @@
+//! The command-line jobs, as library functions (the binary only parses
+//! arguments and maps errors to exit codes).
+
+pub mod bench;
+pub mod illuminance;
+pub mod sobolev;
+pub mod validate;
+
+use crate::chain::ChainParams;
+use crate::run::{RunConfig, Stop};
+use clap::Args;
+
+/// Run controls shared by every Monte Carlo command.
+#[derive(Args, Clone, Debug)]
+pub struct RunArgs {
+    /// Number of chains (rounded up to whole batches). Default 100000 when no
+    /// other stopping rule is given.
+    #[arg(long)]
+    pub chains: Option<u64>,
+    /// Wall-clock limit [s].
+    #[arg(long)]
+    pub time: Option<f64>,
+    /// Stop when the largest relative standard error of E over the points is below this.
+    #[arg(long = "rel-error")]
+    pub rel_error: Option<f64>,
+    /// Seed of the random streams.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Worker threads (0: all cores). Results do not depend on it.
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Resolve reflection orders 1..K and the rest in the output.
+    #[arg(long, default_value_t = 0)]
+    pub orders: u32,
+    /// Truncate chains after this many reflections (biased; for order studies only).
+    #[arg(long = "max-order")]
+    pub max_order: Option<u32>,
+    /// Chains per batch (default: from the number of points; see docs).
+    #[arg(long = "batch-size")]
+    pub batch_size: Option<u64>,
+    /// Russian-roulette weight, relative to the starting weight, in (0, 1].
+    #[arg(long = "rr-weight", default_value_t = ChainParams::default().rr_weight)]
+    pub rr_weight: f64,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+impl RunArgs {
+    /// Validate and turn into a run configuration.
+    pub fn config(&self) -> anyhow::Result<RunConfig> {
+        let mut stop = Stop { chains: self.chains, time: self.time, rel_error: self.rel_error };
+        if let Some(t) = stop.time {
+            anyhow::ensure!(t.is_finite() && t > 0.0, "--time must be a positive number of seconds, got {t}");
+        }
+        if let Some(r) = stop.rel_error {
+            anyhow::ensure!(r.is_finite() && r > 0.0, "--rel-error must be positive, got {r}");
+        }
+        if let Some(c) = stop.chains {
+            anyhow::ensure!(c > 0, "--chains must be positive");
+        }
+        if stop == Stop::default() {
+            stop.chains = Some(100_000);
+        }
+        anyhow::ensure!(
+            self.rr_weight > 0.0 && self.rr_weight <= 1.0,
+            "--rr-weight must lie in (0, 1], got {}",
+            self.rr_weight
+        );
+        anyhow::ensure!(self.batch_size != Some(0), "--batch-size must be positive");
+        Ok(RunConfig {
+            seed: self.seed,
+            threads: self.threads,
+            stop,
+            orders: self.orders,
+            chain: ChainParams { rr_weight: self.rr_weight, max_order: self.max_order },
+            batch_size: self.batch_size,
+        })
+    }
+}
+
+/// A progress bar on standard error (hidden when it is not a terminal).
+pub(crate) fn progress_bar(cfg: &RunConfig, quiet: bool) -> indicatif::ProgressBar {
+    use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let pb = match (cfg.stop.chains, cfg.stop.time) {
+        (Some(c), _) => ProgressBar::new(c),
+        (None, Some(t)) => ProgressBar::new((t * 1000.0) as u64),
+        (None, None) => ProgressBar::no_length(),
+    };
+    pb.set_draw_target(ProgressDrawTarget::stderr());
+    let tmpl = "{spinner} [{elapsed_precise}] {wide_bar} {msg}";
+    pb.set_style(ProgressStyle::with_template(tmpl).expect("valid template"));
+    pb
+}
+
+/// Update a progress bar from a run's progress.
+pub(crate) fn tick(pb: &indicatif::ProgressBar, cfg: &RunConfig, p: &crate::run::Progress) {
+    if pb.is_hidden() {
+        return;
+    }
+    let pos = match (cfg.stop.chains, cfg.stop.time) {
+        (Some(_), _) => p.chains,
+        (None, Some(_)) => (p.elapsed * 1000.0) as u64,
+        _ => 0,
+    };
+    pb.set_position(pos);
+    pb.set_message(format!(
+        "{} chains, max R {:.2e}",
+        p.chains,
+        p.tallies.max_rel_error(p.direct)
+    ));
+}

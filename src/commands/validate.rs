@@ -1,0 +1,322 @@
+//! `lumest validate`: Monte Carlo against exact solutions, error against run time.
+
+use super::sobolev::SobolevParams;
+use super::{progress_bar, tick};
+use crate::estimator::Receivers;
+use crate::geometry::Plane;
+use crate::io::csvio::to_csv;
+use crate::io::plot::{Series, loglog_svg};
+use crate::io::{format_number, write_atomic};
+use crate::light::Light;
+use crate::material::Material;
+use crate::reference::{Sobolev, SobolevValue};
+use crate::run::{MIN_BATCHES, Progress, RunConfig, RunResult, Stop, run};
+use crate::scene::Scene;
+use crate::tally::{figure_of_merit, relative_error, sidak_bound};
+use anyhow::Context;
+use clap::{Args, Subcommand};
+use glam::DVec3;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Validation cases.
+#[derive(Subcommand, Clone, Debug)]
+pub enum ValidateCase {
+    /// Two infinite Lambertian planes and a point source, against the exact solution.
+    Sobolev(ValidateSobolevArgs),
+}
+
+/// Arguments of `lumest validate sobolev`.
+#[derive(Args, Clone, Debug)]
+pub struct ValidateSobolevArgs {
+    #[command(flatten)]
+    pub params: SobolevParams,
+    /// Number of points, half on each plane.
+    #[arg(long, default_value_t = 100)]
+    pub points: usize,
+    /// Largest horizontal distance of the points [m].
+    #[arg(long = "r-max", default_value_t = 3.0)]
+    pub r_max: f64,
+    /// Wall-clock time of the run [s].
+    #[arg(long, default_value_t = 10.0)]
+    pub time: f64,
+    /// Seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Worker threads (0: all cores).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Folder for the table (CSV) and the plot (SVG).
+    #[arg(long, default_value = "validation_report")]
+    pub report: PathBuf,
+    /// Family-wise false-alarm rate of the z test over all points.
+    #[arg(long, default_value_t = 0.01)]
+    pub alpha: f64,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// The Sobolev problem as a scene with points on both planes and exact values.
+///
+/// Plane 1 is `z = 0` (normal +z), the source is at `z = h1`, plane 2 is
+/// `z = h1 + h2` (normal -z). Points alternate between the planes with `r`
+/// evenly spaced in `[0, r_max]` on each, at azimuths spread by the golden angle.
+pub struct SobolevCase {
+    pub scene: Scene,
+    pub points: Vec<(DVec3, DVec3)>,
+    pub plane: Vec<u8>,
+    pub r: Vec<f64>,
+    pub exact: Vec<SobolevValue>,
+}
+
+/// Build the Sobolev validation case.
+pub fn sobolev_case(s: &Sobolev, n_points: usize, r_max: f64) -> SobolevCase {
+    let h = s.h1 + s.h2;
+    let scene = Scene::from_parts(
+        vec![
+            ("plane 1".into(), Plane::new(DVec3::ZERO, DVec3::Z), Material::Lambertian { rho: s.rho1 }),
+            ("plane 2".into(), Plane::new(DVec3::new(0.0, 0.0, h), -DVec3::Z), Material::Lambertian { rho: s.rho2 }),
+        ],
+        vec![Light::Point { p: DVec3::new(0.0, 0.0, s.h1), i: s.intensity }],
+    );
+    let per_plane = [n_points.div_ceil(2), n_points / 2];
+    let mut points = Vec::with_capacity(n_points);
+    let mut plane = Vec::with_capacity(n_points);
+    let mut r = Vec::with_capacity(n_points);
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    for j in 0..n_points {
+        let k = j / 2;
+        let pl = (j % 2) as u8 + 1;
+        let m = per_plane[(pl - 1) as usize];
+        let rk = if m > 1 { r_max * k as f64 / (m - 1) as f64 } else { 0.0 };
+        let phi = golden * j as f64;
+        let (z, n) = if pl == 1 { (0.0, DVec3::Z) } else { (h, -DVec3::Z) };
+        points.push((DVec3::new(rk * phi.cos(), rk * phi.sin(), z), n));
+        plane.push(pl);
+        r.push(rk);
+    }
+    let exact = plane.par_iter().zip(r.par_iter()).map(|(&pl, &rk)| s.illuminance(pl, rk)).collect();
+    SobolevCase { scene, points, plane, r, exact }
+}
+
+/// Error of a Monte Carlo estimate against exact values at one moment.
+#[derive(Clone, Copy, Debug)]
+pub struct Checkpoint {
+    /// Wall time [s].
+    pub time: f64,
+    /// Chains folded in.
+    pub chains: u64,
+    /// Batches folded in.
+    pub batches: u64,
+    /// RMS over points of |E_mc - E_exact| / E_exact.
+    pub rms_err: f64,
+    /// Largest such relative error.
+    pub max_err: f64,
+    /// RMS over points of the estimated relative standard error R.
+    pub rms_r: f64,
+    /// Largest |E_mc - E_exact| / stderr.
+    pub max_z: f64,
+    /// 1 / (rms_r^2 T) [1/s].
+    pub fom: f64,
+}
+
+/// Compare the current estimate with exact totals [lx].
+pub fn checkpoint(p: &Progress, exact: &[f64]) -> Checkpoint {
+    let n = exact.len() as f64;
+    let (mut se2, mut emax, mut r2, mut zmax) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for (j, &ex) in exact.iter().enumerate() {
+        let w = &p.tallies.indirect[j];
+        let e = p.direct[j] + w.mean();
+        let err = (e - ex).abs() / ex;
+        se2 += err * err;
+        emax = emax.max(err);
+        r2 += relative_error(e, w.std_error()).powi(2);
+        if w.std_error() > 0.0 {
+            zmax = zmax.max((e - ex).abs() / w.std_error());
+        }
+    }
+    let rms_r = (r2 / n).sqrt();
+    Checkpoint {
+        time: p.elapsed,
+        chains: p.chains,
+        batches: p.tallies.batches(),
+        rms_err: (se2 / n).sqrt(),
+        max_err: emax,
+        rms_r,
+        max_z: zmax,
+        fom: figure_of_merit(rms_r, p.elapsed),
+    }
+}
+
+/// Run a case with checkpoints at geometrically spaced times up to `cfg.stop.time`.
+pub fn convergence(
+    scene: &Scene,
+    receivers: &Receivers,
+    exact: &[f64],
+    cfg: &RunConfig,
+    quiet: bool,
+) -> (RunResult, Vec<Checkpoint>) {
+    let t_end = cfg.stop.time.unwrap_or(10.0);
+    let mut marks: Vec<f64> = (0..12).rev().map(|k| t_end / 2f64.powi(k)).filter(|&t| t >= 0.05).collect();
+    marks.reverse(); // pop() yields the earliest
+    let mut rows = Vec::new();
+    let pb = progress_bar(cfg, quiet);
+    let result = run(scene, receivers, cfg, &mut |p| {
+        tick(&pb, cfg, p);
+        if p.tallies.batches() >= MIN_BATCHES && marks.last().is_some_and(|&t| p.elapsed >= t) {
+            while marks.last().is_some_and(|&t| p.elapsed >= t) {
+                marks.pop();
+            }
+            rows.push(checkpoint(p, exact));
+        }
+        true
+    });
+    pb.finish_and_clear();
+    let last = Progress {
+        tallies: &result.tallies,
+        direct: &result.direct,
+        chains: result.chains,
+        scores: result.scores,
+        elapsed: result.wall,
+    };
+    let fin = checkpoint(&last, exact);
+    if rows.last().is_none_or(|r: &Checkpoint| r.chains != fin.chains) {
+        rows.push(fin);
+    }
+    (result, rows)
+}
+
+/// Least-squares slope of log(y) against log(x).
+pub fn loglog_slope(pts: &[(f64, f64)]) -> f64 {
+    let v: Vec<(f64, f64)> = pts.iter().filter(|(x, y)| *x > 0.0 && *y > 0.0).map(|(x, y)| (x.ln(), y.ln())).collect();
+    let n = v.len() as f64;
+    let mx = v.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = v.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = v.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = v.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    sxy / sxx
+}
+
+/// Table of checkpoints as CSV text.
+pub fn checkpoint_csv(rows: &[Checkpoint]) -> Vec<u8> {
+    let headers: Vec<String> = ["time_s", "chains", "batches", "rms_rel_err", "max_rel_err", "rms_rel_stderr", "max_abs_z", "fom"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let cells: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            vec![
+                format_number(r.time),
+                r.chains.to_string(),
+                r.batches.to_string(),
+                format_number(r.rms_err),
+                format_number(r.max_err),
+                format_number(r.rms_r),
+                format_number(r.max_z),
+                format_number(r.fom),
+            ]
+        })
+        .collect();
+    to_csv(&headers, &cells)
+}
+
+fn write_report(dir: &Path, name: &str, rows: &[Checkpoint], title: &str) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let csv_path = dir.join(format!("{name}_convergence.csv"));
+    write_atomic(&csv_path.to_string_lossy(), &checkpoint_csv(rows))?;
+    let err: Vec<(f64, f64)> = rows.iter().map(|r| (r.time, r.rms_err)).collect();
+    let est: Vec<(f64, f64)> = rows.iter().map(|r| (r.time, r.rms_r)).collect();
+    let last = rows.last().expect("at least one checkpoint");
+    let c = last.rms_r * last.time.sqrt();
+    let ideal: Vec<(f64, f64)> = rows.iter().map(|r| (r.time, c / r.time.sqrt())).collect();
+    let svg = loglog_svg(
+        title,
+        "wall time T [s]",
+        "relative error of E",
+        &[
+            Series { name: "RMS |E - E_exact| / E_exact".into(), points: err, dashed: false },
+            Series { name: "RMS estimated std error R".into(), points: est, dashed: false },
+            Series { name: "c / sqrt(T)".into(), points: ideal, dashed: true },
+        ],
+    )
+    .map_err(|e| anyhow::anyhow!("plot: {e}"))?;
+    let svg_path = dir.join(format!("{name}_convergence.svg"));
+    write_atomic(&svg_path.to_string_lossy(), svg.as_bytes())?;
+    eprintln!("lumest: wrote {} and {}", csv_path.display(), svg_path.display());
+    Ok(())
+}
+
+/// Print a checkpoint table.
+pub fn print_table(rows: &[Checkpoint]) {
+    println!(
+        "{:>9} {:>12} {:>7} {:>12} {:>12} {:>12} {:>8} {:>11}",
+        "time_s", "chains", "batches", "rms_rel_err", "max_rel_err", "rms_R", "max|z|", "FOM"
+    );
+    for r in rows {
+        println!(
+            "{:>9.3} {:>12} {:>7} {:>12.3e} {:>12.3e} {:>12.3e} {:>8.2} {:>11.3e}",
+            r.time, r.chains, r.batches, r.rms_err, r.max_err, r.rms_r, r.max_z, r.fom
+        );
+    }
+}
+
+/// Run `lumest validate sobolev`. Fails when the final max |z| exceeds the Sidak bound.
+pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(a.points >= 1, "--points must be at least 1");
+    anyhow::ensure!(a.time > 0.0 && a.time.is_finite(), "--time must be positive");
+    anyhow::ensure!(a.r_max >= 0.0 && a.r_max.is_finite(), "--r-max must be >= 0");
+    let problem = a.params.problem()?;
+    let case = sobolev_case(&problem, a.points, a.r_max);
+    let receivers = Receivers::new(&case.scene, &case.points).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let cfg = RunConfig {
+        seed: a.seed,
+        threads: a.threads,
+        stop: Stop { time: Some(a.time), ..Stop::default() },
+        ..RunConfig::default()
+    };
+    let exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
+    println!(
+        "Sobolev: h1={} h2={} rho1={} rho2={} I={} cd; {} points, r in [0, {}] m, {} s",
+        problem.h1, problem.h2, problem.rho1, problem.rho2, problem.intensity, a.points, a.r_max, a.time
+    );
+    let (result, rows) = convergence(&case.scene, &receivers, &exact, &cfg, a.quiet);
+    print_table(&rows);
+    let slope = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_r)).collect::<Vec<_>>());
+    let slope_err = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_err)).collect::<Vec<_>>());
+    println!("log-log slope vs time: estimated R {slope:.3}, actual error {slope_err:.3} (ideal -0.5)");
+    write_report(&a.report, "sobolev", &rows, "Sobolev problem: relative error of E against run time")?;
+    // Per-point comparison.
+    let headers: Vec<String> =
+        ["plane", "r", "E_exact", "E", "E_stderr", "z"].iter().map(|s| s.to_string()).collect();
+    let cells: Vec<Vec<String>> = (0..a.points)
+        .map(|j| {
+            let w = &result.tallies.indirect[j];
+            let e = result.direct[j] + w.mean();
+            vec![
+                case.plane[j].to_string(),
+                format_number(case.r[j]),
+                format_number(exact[j]),
+                format_number(e),
+                format_number(w.std_error()),
+                format_number((e - exact[j]) / w.std_error()),
+            ]
+        })
+        .collect();
+    write_atomic(&a.report.join("sobolev_points.csv").to_string_lossy(), &to_csv(&headers, &cells))?;
+    let fin = rows.last().expect("final checkpoint");
+    let bound = sidak_bound(a.alpha, a.points, Some(fin.batches));
+    let pass = fin.max_z <= bound;
+    println!(
+        "max |z| = {:.3} against the Sidak bound {:.3} (alpha {}, {} points, {} batches): {}",
+        fin.max_z,
+        bound,
+        a.alpha,
+        a.points,
+        fin.batches,
+        if pass { "PASS" } else { "FAIL" }
+    );
+    anyhow::ensure!(pass, "Monte Carlo disagrees with the exact Sobolev solution");
+    Ok(())
+}

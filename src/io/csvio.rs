@@ -1,0 +1,172 @@
+//! CSV point lists and result tables.
+//!
+//! Input: a header row naming at least `x,y,z,nx,ny,nz` (any order; other
+//! columns such as `id` are carried through). Output: the input columns
+//! followed by result columns. `-` stands for standard input / output.
+//! Output files are written to a temporary file and renamed, so a reader
+//! never sees half a table.
+
+use glam::DVec3;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+/// A bad input file, naming the file, the line and the field.
+#[derive(Debug, thiserror::Error)]
+pub enum InputError {
+    #[error("{file}: {message}")]
+    File { file: String, message: String },
+    #[error("{file}:{line}: field `{field}`: {message}")]
+    Field { file: String, line: u64, field: String, message: String },
+}
+
+/// A point list as read: raw columns (to carry through) and parsed geometry.
+#[derive(Clone, Debug, Default)]
+pub struct PointTable {
+    /// Header names in file order.
+    pub headers: Vec<String>,
+    /// Raw cells of each row, in file order.
+    pub rows: Vec<Vec<String>>,
+    /// Line number of each row in the file (1-based).
+    pub lines: Vec<u64>,
+    /// Position [m] and unit normal of each row (normal normalised here).
+    pub points: Vec<(DVec3, DVec3)>,
+}
+
+fn display_name(path: &str) -> String {
+    if path == "-" { "<stdin>".to_string() } else { path.to_string() }
+}
+
+/// Read a CSV table from a file or `-` (standard input).
+fn read_all(path: &str) -> Result<String, InputError> {
+    let mut s = String::new();
+    let res = if path == "-" {
+        std::io::stdin().read_to_string(&mut s).map(|_| ())
+    } else {
+        std::fs::File::open(path).and_then(|mut f| f.read_to_string(&mut s)).map(|_| ())
+    };
+    res.map_err(|e| InputError::File { file: display_name(path), message: format!("cannot read: {e}") })?;
+    Ok(s)
+}
+
+/// A CSV table with named columns: headers, rows and row line numbers.
+pub(crate) struct RawTable {
+    pub headers: Vec<String>,
+    pub rows: Vec<Vec<String>>,
+    pub lines: Vec<u64>,
+}
+
+pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
+    let file = display_name(path);
+    let text = read_all(path)?;
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(text.as_bytes());
+    let headers: Vec<String> = rdr
+        .headers()
+        .map_err(|e| InputError::File { file: file.clone(), message: format!("bad header: {e}") })?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let mut rows = Vec::new();
+    let mut lines = Vec::new();
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line());
+            InputError::Field { file: file.clone(), line, field: "*".into(), message: e.to_string() }
+        })?;
+        lines.push(rec.position().map_or(0, |p| p.line()));
+        rows.push(rec.iter().map(str::to_string).collect());
+    }
+    Ok(RawTable { headers, rows, lines })
+}
+
+/// Index of each wanted column, or an error naming the missing one.
+pub(crate) fn columns(headers: &[String], wanted: &[&str], file: &str) -> Result<Vec<usize>, InputError> {
+    wanted
+        .iter()
+        .map(|w| {
+            headers.iter().position(|h| h == w).ok_or_else(|| InputError::File {
+                file: display_name(file),
+                message: format!("missing column `{w}` in the header (found: {})", headers.join(",")),
+            })
+        })
+        .collect()
+}
+
+/// Parse a finite number from a cell.
+pub(crate) fn number(cell: &str, file: &str, line: u64, field: &str) -> Result<f64, InputError> {
+    let err = |m: String| InputError::Field { file: display_name(file), line, field: field.to_string(), message: m };
+    let x: f64 = cell.parse().map_err(|_| err(format!("`{cell}` is not a number")))?;
+    if !x.is_finite() {
+        return Err(err(format!("`{cell}` is not finite")));
+    }
+    Ok(x)
+}
+
+/// Read a point list (`x,y,z,nx,ny,nz` plus any other columns).
+pub fn read_points(path: &str) -> Result<PointTable, InputError> {
+    let t = read_table(path)?;
+    let names = ["x", "y", "z", "nx", "ny", "nz"];
+    let cols = columns(&t.headers, &names, path)?;
+    let mut points = Vec::with_capacity(t.rows.len());
+    for (row, &line) in t.rows.iter().zip(&t.lines) {
+        let mut v = [0.0; 6];
+        for (k, (&c, name)) in cols.iter().zip(names).enumerate() {
+            v[k] = number(row.get(c).map_or("", String::as_str), path, line, name)?;
+        }
+        let n = DVec3::new(v[3], v[4], v[5]);
+        let len = n.length();
+        if !(len > 0.0 && len.is_finite()) {
+            return Err(InputError::Field {
+                file: display_name(path),
+                line,
+                field: "nx,ny,nz".into(),
+                message: "the normal has zero length".into(),
+            });
+        }
+        points.push((DVec3::new(v[0], v[1], v[2]), n / len));
+    }
+    if points.is_empty() {
+        return Err(InputError::File { file: display_name(path), message: "no points in the file".into() });
+    }
+    Ok(PointTable { headers: t.headers, rows: t.rows, lines: t.lines, points })
+}
+
+/// Shortest round-trip text of `x`, in scientific notation when very small or large.
+pub fn format_number(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || (1e-4..1e15).contains(&a) { format!("{x}") } else { format!("{x:e}") }
+}
+
+/// Write `contents` to `path` atomically (temporary file in the same folder,
+/// then rename), or to standard output for `-`.
+pub fn write_atomic(path: &str, contents: &[u8]) -> std::io::Result<()> {
+    if path == "-" {
+        let mut out = std::io::stdout().lock();
+        out.write_all(contents)?;
+        return out.flush();
+    }
+    let target = Path::new(path);
+    let dir = target.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = target.file_name().map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let tmp: PathBuf = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(contents)?;
+        f.sync_all()?;
+    }
+    std::fs::rename(&tmp, target).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// Build CSV text from headers and rows of cells.
+pub fn to_csv(headers: &[String], rows: &[Vec<String>]) -> Vec<u8> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(headers).expect("write to memory");
+    for r in rows {
+        w.write_record(r).expect("write to memory");
+    }
+    w.into_inner().expect("flush to memory")
+}

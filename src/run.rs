@@ -1,0 +1,359 @@
+//! Threads, seeds, batches, stopping rules and timing.
+//!
+//! Work is cut into batches of `batch_size` chains. Chain `c` draws from the
+//! Philox stream `(seed, c)` and batch `b` holds chains `b*batch_size ..
+//! (b+1)*batch_size`, so a batch's sums depend only on `(seed, b)`. Worker
+//! threads take batch indices from a shared counter; the calling thread folds
+//! finished batches into the tallies strictly in index order. Hence results
+//! are bit-identical for any thread count whenever the set of batches is the
+//! same: always with `--chains`, and with `--rel-error` (the run keeps exactly
+//! the shortest prefix of batches that meets the target). Only a run stopped
+//! by `--time` depends on the machine's speed.
+//!
+//! Why batches rather than per-chain tallies: a chain scores into every point
+//! at every collision, so per-chain squares would cost as much as the scores
+//! themselves; batch means are independent realisations and give the standard
+//! error with `B - 1` degrees of freedom.
+
+use crate::chain::{self, ChainParams};
+use crate::estimator::Receivers;
+use crate::sampling::Philox4x32;
+use crate::scene::Scene;
+use crate::tally::{Welford, relative_error};
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+/// When to stop. At least one rule must be set; the first one met stops the run.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Stop {
+    /// Number of chains (rounded up to whole batches).
+    pub chains: Option<u64>,
+    /// Wall-clock limit [s].
+    pub time: Option<f64>,
+    /// Target for the largest relative standard error of `E` over the points.
+    pub rel_error: Option<f64>,
+}
+
+/// Fewest batches for a standard error (and for the `--rel-error` rule).
+pub const MIN_BATCHES: u64 = 32;
+
+/// Run configuration.
+#[derive(Clone, Debug)]
+pub struct RunConfig {
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Worker threads (0: all available cores).
+    pub threads: usize,
+    /// Stopping rules.
+    pub stop: Stop,
+    /// Resolve reflection orders `1..=orders` and the rest (0: indirect only).
+    pub orders: u32,
+    /// Random-walk parameters.
+    pub chain: ChainParams,
+    /// Chains per batch; `None` picks it from the number of points and `stop.chains`.
+    pub batch_size: Option<u64>,
+}
+
+impl Default for RunConfig {
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            threads: 0,
+            stop: Stop { chains: Some(100_000), ..Stop::default() },
+            orders: 0,
+            chain: ChainParams::default(),
+            batch_size: None,
+        }
+    }
+}
+
+/// Per-point tallies over batch means of the indirect illuminance [lx].
+#[derive(Clone, Debug)]
+pub struct Tallies {
+    /// Indirect illuminance (all orders >= 1) per point.
+    pub indirect: Vec<Welford>,
+    /// `orders[k][j]`: order `k+1` for `k < K`, and all orders above `K` for `k = K`.
+    pub orders: Vec<Vec<Welford>>,
+}
+
+impl Tallies {
+    fn new(n: usize, orders: u32) -> Self {
+        let buckets = if orders == 0 { 0 } else { orders as usize + 1 };
+        Self { indirect: vec![Welford::new(); n], orders: vec![vec![Welford::new(); n]; buckets] }
+    }
+
+    /// Number of batches folded in.
+    pub fn batches(&self) -> u64 {
+        self.indirect.first().map_or(0, Welford::count)
+    }
+
+    /// Largest relative standard error of the total `E = direct + indirect` over the points.
+    pub fn max_rel_error(&self, direct: &[f64]) -> f64 {
+        self.indirect
+            .iter()
+            .zip(direct)
+            .map(|(w, d)| relative_error(d + w.mean(), w.std_error()))
+            .fold(0.0, f64::max)
+    }
+
+    /// Root mean square of the relative standard error of `E` over the points.
+    pub fn rms_rel_error(&self, direct: &[f64]) -> f64 {
+        let n = self.indirect.len().max(1) as f64;
+        let s: f64 = self
+            .indirect
+            .iter()
+            .zip(direct)
+            .map(|(w, d)| relative_error(d + w.mean(), w.std_error()).powi(2))
+            .sum();
+        (s / n).sqrt()
+    }
+}
+
+/// What stopped a run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopReason {
+    Chains,
+    Time,
+    RelError,
+    /// The scene emits no light: the answer is exactly zero.
+    NoLight,
+}
+
+/// A view of a run in progress, handed to the observer after each batch.
+pub struct Progress<'a> {
+    /// Tallies so far.
+    pub tallies: &'a Tallies,
+    /// Exact direct illuminance per point [lx].
+    pub direct: &'a [f64],
+    /// Chains folded in.
+    pub chains: u64,
+    /// Point scores evaluated in folded batches.
+    pub scores: u64,
+    /// Wall time since the start [s].
+    pub elapsed: f64,
+}
+
+/// The outcome of a run.
+#[derive(Clone, Debug)]
+pub struct RunResult {
+    /// Exact direct illuminance per point [lx].
+    pub direct: Vec<f64>,
+    /// Indirect tallies per point.
+    pub tallies: Tallies,
+    /// Chains traced in the kept batches.
+    pub chains: u64,
+    /// Chains per batch.
+    pub batch_size: u64,
+    /// Collisions in the kept batches.
+    pub collisions: u64,
+    /// Point scores evaluated in the kept batches.
+    pub scores: u64,
+    /// Wall time [s].
+    pub wall: f64,
+    /// Threads used.
+    pub threads: usize,
+    /// What stopped the run.
+    pub reason: StopReason,
+}
+
+/// Chains per batch when not given: about a million point scores per batch,
+/// a power of two between 16 and 65536, and at least `MIN_BATCHES` batches for
+/// a `--chains` run. Depends only on the inputs, never on the machine.
+pub fn default_batch_size(n_points: usize, chains: Option<u64>) -> u64 {
+    let target = (1u64 << 20) / (n_points as u64 + 16);
+    let mut bs = target.clamp(16, 1 << 16).next_power_of_two();
+    if let Some(n) = chains {
+        bs = bs.min(n.div_ceil(MIN_BATCHES)).max(1);
+    }
+    bs
+}
+
+struct Batch {
+    index: u64,
+    /// `sums[k * n + j]`: sum over the batch's chains of bucket `k`'s score at point `j`.
+    sums: Vec<f64>,
+    collisions: u64,
+    scores: u64,
+}
+
+/// Run the chains and tally. `observe` is called after every folded batch and
+/// may return `false` to stop early (the batches folded so far are kept).
+pub fn run(
+    scene: &Scene,
+    receivers: &Receivers,
+    cfg: &RunConfig,
+    observe: &mut dyn FnMut(&Progress) -> bool,
+) -> RunResult {
+    let start = Instant::now();
+    let n = receivers.len();
+    let buckets = if cfg.orders == 0 { 1 } else { cfg.orders as usize + 1 };
+    let stop = cfg.stop;
+    let bs = cfg.batch_size.unwrap_or_else(|| default_batch_size(n, stop.chains)).max(1);
+    let max_batches = stop.chains.map_or(u64::MAX, |c| c.div_ceil(bs).max(1));
+    let threads = if cfg.threads == 0 { std::thread::available_parallelism().map_or(1, |p| p.get()) } else { cfg.threads };
+    let mut tallies = Tallies::new(n, cfg.orders);
+    let direct = receivers.direct().to_vec();
+    let mut result = RunResult {
+        direct: Vec::new(),
+        tallies: Tallies::new(0, 0),
+        chains: 0,
+        batch_size: bs,
+        collisions: 0,
+        scores: 0,
+        wall: 0.0,
+        threads,
+        reason: StopReason::Chains,
+    };
+    if scene.total_power() <= 0.0 {
+        // Fill zero batches so the statistics read "exactly zero".
+        for _ in 0..MIN_BATCHES {
+            for w in tallies.indirect.iter_mut().chain(tallies.orders.iter_mut().flatten()) {
+                w.push(0.0);
+            }
+        }
+        result.reason = StopReason::NoLight;
+        result.direct = direct;
+        result.tallies = tallies;
+        result.wall = start.elapsed().as_secs_f64();
+        return result;
+    }
+
+    let next = AtomicU64::new(0);
+    let halt = AtomicBool::new(false);
+    let (tx, rx) = mpsc::channel::<Batch>();
+    let mut keep_until = u64::MAX; // batches with index >= this are discarded
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            let tx = tx.clone();
+            let (next, halt) = (&next, &halt);
+            s.spawn(move || {
+                let mut acc = vec![0.0; buckets * receivers.accumulator_len()];
+                loop {
+                    if halt.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let b = next.fetch_add(1, Ordering::Relaxed);
+                    if b >= max_batches {
+                        break;
+                    }
+                    let batch = run_batch(scene, receivers, cfg, b, bs, buckets, &mut acc);
+                    if tx.send(batch).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+
+        let mut pending: BTreeMap<u64, Batch> = BTreeMap::new();
+        let mut folded = 0u64;
+        let mut batch_means = vec![0.0; buckets * n];
+        loop {
+            match rx.recv_timeout(Duration::from_millis(50)) {
+                Ok(b) => {
+                    pending.insert(b.index, b);
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+                Err(mpsc::RecvTimeoutError::Disconnected) => break,
+            }
+            if stop.time.is_some_and(|t| start.elapsed().as_secs_f64() >= t) && !halt.load(Ordering::Relaxed) {
+                halt.store(true, Ordering::Relaxed);
+                result.reason = StopReason::Time;
+            }
+            while let Some(b) = pending.remove(&folded) {
+                if b.index >= keep_until {
+                    folded += 1;
+                    continue;
+                }
+                fold(&mut tallies, &b, bs, buckets, n, receivers, &mut batch_means);
+                result.chains += bs;
+                result.collisions += b.collisions;
+                result.scores += b.scores;
+                folded += 1;
+                let progress = Progress {
+                    tallies: &tallies,
+                    direct: &direct,
+                    chains: result.chains,
+                    scores: result.scores,
+                    elapsed: start.elapsed().as_secs_f64(),
+                };
+                let mut done = !observe(&progress);
+                if let Some(target) = stop.rel_error
+                    && keep_until == u64::MAX
+                    && folded >= MIN_BATCHES
+                    && tallies.max_rel_error(&direct) <= target
+                {
+                    result.reason = StopReason::RelError;
+                    done = true;
+                }
+                if done && keep_until == u64::MAX {
+                    keep_until = folded;
+                    halt.store(true, Ordering::Relaxed);
+                }
+            }
+        }
+    });
+    if stop.chains.is_some() && result.reason == StopReason::Chains {
+        result.reason = StopReason::Chains;
+    }
+    result.direct = direct;
+    result.tallies = tallies;
+    result.wall = start.elapsed().as_secs_f64();
+    result
+}
+
+fn run_batch(
+    scene: &Scene,
+    receivers: &Receivers,
+    cfg: &RunConfig,
+    b: u64,
+    bs: u64,
+    buckets: usize,
+    acc: &mut [f64],
+) -> Batch {
+    acc.fill(0.0);
+    let len = receivers.accumulator_len();
+    let k_max = cfg.orders;
+    let mut collisions = 0u64;
+    let mut scores = 0u64;
+    for c in b * bs..(b + 1) * bs {
+        let mut rng = Philox4x32::new(cfg.seed, c);
+        collisions += u64::from(chain::trace(scene, &mut rng, &cfg.chain, |col| {
+            let k = if k_max == 0 { 0 } else { (col.order.min(k_max + 1) - 1) as usize };
+            scores += receivers.score(scene, col, &mut acc[k * len..(k + 1) * len]) as u64;
+        }));
+    }
+    let n = receivers.len();
+    let mut sums = vec![0.0; buckets * n];
+    for k in 0..buckets {
+        receivers.reduce(&acc[k * len..(k + 1) * len], &mut sums[k * n..(k + 1) * n]);
+    }
+    Batch { index: b, sums, collisions, scores }
+}
+
+fn fold(
+    tallies: &mut Tallies,
+    b: &Batch,
+    bs: u64,
+    buckets: usize,
+    n: usize,
+    receivers: &Receivers,
+    means: &mut [f64],
+) {
+    let _ = receivers;
+    let inv = 1.0 / bs as f64;
+    for (m, s) in means.iter_mut().zip(&b.sums) {
+        *m = s * inv;
+    }
+    for j in 0..n {
+        let total: f64 = (0..buckets).map(|k| means[k * n + j]).sum();
+        tallies.indirect[j].push(total);
+    }
+    for (k, bucket) in tallies.orders.iter_mut().enumerate() {
+        for (j, w) in bucket.iter_mut().enumerate() {
+            w.push(means[k * n + j]);
+        }
+    }
+}

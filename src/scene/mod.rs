@@ -1,0 +1,66 @@
+//! Scenes: description (as written) -> validated and compiled scene.
+//!
+//! Two strict stages: [`desc`] is the file as written (unknown keys rejected),
+//! [`load`] validates every value with its line and compiles the scene. This is
+//! the only place where user units would be converted and where it is decided
+//! what the scene needs (for example, a planes-only scene never builds a BVH).
+
+pub mod compile;
+pub mod desc;
+
+pub use compile::{Scene, SceneSummary};
+
+use std::path::{Path, PathBuf};
+
+/// An error in a scene file, with the file, line, column and field.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("{file}: cannot read scene file: {source}")]
+    Io {
+        file: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The TOML is malformed, has an unknown key, a missing or mistyped field.
+    #[error("{file}:{line}:{column}: {message}")]
+    Syntax {
+        file: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    /// A value is out of its valid range.
+    #[error("{file}:{line}:{column}: field `{field}`: {message}")]
+    Invalid {
+        file: PathBuf,
+        line: usize,
+        column: usize,
+        field: String,
+        message: String,
+    },
+}
+
+/// Read, validate and compile a scene file.
+pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    let src = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        file: path.to_path_buf(),
+        source,
+    })?;
+    parse(&src, path)
+}
+
+/// Validate and compile a scene from TOML text; `file` is used in messages.
+pub fn parse(src: &str, file: &Path) -> Result<Scene, SceneError> {
+    let ctx = compile::SourceCtx { src, file };
+    let desc: desc::SceneDesc = toml::from_str(src).map_err(|e| {
+        let (line, column) = ctx.line_col(e.span().map_or(0, |s| s.start));
+        SceneError::Syntax {
+            file: file.to_path_buf(),
+            line,
+            column,
+            message: e.message().trim().to_string(),
+        }
+    })?;
+    compile::compile(&desc, &ctx)
+}
