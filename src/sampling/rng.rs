@@ -20,6 +20,9 @@ const PHILOX_W0: u32 = 0x9E37_79B9;
 /// Weyl key increment for key word 1 (sqrt(3) - 1, 32 bits).
 const PHILOX_W1: u32 = 0xBB67_AE85;
 
+/// Words buffered per refill: one 4-word block.
+const BUF_WORDS: usize = 4;
+
 /// 2^-53: turns the top 53 bits of a `u64` into a float in [0, 1).
 const INV_2_POW_53: f64 = 1.0 / (1u64 << 53) as f64;
 
@@ -79,8 +82,8 @@ pub struct Philox4x32 {
     /// Index of the next block to generate (counter words 0, 1).
     block: u64,
     /// Output words of the current block.
-    buf: [u32; 4],
-    /// Next unused word in `buf`; 4 means the buffer is exhausted.
+    buf: [u32; BUF_WORDS],
+    /// Next unused word in `buf`; `BUF_WORDS` means the buffer is exhausted.
     idx: usize,
 }
 
@@ -95,8 +98,8 @@ impl Philox4x32 {
             key: [seed as u32, (seed >> 32) as u32],
             stream: [stream as u32, (stream >> 32) as u32],
             block: 0,
-            buf: [0; 4],
-            idx: 4,
+            buf: [0; BUF_WORDS],
+            idx: BUF_WORDS,
         }
     }
 
@@ -117,7 +120,7 @@ impl Philox4x32 {
     /// Next uniformly distributed 32-bit word.
     #[inline]
     pub fn next_u32(&mut self) -> u32 {
-        if self.idx >= 4 {
+        if self.idx >= BUF_WORDS {
             self.refill();
         }
         let x = self.buf[self.idx];
@@ -129,8 +132,8 @@ impl Philox4x32 {
     /// `hi` are the next two 32-bit words (in that order).
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
-        if self.idx <= 2 {
-            // Fast path: both words in the current block.
+        if self.idx + 2 <= BUF_WORDS {
+            // Fast path: both words in the buffer.
             let lo = u64::from(self.buf[self.idx]);
             let hi = u64::from(self.buf[self.idx + 1]);
             self.idx += 2;
@@ -242,7 +245,38 @@ mod tests {
         g.block = u64::MAX;
         let got: Vec<u32> = (0..4).map(|_| g.next_u32()).collect();
         assert_eq!(got, KAT[1].2);
+        // The draw counter wraps to 0.
         assert_eq!(g.block, 0);
+    }
+
+    #[test]
+    fn stream_is_the_sequence_of_single_blocks() {
+        // Word 4 i + j of stream (seed, s) is word j of
+        // philox4x32_10([i_lo, i_hi, s_lo, s_hi], (seed_lo, seed_hi)).
+        let (seed, s) = (0x0123_4567_89ab_cdef_u64, 0xfedc_ba98_7654_3210_u64);
+        let mut g = Philox4x32::new(seed, s);
+        let key = [seed as u32, (seed >> 32) as u32];
+        for i in 0..11u64 {
+            let want = philox4x32_10(
+                [i as u32, (i >> 32) as u32, s as u32, (s >> 32) as u32],
+                key,
+            );
+            for w in want {
+                assert_eq!(g.next_u32(), w, "block {i}");
+            }
+        }
+        // Same across the 32-bit carry of the draw counter.
+        let mut g = Philox4x32::new(seed, s);
+        g.block = u64::from(u32::MAX);
+        for i in [u64::from(u32::MAX), 1 << 32] {
+            let want = philox4x32_10(
+                [i as u32, (i >> 32) as u32, s as u32, (s >> 32) as u32],
+                key,
+            );
+            for w in want {
+                assert_eq!(g.next_u32(), w, "block {i}");
+            }
+        }
     }
 
     #[test]
