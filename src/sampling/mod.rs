@@ -7,3 +7,4 @@ pub mod rng;
 pub mod warp;
 
 pub use rng::Philox4x32;
+pub use warp::{DirectionSample, Frame};

@@ -1,5 +1,17 @@
 //! Warps from the unit square to directions, each with pdf and inverse.
+//!
+//! Sampler families in the style of pbrt-v4 (Pharr, Jakob, Humphreys,
+//! *Physically Based Rendering*, 4th ed., Sec. A.5): every sampler takes its
+//! uniforms explicitly as `u: [f64; 2]` in [0, 1)^2, returns a
+//! [`DirectionSample`] carrying its density, and comes with a standalone pdf
+//! function and an inverse `invert_*(w) -> u`. All densities are with respect
+//! to solid angle, in 1/sr.
+use core::f64::consts::{FRAC_1_PI, TAU};
 use glam::DVec3;
+
+/// Largest `f64` strictly below 1 (1 - 2^-53); inverses clamp to it so that
+/// their results stay in [0, 1).
+const ONE_MINUS_EPSILON: f64 = 1.0 - f64::EPSILON / 2.0;
 
 /// A sampled direction with its pdf [1/sr] (solid-angle measure).
 #[derive(Clone, Copy, Debug)]
@@ -10,35 +22,256 @@ pub struct DirectionSample {
     pub pdf: f64,
 }
 
-/// Orthonormal frame around a unit normal `n` (Duff et al. 2017).
+/// Right-handed orthonormal frame `(s, t, n)` around a unit normal `n`,
+/// with `s x t = n`.
+///
+/// Built branch-free by Duff, Burgess, Christensen, Hery, Kensler, Liani,
+/// Villemin, "Building an Orthonormal Basis, Revisited", JCGT 6(1), 2017
+/// (Listing 3), which fixes the singularity of Frisvad (2012) at
+/// `n = (0, 0, -1)` by using `sign(n_z)`.
 #[derive(Clone, Copy, Debug)]
 pub struct Frame {
+    /// First tangent (local x axis).
     pub s: DVec3,
+    /// Second tangent (local y axis), `t = n x s`.
     pub t: DVec3,
+    /// Normal (local z axis).
     pub n: DVec3,
 }
 
 impl Frame {
+    /// Frame with local z axis `n` (must be unit length).
+    ///
+    /// With `σ = sign(n_z)` (`±1`, taking the sign bit so `-0.0 -> -1`),
+    /// `a = -1 / (σ + n_z)`, `b = n_x n_y a`:
+    ///
+    /// `s = (1 + σ n_x² a, σ b, -σ n_x)`, `t = (b, σ + n_y² a, -n_y)`.
+    ///
+    /// Orthonormal to rounding error (~1e-16) for every unit `n`,
+    /// including `n = (0, 0, -1)` (Duff et al. 2017).
+    #[inline]
     pub fn from_normal(n: DVec3) -> Self {
-        let _ = n;
-        todo!()
+        let sign = 1.0_f64.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let s = DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let t = DVec3::new(b, sign + n.y * n.y * a, -n.y);
+        Self { s, t, n }
     }
+
+    /// Local coordinates `(x, y, z)` -> world vector `x s + y t + z n`.
+    #[inline]
     pub fn to_world(&self, v: DVec3) -> DVec3 {
         self.s * v.x + self.t * v.y + self.n * v.z
     }
+
+    /// World vector -> local coordinates `(v·s, v·t, v·n)`.
+    #[inline]
     pub fn to_local(&self, v: DVec3) -> DVec3 {
         DVec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }
 }
 
-/// Uniform direction on the unit sphere; pdf 1/(4 pi).
-pub fn sample_uniform_sphere(u: [f64; 2]) -> DirectionSample {
-    let _ = u;
-    todo!()
+/// `u in [0,1)` -> `2 pi u`, and back with `atan2`, wrapped into [0, 1).
+#[inline]
+fn phi_to_u(y: f64, x: f64) -> f64 {
+    let mut u = y.atan2(x) * (0.5 * FRAC_1_PI);
+    if u < 0.0 {
+        u += 1.0;
+    }
+    u.min(ONE_MINUS_EPSILON)
 }
 
-/// Cosine-weighted direction on the hemisphere z > 0 (local frame); pdf cos/pi.
+/// Uniform direction on the unit sphere S²; pdf `1/(4 pi)` [1/sr].
+///
+/// Archimedes' map: `z = 1 - 2 u0`, `φ = 2 π u1`,
+/// `w = (r cos φ, r sin φ, z)` with `r = sqrt(1 - z²) = 2 sqrt(u0 (1 - u0))`
+/// (the latter form avoids cancellation near the poles). Area-preserving up
+/// to the factor 4π, so the density is constant (pbrt-v4 `SampleUniformSphere`).
+#[inline]
+pub fn sample_uniform_sphere(u: [f64; 2]) -> DirectionSample {
+    let z = 1.0 - 2.0 * u[0];
+    let r = 2.0 * (u[0] * (1.0 - u[0])).max(0.0).sqrt();
+    let (sin_phi, cos_phi) = (TAU * u[1]).sin_cos();
+    DirectionSample {
+        w: DVec3::new(r * cos_phi, r * sin_phi, z),
+        pdf: uniform_sphere_pdf(),
+    }
+}
+
+/// Density of [`sample_uniform_sphere`]: `1/(4 pi)` [1/sr].
+#[inline]
+pub fn uniform_sphere_pdf() -> f64 {
+    0.25 * FRAC_1_PI
+}
+
+/// Inverse of [`sample_uniform_sphere`]: `u0 = (1 - z)/2`,
+/// `u1 = atan2(y, x) / (2 π)` wrapped into [0, 1).
+///
+/// `w` must be unit length. At the poles (`x = y = 0`) `φ` is undefined and
+/// `u1 = 0` is returned. Results are clamped to [0, 1).
+#[inline]
+pub fn invert_uniform_sphere(w: DVec3) -> [f64; 2] {
+    let u0 = (0.5 * (1.0 - w.z)).clamp(0.0, ONE_MINUS_EPSILON);
+    [u0, phi_to_u(w.y, w.x)]
+}
+
+/// Cosine-weighted direction on the hemisphere z > 0 of the local frame
+/// (z up; map to world with [`Frame::to_world`]); pdf `cos θ / π` [1/sr].
+///
+/// Malley's method with the direct polar map of the unit disk:
+/// `r = sqrt(u0)`, `φ = 2 π u1`, `w = (r cos φ, r sin φ, sqrt(1 - u0))`.
+/// The disk point is uniform (density 1/π per unit area); projecting it up
+/// onto the hemisphere multiplies the density by `cos θ` (Pharr et al.,
+/// pbrt-v4 Sec. A.5.3, which uses the concentric map instead; the polar map
+/// is chosen here because its inverse is elementary and exact).
+#[inline]
 pub fn sample_cosine_hemisphere(u: [f64; 2]) -> DirectionSample {
-    let _ = u;
-    todo!()
+    let r = u[0].sqrt();
+    let (sin_phi, cos_phi) = (TAU * u[1]).sin_cos();
+    let z = (1.0 - u[0]).max(0.0).sqrt();
+    DirectionSample {
+        w: DVec3::new(r * cos_phi, r * sin_phi, z),
+        pdf: cosine_hemisphere_pdf(z),
+    }
+}
+
+/// Density of [`sample_cosine_hemisphere`]: `max(cos θ, 0) / π` [1/sr],
+/// where `cos_theta` is the local z coordinate of the direction.
+/// Zero for directions below the hemisphere, which are never sampled.
+#[inline]
+pub fn cosine_hemisphere_pdf(cos_theta: f64) -> f64 {
+    cos_theta.max(0.0) * FRAC_1_PI
+}
+
+/// Inverse of [`sample_cosine_hemisphere`] (local frame, z up):
+/// `u0 = r² = (x² + y²) / |w|²`, `u1 = atan2(y, x) / (2 π)` in [0, 1).
+///
+/// Dividing by `|w|²` makes the result insensitive to small
+/// normalisation errors in `w`. A direction with `z < 0` is inverted as its
+/// mirror image `(x, y, -z)`. At the pole `u1 = 0`. Results are clamped to
+/// [0, 1).
+#[inline]
+pub fn invert_cosine_hemisphere(w: DVec3) -> [f64; 2] {
+    let rho2 = w.x * w.x + w.y * w.y;
+    let u0 = (rho2 / (rho2 + w.z * w.z)).clamp(0.0, ONE_MINUS_EPSILON);
+    [u0, phi_to_u(w.y, w.x)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Philox4x32;
+    use core::f64::consts::PI;
+
+    /// Cell-centred grid of `n x n` points of the open unit square, plus
+    /// points close to its edges.
+    fn grid(n: usize) -> Vec<[f64; 2]> {
+        let mut v: Vec<f64> = (0..n).map(|i| (i as f64 + 0.5) / n as f64).collect();
+        v.extend([1e-9, 1e-6, 0.25, 0.5, 0.75, 1.0 - 1e-6, 1.0 - 1e-9]);
+        let mut g = Vec::new();
+        for &a in &v {
+            for &b in &v {
+                g.push([a, b]);
+            }
+        }
+        g
+    }
+
+    #[test]
+    fn uniform_sphere_roundtrip_and_record() {
+        for u in grid(64) {
+            let ds = sample_uniform_sphere(u);
+            assert!((ds.w.length() - 1.0).abs() < 1e-14, "{u:?}");
+            assert_eq!(ds.pdf, uniform_sphere_pdf());
+            let v = invert_uniform_sphere(ds.w);
+            assert!(
+                (v[0] - u[0]).abs() < 1e-12 && (v[1] - u[1]).abs() < 1e-12,
+                "{u:?} -> {v:?}"
+            );
+        }
+        assert!((uniform_sphere_pdf() * 4.0 * PI - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn cosine_hemisphere_roundtrip_and_record() {
+        for u in grid(64) {
+            let ds = sample_cosine_hemisphere(u);
+            assert!((ds.w.length() - 1.0).abs() < 1e-14, "{u:?}");
+            assert!(ds.w.z > 0.0);
+            assert!((ds.pdf - ds.w.z / PI).abs() < 1e-15);
+            let v = invert_cosine_hemisphere(ds.w);
+            assert!(
+                (v[0] - u[0]).abs() < 1e-12 && (v[1] - u[1]).abs() < 1e-12,
+                "{u:?} -> {v:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn corners_give_valid_directions_and_inverses_stay_in_range() {
+        for u in [
+            [0.0, 0.0],
+            [0.0, 0.999],
+            [ONE_MINUS_EPSILON, ONE_MINUS_EPSILON],
+        ] {
+            for ds in [sample_uniform_sphere(u), sample_cosine_hemisphere(u)] {
+                assert!(ds.w.is_finite() && (ds.w.length() - 1.0).abs() < 1e-14);
+                assert!(ds.pdf.is_finite() && ds.pdf >= 0.0);
+            }
+        }
+        let dirs = [
+            DVec3::Z,
+            -DVec3::Z,
+            DVec3::X,
+            DVec3::new(1.0, -1e-300, 0.0),
+            DVec3::new(1.0, -0.0, 0.0),
+        ];
+        for w in dirs {
+            for v in [invert_uniform_sphere(w), invert_cosine_hemisphere(w)] {
+                assert!(v.iter().all(|x| (0.0..1.0).contains(x)), "{w:?} -> {v:?}");
+            }
+        }
+        assert_eq!(cosine_hemisphere_pdf(-0.5), 0.0);
+    }
+
+    fn check_frame(n: DVec3) {
+        let f = Frame::from_normal(n);
+        let tol = 1e-14;
+        assert!((f.s.length() - 1.0).abs() < tol, "{n:?}");
+        assert!((f.t.length() - 1.0).abs() < tol, "{n:?}");
+        assert!(f.s.dot(f.t).abs() < tol, "{n:?}");
+        assert!(f.s.dot(f.n).abs() < tol, "{n:?}");
+        assert!(f.t.dot(f.n).abs() < tol, "{n:?}");
+        // Right-handed: s x t = n.
+        assert!((f.s.cross(f.t) - f.n).length() < tol, "{n:?}");
+        // Round trip through the frame.
+        let v = DVec3::new(0.3, -0.7, 0.2);
+        assert!((f.to_local(f.to_world(v)) - v).length() < tol);
+        assert!((f.to_world(DVec3::Z) - n).length() < tol);
+    }
+
+    #[test]
+    fn frame_orthonormal_right_handed() {
+        for n in [
+            DVec3::Z,
+            -DVec3::Z,
+            DVec3::new(1e-9, -2e-9, -1.0).normalize(),
+            DVec3::new(-1e-5, 1e-5, -1.0).normalize(),
+            DVec3::new(1e-3, 0.0, -1.0).normalize(),
+            DVec3::new(0.0, 1e-8, 1.0).normalize(),
+            DVec3::X,
+            -DVec3::Y,
+            DVec3::new(1.0, 1.0, 1e-300).normalize(),
+            DVec3::new(1.0, 1.0, -1e-300).normalize(),
+        ] {
+            check_frame(n);
+        }
+        // Equator normal with a negative-zero z: copysign picks sign = -1.
+        check_frame(DVec3::new(1.0, 0.0, -0.0));
+        let mut rng = Philox4x32::new(0xF4A3E, 0);
+        for _ in 0..10_000 {
+            check_frame(sample_uniform_sphere(rng.next_2d()).w);
+        }
+    }
 }
