@@ -37,7 +37,7 @@ fn round(c: [u32; 4], k: [u32; 2]) -> [u32; 4] {
     [hi1 ^ c[1] ^ k[0], lo1, hi0 ^ c[3] ^ k[1], lo0]
 }
 
-/// The Philox4x32-10 bijection: 10 rounds of [`round`] applied to the
+/// The Philox4x32-10 bijection: 10 Philox rounds applied to the
 /// 128-bit counter `ctr` under the 64-bit key `key`, the key being bumped
 /// by the Weyl constants (0x9E3779B9, 0xBB67AE85) between rounds.
 ///
