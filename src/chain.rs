@@ -55,16 +55,19 @@ impl Default for ChainParams {
 }
 
 /// Trace one chain, calling `on_collision` at every front-side collision.
+/// `u_emit` are the uniforms of the emitted direction (from `rng`, or from a
+/// stratified net over the batch); everything else draws from `rng`.
 /// Returns the number of collisions.
 #[inline]
 pub fn trace<F: FnMut(&Collision)>(
     scene: &Scene,
     rng: &mut Philox4x32,
     params: &ChainParams,
+    u_emit: [f64; 2],
     mut on_collision: F,
 ) -> u32 {
     let light = scene.pick_light(rng.next_f64());
-    let e = light.sample_emission(rng.next_2d());
+    let e = light.sample_emission(u_emit);
     let q0 = scene.total_power();
     // A point light picked with probability power/total carries total power per chain.
     let mut q = e.phi / light.power() * q0;

@@ -18,6 +18,7 @@
 use crate::chain::{self, ChainParams};
 use crate::estimator::Receivers;
 use crate::sampling::Philox4x32;
+use crate::sampling::qmc::{DigitalShift, shifted_sobol_2d};
 use crate::scene::Scene;
 use crate::tally::{Welford, relative_error};
 use std::collections::BTreeMap;
@@ -40,6 +41,13 @@ pub struct Stop {
 pub const MIN_BATCHES: u64 = 32;
 
 /// Run configuration.
+///
+/// With `stratify`, the emitted directions of a batch's chains form a
+/// randomly shifted Sobol' (0,2)-net (see [`crate::sampling::qmc`]): each
+/// batch mean stays unbiased and batches stay independent, while the first
+/// collisions cover the surfaces evenly. Chain `c` then depends on `(seed, c)`
+/// and on its batch's shift, i.e. on `(seed, c, batch_size)`; still never on
+/// the thread count.
 #[derive(Clone, Debug)]
 pub struct RunConfig {
     /// Seed of every random stream.
@@ -54,6 +62,8 @@ pub struct RunConfig {
     pub chain: ChainParams,
     /// Chains per batch; `None` picks it from the number of points and `stop.chains`.
     pub batch_size: Option<u64>,
+    /// Stratify emitted directions over each batch (randomised Sobol' net).
+    pub stratify: bool,
 }
 
 impl Default for RunConfig {
@@ -65,6 +75,7 @@ impl Default for RunConfig {
             orders: 0,
             chain: ChainParams::default(),
             batch_size: None,
+            stratify: true,
         }
     }
 }
@@ -318,9 +329,17 @@ fn run_batch(
     let k_max = cfg.orders;
     let mut collisions = 0u64;
     let mut scores = 0u64;
+    // The net's shift comes from a stream no chain uses (chain indices < 2^63).
+    let mut srng = Philox4x32::new(cfg.seed, (1 << 63) | b);
+    let shift = DigitalShift([srng.next_u32(), srng.next_u32()]);
     for c in b * bs..(b + 1) * bs {
         let mut rng = Philox4x32::new(cfg.seed, c);
-        collisions += u64::from(chain::trace(scene, &mut rng, &cfg.chain, |col| {
+        let u_emit = if cfg.stratify {
+            shifted_sobol_2d((c - b * bs) as u32, shift, rng.next_2d())
+        } else {
+            rng.next_2d()
+        };
+        collisions += u64::from(chain::trace(scene, &mut rng, &cfg.chain, u_emit, |col| {
             let k = if k_max == 0 { 0 } else { (col.order.min(k_max + 1) - 1) as usize };
             scores += receivers.score(scene, col, &mut acc[k * len..(k + 1) * len]) as u64;
         }));

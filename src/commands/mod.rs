@@ -41,6 +41,9 @@ pub struct RunArgs {
     /// Russian-roulette weight, relative to the starting weight, in (0, 1].
     #[arg(long = "rr-weight", default_value_t = ChainParams::default().rr_weight)]
     pub rr_weight: f64,
+    /// Draw emitted directions independently instead of stratifying them over each batch.
+    #[arg(long = "no-stratify")]
+    pub no_stratify: bool,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -75,6 +78,7 @@ impl RunArgs {
             orders: self.orders,
             chain: ChainParams { rr_weight: self.rr_weight, max_order: self.max_order },
             batch_size: self.batch_size,
+            stratify: !self.no_stratify,
         })
     }
 }

@@ -154,20 +154,10 @@ impl Receivers {
         let acc = &mut acc[list.offset..list.offset + len];
         let (x, n) = (c.p, c.n);
         let xm = if list.blockers != 0 { scene.side_mask(x) } else { SideMask::default() };
-        let check = (xm.front | xm.back) & list.blockers != 0;
-        let (px, py, pz) = (&list.px[..len], &list.py[..len], &list.pz[..len]);
-        let (nx, ny, nz) = (&list.nx[..len], &list.ny[..len], &list.nz[..len]);
-        let masks = &list.masks[..len];
-        for k in 0..len {
-            let dx = px[k] - x.x;
-            let dy = py[k] - x.y;
-            let dz = pz[k] - x.z;
-            let cx = (n.x * dx + n.y * dy + n.z * dz).max(0.0);
-            let cp = (-(nx[k] * dx + ny[k] * dy + nz[k] * dz)).max(0.0);
-            let d2 = dx * dx + dy * dy + dz * dz;
-            // Branch-free visibility so the common (unblocked) loop vectorises.
-            let v = if !check || xm.sees(masks[k]) { 1.0 } else { 0.0 };
-            acc[k] += v * (qf * cx * cp / (d2 * d2));
+        if (xm.front | xm.back) & list.blockers == 0 {
+            score_open(list, x, n, qf, acc);
+        } else {
+            score_masked(list, x, n, qf, xm, acc);
         }
         len
     }
@@ -178,6 +168,36 @@ impl Receivers {
             for (k, &j) in list.idx.iter().enumerate() {
                 per_point[j as usize] += acc[list.offset + k];
             }
+        }
+    }
+}
+
+/// Score a collision at `x` (front normal `n`, weight times BRDF `qf`) into
+/// every entry of `list`, no plane in the way. Written over zipped slices so
+/// the compiler drops bounds checks and vectorises.
+#[inline]
+fn score_open(list: &ReceiverList, x: DVec3, n: DVec3, qf: f64, acc: &mut [f64]) {
+    let it = acc
+        .iter_mut()
+        .zip(list.px.iter().zip(&list.py).zip(&list.pz))
+        .zip(list.nx.iter().zip(&list.ny).zip(&list.nz));
+    for (a, ((px, py), pz), ((nx, ny), nz)) in it.map(|((a, p), q)| (a, p, q)) {
+        let (dx, dy, dz) = (px - x.x, py - x.y, pz - x.z);
+        let cx = (n.x * dx + n.y * dy + n.z * dz).max(0.0);
+        let cp = (-(nx * dx + ny * dy + nz * dz)).max(0.0);
+        let d2 = dx * dx + dy * dy + dz * dz;
+        *a += qf * cx * cp / (d2 * d2);
+    }
+}
+
+/// As [`score_open`], with entries hidden from `x` by a plane scoring zero.
+#[inline]
+fn score_masked(list: &ReceiverList, x: DVec3, n: DVec3, qf: f64, xm: SideMask, acc: &mut [f64]) {
+    for (k, a) in acc.iter_mut().enumerate() {
+        if xm.sees(list.masks[k]) {
+            let p = DVec3::new(list.px[k], list.py[k], list.pz[k]);
+            let np = DVec3::new(list.nx[k], list.ny[k], list.nz[k]);
+            *a += qf * local_kernel(x, n, p, np);
         }
     }
 }

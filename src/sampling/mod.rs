@@ -4,6 +4,7 @@
 //! (so tests can drive it) and returns a named record with its pdf.
 
 pub mod rng;
+pub mod qmc;
 pub mod warp;
 
 pub use rng::Philox4x32;
