@@ -50,7 +50,10 @@ pub struct ChainParams {
 
 impl Default for ChainParams {
     fn default() -> Self {
-        Self { rr_weight: 0.25, max_order: None }
+        Self {
+            rr_weight: 0.25,
+            max_order: None,
+        }
     }
 }
 
@@ -76,13 +79,22 @@ pub fn trace<F: FnMut(&Collision)>(
     let rr = params.rr_weight * q0;
     let mut order = 0;
     while q > 0.0 {
-        let Some(hit) = scene.intersect(&ray, skip) else { break };
+        let Some(hit) = scene.intersect(&ray, skip) else {
+            break;
+        };
         if ray.d.dot(hit.n) >= 0.0 {
             break; // back side: absorbed
         }
         order += 1;
         let wi = -ray.d;
-        on_collision(&Collision { p: hit.p, n: hit.n, wi, q, surface: hit.surface, order });
+        on_collision(&Collision {
+            p: hit.p,
+            n: hit.n,
+            wi,
+            q,
+            surface: hit.surface,
+            order,
+        });
         if params.max_order.is_some_and(|m| order >= m) {
             break;
         }
@@ -101,7 +113,10 @@ pub fn trace<F: FnMut(&Collision)>(
             }
             q = rr;
         }
-        ray = Ray { o: hit.p, d: frame.to_world(s.w) };
+        ray = Ray {
+            o: hit.p,
+            d: frame.to_world(s.w),
+        };
         skip = Some(hit.surface);
     }
     order

@@ -33,8 +33,10 @@
 #![forbid(unsafe_code)]
 
 pub mod chain;
+pub mod commands;
 pub mod estimator;
 pub mod geometry;
+pub mod io;
 pub mod light;
 pub mod material;
 pub mod reference;
@@ -42,5 +44,3 @@ pub mod run;
 pub mod sampling;
 pub mod scene;
 pub mod tally;
-pub mod io;
-pub mod commands;

@@ -71,7 +71,10 @@ impl Default for RunConfig {
         Self {
             seed: 1,
             threads: 0,
-            stop: Stop { chains: Some(100_000), ..Stop::default() },
+            stop: Stop {
+                chains: Some(100_000),
+                ..Stop::default()
+            },
             orders: 0,
             chain: ChainParams::default(),
             batch_size: None,
@@ -92,7 +95,10 @@ pub struct Tallies {
 impl Tallies {
     fn new(n: usize, orders: u32) -> Self {
         let buckets = if orders == 0 { 0 } else { orders as usize + 1 };
-        Self { indirect: vec![Welford::new(); n], orders: vec![vec![Welford::new(); n]; buckets] }
+        Self {
+            indirect: vec![Welford::new(); n],
+            orders: vec![vec![Welford::new(); n]; buckets],
+        }
     }
 
     /// Number of batches folded in.
@@ -199,11 +205,22 @@ pub fn run(
 ) -> RunResult {
     let start = Instant::now();
     let n = receivers.len();
-    let buckets = if cfg.orders == 0 { 1 } else { cfg.orders as usize + 1 };
+    let buckets = if cfg.orders == 0 {
+        1
+    } else {
+        cfg.orders as usize + 1
+    };
     let stop = cfg.stop;
-    let bs = cfg.batch_size.unwrap_or_else(|| default_batch_size(n, stop.chains)).max(1);
+    let bs = cfg
+        .batch_size
+        .unwrap_or_else(|| default_batch_size(n, stop.chains))
+        .max(1);
     let max_batches = stop.chains.map_or(u64::MAX, |c| c.div_ceil(bs).max(1));
-    let threads = if cfg.threads == 0 { std::thread::available_parallelism().map_or(1, |p| p.get()) } else { cfg.threads };
+    let threads = if cfg.threads == 0 {
+        std::thread::available_parallelism().map_or(1, |p| p.get())
+    } else {
+        cfg.threads
+    };
     let mut tallies = Tallies::new(n, cfg.orders);
     let direct = receivers.direct().to_vec();
     let mut result = RunResult {
@@ -220,7 +237,11 @@ pub fn run(
     if scene.total_power() <= 0.0 {
         // Fill zero batches so the statistics read "exactly zero".
         for _ in 0..MIN_BATCHES {
-            for w in tallies.indirect.iter_mut().chain(tallies.orders.iter_mut().flatten()) {
+            for w in tallies
+                .indirect
+                .iter_mut()
+                .chain(tallies.orders.iter_mut().flatten())
+            {
                 w.push(0.0);
             }
         }
@@ -269,7 +290,11 @@ pub fn run(
                 Err(mpsc::RecvTimeoutError::Timeout) => {}
                 Err(mpsc::RecvTimeoutError::Disconnected) => break,
             }
-            if stop.time.is_some_and(|t| start.elapsed().as_secs_f64() >= t) && !halt.load(Ordering::Relaxed) {
+            if stop
+                .time
+                .is_some_and(|t| start.elapsed().as_secs_f64() >= t)
+                && !halt.load(Ordering::Relaxed)
+            {
                 halt.store(true, Ordering::Relaxed);
                 result.reason = StopReason::Time;
             }
@@ -278,7 +303,15 @@ pub fn run(
                     folded += 1;
                     continue;
                 }
-                fold(&mut tallies, &b, bs, buckets, n, receivers, &mut batch_means);
+                fold(
+                    &mut tallies,
+                    &b,
+                    bs,
+                    buckets,
+                    n,
+                    receivers,
+                    &mut batch_means,
+                );
                 result.chains += bs;
                 result.collisions += b.collisions;
                 result.scores += b.scores;
@@ -340,7 +373,11 @@ fn run_batch(
             rng.next_2d()
         };
         collisions += u64::from(chain::trace(scene, &mut rng, &cfg.chain, u_emit, |col| {
-            let k = if k_max == 0 { 0 } else { (col.order.min(k_max + 1) - 1) as usize };
+            let k = if k_max == 0 {
+                0
+            } else {
+                (col.order.min(k_max + 1) - 1) as usize
+            };
             scores += receivers.score(scene, col, &mut acc[k * len..(k + 1) * len]) as u64;
         }));
     }
@@ -349,7 +386,12 @@ fn run_batch(
     for k in 0..buckets {
         receivers.reduce(&acc[k * len..(k + 1) * len], &mut sums[k * n..(k + 1) * n]);
     }
-    Batch { index: b, sums, collisions, scores }
+    Batch {
+        index: b,
+        sums,
+        collisions,
+        scores,
+    }
 }
 
 fn fold(

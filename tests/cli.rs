@@ -56,7 +56,19 @@ fn illuminance_writes_input_columns_and_results() {
     assert!(ok, "{stderr}");
     let mut lines = out.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    for c in ["id", "x", "y", "z", "nx", "ny", "nz", "E", "E_stderr", "E_direct", "E_indirect"] {
+    for c in [
+        "id",
+        "x",
+        "y",
+        "z",
+        "nx",
+        "ny",
+        "nz",
+        "E",
+        "E_stderr",
+        "E_direct",
+        "E_indirect",
+    ] {
         assert!(header.contains(&c), "missing {c} in {header:?}");
     }
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
@@ -70,7 +82,10 @@ fn illuminance_writes_input_columns_and_results() {
         let se: f64 = r[col("E_stderr")].parse().unwrap();
         assert!(e.is_finite() && se.is_finite() && se > 0.0);
     }
-    assert!(stderr.contains("chains/s") && stderr.contains("FOM"), "{stderr}");
+    assert!(
+        stderr.contains("chains/s") && stderr.contains("FOM"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -78,24 +93,55 @@ fn orders_columns_and_stdin_stdout() {
     let dir = tempfile::tempdir().unwrap();
     let s = write(dir.path(), "scene.toml", SCENE);
     let o = lumest()
-        .args(["illuminance", "--scene", &s, "--points", "-", "--out", "-", "--chains", "2000", "--orders", "2", "--quiet"])
+        .args([
+            "illuminance",
+            "--scene",
+            &s,
+            "--points",
+            "-",
+            "--out",
+            "-",
+            "--chains",
+            "2000",
+            "--orders",
+            "2",
+            "--quiet",
+        ])
         .write_stdin(POINTS)
         .output()
         .unwrap();
     assert!(o.status.success());
     let out = String::from_utf8(o.stdout).unwrap();
     let header = out.lines().next().unwrap();
-    assert!(header.contains("E_order1") && header.contains("E_order2") && header.contains("E_rest"), "{header}");
+    assert!(
+        header.contains("E_order1") && header.contains("E_order2") && header.contains("E_rest"),
+        "{header}"
+    );
     assert_eq!(out.lines().count(), 4);
 }
 
 #[test]
 fn bad_scene_values_name_file_line_and_field() {
     let cases = [
-        ("reflectance = 0.5 }\n\n[[surface]]", "reflectance = 1.5 }\n\n[[surface]]", ":5:", "reflectance"),
-        ("normal = [0.0, 0.0, 1.0]", "normal = [0.0, 0.0, 0.0]", ":4:", "normal"),
+        (
+            "reflectance = 0.5 }\n\n[[surface]]",
+            "reflectance = 1.5 }\n\n[[surface]]",
+            ":5:",
+            "reflectance",
+        ),
+        (
+            "normal = [0.0, 0.0, 1.0]",
+            "normal = [0.0, 0.0, 0.0]",
+            ":4:",
+            "normal",
+        ),
         ("intensity = 1.0", "intensity = nan", ":16:", "intensity"),
-        ("point = [0.0, 0.0, 1.0]", "point = [0.0, 0.0, 1.0]\ncolour = 3", ":10:", "colour"),
+        (
+            "point = [0.0, 0.0, 1.0]",
+            "point = [0.0, 0.0, 1.0]\ncolour = 3",
+            ":10:",
+            "colour",
+        ),
         ("normal = [0.0, 0.0, -1.0]\n", "", ":7:", "normal"),
         ("type = \"point\"", "type = \"spotlight\"", ":14:", "type"),
     ];
@@ -104,7 +150,10 @@ fn bad_scene_values_name_file_line_and_field() {
         assert_ne!(scene, SCENE);
         let (ok, stderr, out) = run_scene(&scene, POINTS);
         assert!(!ok, "accepted a bad scene ({to})");
-        assert!(stderr.contains("scene.toml") && stderr.contains(line) && stderr.contains(field), "{to}: {stderr}");
+        assert!(
+            stderr.contains("scene.toml") && stderr.contains(line) && stderr.contains(field),
+            "{to}: {stderr}"
+        );
         assert!(out.is_empty(), "output written despite the error");
     }
 }
@@ -115,14 +164,22 @@ fn bad_points_name_file_line_and_field() {
         ("b,1,0,0,0,0,1", "b,1,0,abc,0,0,1", ":3:", "`z`"),
         ("b,1,0,0,0,0,1", "b,1,0,0,0,0,0", ":3:", "nx,ny,nz"),
         ("c,0.5,0,1,0,0,-1", "c,0.5,inf,1,0,0,-1", ":4:", "`y`"),
-        ("id,x,y,z,nx,ny,nz", "id,x,y,z,nx,ny,normal_z", "points.csv", "`nz`"),
+        (
+            "id,x,y,z,nx,ny,nz",
+            "id,x,y,z,nx,ny,normal_z",
+            "points.csv",
+            "`nz`",
+        ),
         ("a,0,0,0,0,0,1", "a,0,0,0.5,0,0,1", ":2:", "light"),
     ];
     for (from, to, line, field) in cases {
         let points = POINTS.replacen(from, to, 1);
         let (ok, stderr, out) = run_scene(SCENE, &points);
         assert!(!ok, "accepted bad points ({to})");
-        assert!(stderr.contains("points.csv") && stderr.contains(line) && stderr.contains(field), "{to}: {stderr}");
+        assert!(
+            stderr.contains("points.csv") && stderr.contains(line) && stderr.contains(field),
+            "{to}: {stderr}"
+        );
         assert!(out.is_empty());
     }
 }
@@ -130,17 +187,28 @@ fn bad_points_name_file_line_and_field() {
 #[test]
 fn sobolev_command_prints_exact_values() {
     let o = lumest()
-        .args(["sobolev", "--h1", "0.5", "--h2", "0.5", "--rho1", "0.5", "--rho2", "0.5", "--plane", "1", "--r", "0:1:0.5", "--orders", "2"])
+        .args([
+            "sobolev", "--h1", "0.5", "--h2", "0.5", "--rho1", "0.5", "--rho2", "0.5", "--plane",
+            "1", "--r", "0:1:0.5", "--orders", "2",
+        ])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = String::from_utf8(o.stdout).unwrap();
     let mut lines = out.lines();
-    assert_eq!(lines.next().unwrap(), "r,E,E_direct,E_reflected,E_order1,E_order2");
-    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|c| c.parse().unwrap()).collect()).collect();
+    assert_eq!(
+        lines.next().unwrap(),
+        "r,E,E_direct,E_reflected,E_order1,E_order2"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+        .collect();
     assert_eq!(rows.len(), 3);
     // Independent 30-digit values (data/reference/sobolev_case_A.csv), r = 0 and r = 1.
-    let want = [(0.0, 4.5281295258173371, 3.8773389845847300e-01), (1.0, 6.5344231719438861e-01, 1.9005868565562889e-01)];
+    let want = [
+        (0.0, 4.5281295258173371, 3.8773389845847300e-01),
+        (1.0, 6.5344231719438861e-01, 1.9005868565562889e-01),
+    ];
     for (row, (r, e, o1)) in [&rows[0], &rows[2]].into_iter().zip(want) {
         assert_eq!(row[0], r);
         assert!((row[1] / e - 1.0).abs() < 1e-9, "{} vs {e}", row[1]);

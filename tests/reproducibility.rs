@@ -5,8 +5,19 @@ use common::{chains_cfg, sobolev_run};
 use lumest::run::{RunConfig, Stop};
 
 fn bits(r: &lumest::run::RunResult) -> Vec<u64> {
-    let mut v: Vec<u64> = r.tallies.indirect.iter().flat_map(|w| [w.mean().to_bits(), w.std_error().to_bits()]).collect();
-    v.extend(r.tallies.orders.iter().flatten().map(|w| w.mean().to_bits()));
+    let mut v: Vec<u64> = r
+        .tallies
+        .indirect
+        .iter()
+        .flat_map(|w| [w.mean().to_bits(), w.std_error().to_bits()])
+        .collect();
+    v.extend(
+        r.tallies
+            .orders
+            .iter()
+            .flatten()
+            .map(|w| w.mean().to_bits()),
+    );
     v.push(r.chains);
     v.push(r.collisions);
     v
@@ -15,7 +26,10 @@ fn bits(r: &lumest::run::RunResult) -> Vec<u64> {
 #[test]
 fn identical_for_any_thread_count() {
     let p = (0.5, 0.5, 0.5, 0.5);
-    let cfg = |t| RunConfig { orders: 2, ..chains_cfg(50_000, 42, t) };
+    let cfg = |t| RunConfig {
+        orders: 2,
+        ..chains_cfg(50_000, 42, t)
+    };
     let (_, one) = sobolev_run(p, 30, 3.0, &cfg(1));
     let (_, two) = sobolev_run(p, 30, 3.0, &cfg(2));
     let (_, three) = sobolev_run(p, 30, 3.0, &cfg(3));
@@ -31,7 +45,11 @@ fn rel_error_stop_is_reproducible() {
     let cfg = |t| RunConfig {
         seed: 7,
         threads: t,
-        stop: Stop { rel_error: Some(2e-3), time: Some(120.0), ..Stop::default() },
+        stop: Stop {
+            rel_error: Some(2e-3),
+            time: Some(120.0),
+            ..Stop::default()
+        },
         batch_size: Some(512),
         ..RunConfig::default()
     };

@@ -15,7 +15,11 @@ const ALPHA: f64 = 1e-3;
 #[test]
 fn agrees_with_exact_solution_on_both_planes() {
     // (h1, h2, rho1, rho2): the seed paper's case, an asymmetric one, and rho = 0.9.
-    let configs = [(0.5, 0.5, 0.5, 0.5), (0.3, 0.7, 0.2, 0.8), (0.5, 0.5, 0.9, 0.9)];
+    let configs = [
+        (0.5, 0.5, 0.5, 0.5),
+        (0.3, 0.7, 0.2, 0.8),
+        (0.5, 0.5, 0.9, 0.9),
+    ];
     let n = 24;
     let mut worst: f64 = 0.0;
     let mut batches = u64::MAX;
@@ -29,14 +33,20 @@ fn agrees_with_exact_solution_on_both_planes() {
         }
     }
     let bound = sidak_bound(ALPHA, configs.len() * n, Some(batches));
-    assert!(worst < bound, "max |z| = {worst} exceeds the Sidak bound {bound}");
+    assert!(
+        worst < bound,
+        "max |z| = {worst} exceeds the Sidak bound {bound}"
+    );
 }
 
 #[test]
 fn orders_agree_with_neumann_terms() {
     let p = (0.5, 0.5, 0.5, 0.5);
     let s = Sobolev::new(p.0, p.1, p.2, p.3, 1.0).unwrap();
-    let cfg = RunConfig { orders: 3, ..chains_cfg(200_000, 5, 0) };
+    let cfg = RunConfig {
+        orders: 3,
+        ..chains_cfg(200_000, 5, 0)
+    };
     let n = 12;
     let (case, r) = sobolev_run(p, n, 2.0, &cfg);
     let mut worst: f64 = 0.0;
@@ -66,7 +76,12 @@ fn error_bars_are_calibrated() {
     let mut zs = Vec::with_capacity(runs);
     let mut b = 0;
     for seed in 0..runs as u64 {
-        let (case, r) = sobolev_run((0.5, 0.5, 0.7, 0.7), n, 3.0, &chains_cfg(8_192, 1000 + seed, 0));
+        let (case, r) = sobolev_run(
+            (0.5, 0.5, 0.7, 0.7),
+            n,
+            3.0,
+            &chains_cfg(8_192, 1000 + seed, 0),
+        );
         let j = seed as usize % n;
         zs.push(z(&r, j, case.exact[j].e));
         b = r.tallies.batches();
@@ -76,7 +91,10 @@ fn error_bars_are_calibrated() {
     let var_f = 2.0 * d * d * (d - 1.0) / ((d - 2.0).powi(2) * (d - 4.0));
     let mean_z2 = zs.iter().map(|z| z * z).sum::<f64>() / runs as f64;
     let k = sidak_bound(ALPHA, 1, None) * (var_f / runs as f64).sqrt();
-    assert!((mean_z2 - mean_f).abs() < k, "mean z^2 = {mean_z2}, expected {mean_f} +- {k}");
+    assert!(
+        (mean_z2 - mean_f).abs() < k,
+        "mean z^2 = {mean_z2}, expected {mean_f} +- {k}"
+    );
 
     let t = StudentsT::new(0.0, 1.0, d).unwrap();
     zs.sort_by(f64::total_cmp);

@@ -33,31 +33,60 @@ pub struct BenchArgs {
 
 /// Run the benchmark and print a table.
 pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
-    let counts: Vec<usize> = parse_list(&a.points)?.into_iter().map(|x| x as usize).collect();
+    let counts: Vec<usize> = parse_list(&a.points)?
+        .into_iter()
+        .map(|x| x as usize)
+        .collect();
     let times: Vec<f64> = match &a.time {
         Some(t) => parse_list(t)?,
-        None => counts.iter().map(|&n| if n <= 1000 { 20.0 } else { 60.0 }).collect(),
+        None => counts
+            .iter()
+            .map(|&n| if n <= 1000 { 20.0 } else { 60.0 })
+            .collect(),
     };
-    anyhow::ensure!(times.len() == 1 || times.len() == counts.len(), "--time: one value or one per point count");
+    anyhow::ensure!(
+        times.len() == 1 || times.len() == counts.len(),
+        "--time: one value or one per point count"
+    );
     let problem = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).map_err(|e| anyhow::anyhow!("{e}"))?;
     println!(
         "{:>7} {:>7} {:>12} {:>11} {:>11} {:>10} {:>10} {:>11} {:>10} {:>8} {:>7}",
-        "points", "time_s", "chains", "chains/s", "scores/s", "rms_R", "max_R", "FOM", "rms_err", "target", "met"
+        "points",
+        "time_s",
+        "chains",
+        "chains/s",
+        "scores/s",
+        "rms_R",
+        "max_R",
+        "FOM",
+        "rms_err",
+        "target",
+        "met"
     );
     for (k, &n) in counts.iter().enumerate() {
         let t = if times.len() == 1 { times[0] } else { times[k] };
         let case = sobolev_case(&problem, n, 3.0);
-        let receivers = Receivers::new(&case.scene, &case.points).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let receivers =
+            Receivers::new(&case.scene, &case.points).map_err(|e| anyhow::anyhow!("{e}"))?;
         let cfg = RunConfig {
             seed: a.seed,
             threads: a.threads,
-            stop: Stop { time: Some(t), ..Stop::default() },
+            stop: Stop {
+                time: Some(t),
+                ..Stop::default()
+            },
             ..RunConfig::default()
         };
         let r = run(&case.scene, &receivers, &cfg, &mut |_| true);
         let exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
         let cp = checkpoint(
-            &Progress { tallies: &r.tallies, direct: &r.direct, chains: r.chains, scores: r.scores, elapsed: r.wall },
+            &Progress {
+                tallies: &r.tallies,
+                direct: &r.direct,
+                chains: r.chains,
+                scores: r.scores,
+                elapsed: r.wall,
+            },
             &exact,
         );
         let target = if n <= 100 { 1e-4 } else { 1e-3 };

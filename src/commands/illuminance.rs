@@ -29,10 +29,17 @@ pub struct IlluminanceArgs {
 
 /// Result columns for one point, in lux.
 pub fn result_headers(orders: u32) -> Vec<String> {
-    let mut h: Vec<String> = ["E", "E_stderr", "E_direct", "E_indirect", "E_rel_err", "E_ci95"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+    let mut h: Vec<String> = [
+        "E",
+        "E_stderr",
+        "E_direct",
+        "E_indirect",
+        "E_rel_err",
+        "E_ci95",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
     if orders > 0 {
         for k in 1..=orders {
             h.push(format!("E_order{k}"));
@@ -94,10 +101,13 @@ pub fn illuminance(args: &IlluminanceArgs) -> anyhow::Result<()> {
     let cfg = args.run.config()?;
     let scene = scene::load(&args.scene)?;
     let table = read_points(&args.points)?;
-    let receivers = Receivers::new(&scene, &table.points).map_err(|e| {
-        anyhow::anyhow!("{}:{}: {}", args.points, table.lines[e.index], e.message)
-    })?;
-    eprintln!("lumest: scene {}: {}", args.scene.display(), scene.summary());
+    let receivers = Receivers::new(&scene, &table.points)
+        .map_err(|e| anyhow::anyhow!("{}:{}: {}", args.points, table.lines[e.index], e.message))?;
+    eprintln!(
+        "lumest: scene {}: {}",
+        args.scene.display(),
+        scene.summary()
+    );
     let pb = progress_bar(&cfg, args.run.quiet);
     let result = run(&scene, &receivers, &cfg, &mut |p| {
         tick(&pb, &cfg, p);
@@ -117,7 +127,8 @@ pub fn illuminance(args: &IlluminanceArgs) -> anyhow::Result<()> {
             r
         })
         .collect();
-    write_atomic(&args.out, &to_csv(&headers, &rows)).with_context(|| format!("writing {}", args.out))?;
+    write_atomic(&args.out, &to_csv(&headers, &rows))
+        .with_context(|| format!("writing {}", args.out))?;
     for line in summary(&result).lines() {
         eprintln!("lumest: {line}");
     }

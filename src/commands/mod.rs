@@ -52,12 +52,22 @@ pub struct RunArgs {
 impl RunArgs {
     /// Validate and turn into a run configuration.
     pub fn config(&self) -> anyhow::Result<RunConfig> {
-        let mut stop = Stop { chains: self.chains, time: self.time, rel_error: self.rel_error };
+        let mut stop = Stop {
+            chains: self.chains,
+            time: self.time,
+            rel_error: self.rel_error,
+        };
         if let Some(t) = stop.time {
-            anyhow::ensure!(t.is_finite() && t > 0.0, "--time must be a positive number of seconds, got {t}");
+            anyhow::ensure!(
+                t.is_finite() && t > 0.0,
+                "--time must be a positive number of seconds, got {t}"
+            );
         }
         if let Some(r) = stop.rel_error {
-            anyhow::ensure!(r.is_finite() && r > 0.0, "--rel-error must be positive, got {r}");
+            anyhow::ensure!(
+                r.is_finite() && r > 0.0,
+                "--rel-error must be positive, got {r}"
+            );
         }
         if let Some(c) = stop.chains {
             anyhow::ensure!(c > 0, "--chains must be positive");
@@ -76,7 +86,10 @@ impl RunArgs {
             threads: self.threads,
             stop,
             orders: self.orders,
-            chain: ChainParams { rr_weight: self.rr_weight, max_order: self.max_order },
+            chain: ChainParams {
+                rr_weight: self.rr_weight,
+                max_order: self.max_order,
+            },
             batch_size: self.batch_size,
             stratify: !self.no_stratify,
         })

@@ -28,7 +28,8 @@ pub struct SobolevParams {
 impl SobolevParams {
     /// The validated reference problem.
     pub fn problem(&self) -> anyhow::Result<Sobolev> {
-        Sobolev::new(self.h1, self.h2, self.rho1, self.rho2, self.intensity).map_err(|e| anyhow::anyhow!("{e}"))
+        Sobolev::new(self.h1, self.h2, self.rho1, self.rho2, self.intensity)
+            .map_err(|e| anyhow::anyhow!("{e}"))
     }
 }
 
@@ -51,7 +52,10 @@ pub struct SobolevArgs {
 /// Parse `a,b,c` or `start:stop:step` (stop included within rounding).
 pub fn parse_list(s: &str) -> anyhow::Result<Vec<f64>> {
     let num = |t: &str| -> anyhow::Result<f64> {
-        let x: f64 = t.trim().parse().map_err(|_| anyhow::anyhow!("`{t}` is not a number in list `{s}`"))?;
+        let x: f64 = t
+            .trim()
+            .parse()
+            .map_err(|_| anyhow::anyhow!("`{t}` is not a number in list `{s}`"))?;
         anyhow::ensure!(x.is_finite(), "`{t}` is not finite in list `{s}`");
         Ok(x)
     };
@@ -59,7 +63,10 @@ pub fn parse_list(s: &str) -> anyhow::Result<Vec<f64>> {
         let parts: Vec<&str> = s.split(':').collect();
         anyhow::ensure!(parts.len() == 3, "a range is `start:stop:step`, got `{s}`");
         let (a, b, h) = (num(parts[0])?, num(parts[1])?, num(parts[2])?);
-        anyhow::ensure!(h > 0.0 && b >= a, "range `{s}` needs step > 0 and stop >= start");
+        anyhow::ensure!(
+            h > 0.0 && b >= a,
+            "range `{s}` needs step > 0 and stop >= start"
+        );
         let n = ((b - a) / h * (1.0 + 1e-12) + 1e-9).floor() as usize;
         anyhow::ensure!(n < 10_000_000, "range `{s}` has too many values");
         Ok((0..=n).map(|k| a + h * k as f64).collect())
@@ -79,7 +86,12 @@ pub fn sobolev(args: &SobolevArgs) -> anyhow::Result<()> {
         .par_iter()
         .map(|&r| {
             let v = problem.illuminance(args.plane, r);
-            let mut cells = vec![format_number(r), format_number(v.e), format_number(v.e_direct), format_number(v.e_reflected)];
+            let mut cells = vec![
+                format_number(r),
+                format_number(v.e),
+                format_number(v.e_direct),
+                format_number(v.e_reflected),
+            ];
             for n in 1..=args.orders {
                 cells.push(format_number(problem.order(args.plane, r, n)));
             }

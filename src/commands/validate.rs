@@ -75,10 +75,21 @@ pub fn sobolev_case(s: &Sobolev, n_points: usize, r_max: f64) -> SobolevCase {
     let h = s.h1 + s.h2;
     let scene = Scene::from_parts(
         vec![
-            ("plane 1".into(), Plane::new(DVec3::ZERO, DVec3::Z), Material::Lambertian { rho: s.rho1 }),
-            ("plane 2".into(), Plane::new(DVec3::new(0.0, 0.0, h), -DVec3::Z), Material::Lambertian { rho: s.rho2 }),
+            (
+                "plane 1".into(),
+                Plane::new(DVec3::ZERO, DVec3::Z),
+                Material::Lambertian { rho: s.rho1 },
+            ),
+            (
+                "plane 2".into(),
+                Plane::new(DVec3::new(0.0, 0.0, h), -DVec3::Z),
+                Material::Lambertian { rho: s.rho2 },
+            ),
         ],
-        vec![Light::Point { p: DVec3::new(0.0, 0.0, s.h1), i: s.intensity }],
+        vec![Light::Point {
+            p: DVec3::new(0.0, 0.0, s.h1),
+            i: s.intensity,
+        }],
     );
     let per_plane = [n_points.div_ceil(2), n_points / 2];
     let mut points = Vec::with_capacity(n_points);
@@ -89,15 +100,33 @@ pub fn sobolev_case(s: &Sobolev, n_points: usize, r_max: f64) -> SobolevCase {
         let k = j / 2;
         let pl = (j % 2) as u8 + 1;
         let m = per_plane[(pl - 1) as usize];
-        let rk = if m > 1 { r_max * k as f64 / (m - 1) as f64 } else { 0.0 };
+        let rk = if m > 1 {
+            r_max * k as f64 / (m - 1) as f64
+        } else {
+            0.0
+        };
         let phi = golden * j as f64;
-        let (z, n) = if pl == 1 { (0.0, DVec3::Z) } else { (h, -DVec3::Z) };
+        let (z, n) = if pl == 1 {
+            (0.0, DVec3::Z)
+        } else {
+            (h, -DVec3::Z)
+        };
         points.push((DVec3::new(rk * phi.cos(), rk * phi.sin(), z), n));
         plane.push(pl);
         r.push(rk);
     }
-    let exact = plane.par_iter().zip(r.par_iter()).map(|(&pl, &rk)| s.illuminance(pl, rk)).collect();
-    SobolevCase { scene, points, plane, r, exact }
+    let exact = plane
+        .par_iter()
+        .zip(r.par_iter())
+        .map(|(&pl, &rk)| s.illuminance(pl, rk))
+        .collect();
+    SobolevCase {
+        scene,
+        points,
+        plane,
+        r,
+        exact,
+    }
 }
 
 /// Error of a Monte Carlo estimate against exact values at one moment.
@@ -158,7 +187,11 @@ pub fn convergence(
     quiet: bool,
 ) -> (RunResult, Vec<Checkpoint>) {
     let t_end = cfg.stop.time.unwrap_or(10.0);
-    let mut marks: Vec<f64> = (0..12).rev().map(|k| t_end / 2f64.powi(k)).filter(|&t| t >= 0.05).collect();
+    let mut marks: Vec<f64> = (0..12)
+        .rev()
+        .map(|k| t_end / 2f64.powi(k))
+        .filter(|&t| t >= 0.05)
+        .collect();
     marks.reverse(); // pop() yields the earliest
     let mut rows = Vec::new();
     let pb = progress_bar(cfg, quiet);
@@ -181,7 +214,10 @@ pub fn convergence(
         elapsed: result.wall,
     };
     let fin = checkpoint(&last, exact);
-    if rows.last().is_none_or(|r: &Checkpoint| r.chains != fin.chains) {
+    if rows
+        .last()
+        .is_none_or(|r: &Checkpoint| r.chains != fin.chains)
+    {
         rows.push(fin);
     }
     (result, rows)
@@ -189,7 +225,11 @@ pub fn convergence(
 
 /// Least-squares slope of log(y) against log(x).
 pub fn loglog_slope(pts: &[(f64, f64)]) -> f64 {
-    let v: Vec<(f64, f64)> = pts.iter().filter(|(x, y)| *x > 0.0 && *y > 0.0).map(|(x, y)| (x.ln(), y.ln())).collect();
+    let v: Vec<(f64, f64)> = pts
+        .iter()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+        .map(|(x, y)| (x.ln(), y.ln()))
+        .collect();
     let n = v.len() as f64;
     let mx = v.iter().map(|p| p.0).sum::<f64>() / n;
     let my = v.iter().map(|p| p.1).sum::<f64>() / n;
@@ -200,10 +240,19 @@ pub fn loglog_slope(pts: &[(f64, f64)]) -> f64 {
 
 /// Table of checkpoints as CSV text.
 pub fn checkpoint_csv(rows: &[Checkpoint]) -> Vec<u8> {
-    let headers: Vec<String> = ["time_s", "chains", "batches", "rms_rel_err", "max_rel_err", "rms_rel_stderr", "max_abs_z", "fom"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+    let headers: Vec<String> = [
+        "time_s",
+        "chains",
+        "batches",
+        "rms_rel_err",
+        "max_rel_err",
+        "rms_rel_stderr",
+        "max_abs_z",
+        "fom",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
     let cells: Vec<Vec<String>> = rows
         .iter()
         .map(|r| {
@@ -236,15 +285,31 @@ fn write_report(dir: &Path, name: &str, rows: &[Checkpoint], title: &str) -> any
         "wall time T [s]",
         "relative error of E",
         &[
-            Series { name: "RMS |E - E_exact| / E_exact".into(), points: err, dashed: false },
-            Series { name: "RMS estimated std error R".into(), points: est, dashed: false },
-            Series { name: "c / sqrt(T)".into(), points: ideal, dashed: true },
+            Series {
+                name: "RMS |E - E_exact| / E_exact".into(),
+                points: err,
+                dashed: false,
+            },
+            Series {
+                name: "RMS estimated std error R".into(),
+                points: est,
+                dashed: false,
+            },
+            Series {
+                name: "c / sqrt(T)".into(),
+                points: ideal,
+                dashed: true,
+            },
         ],
     )
     .map_err(|e| anyhow::anyhow!("plot: {e}"))?;
     let svg_path = dir.join(format!("{name}_convergence.svg"));
     write_atomic(&svg_path.to_string_lossy(), svg.as_bytes())?;
-    eprintln!("lumest: wrote {} and {}", csv_path.display(), svg_path.display());
+    eprintln!(
+        "lumest: wrote {} and {}",
+        csv_path.display(),
+        svg_path.display()
+    );
     Ok(())
 }
 
@@ -265,31 +330,57 @@ pub fn print_table(rows: &[Checkpoint]) {
 /// Run `lumest validate sobolev`. Fails when the final max |z| exceeds the Sidak bound.
 pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.points >= 1, "--points must be at least 1");
-    anyhow::ensure!(a.time > 0.0 && a.time.is_finite(), "--time must be positive");
-    anyhow::ensure!(a.r_max >= 0.0 && a.r_max.is_finite(), "--r-max must be >= 0");
+    anyhow::ensure!(
+        a.time > 0.0 && a.time.is_finite(),
+        "--time must be positive"
+    );
+    anyhow::ensure!(
+        a.r_max >= 0.0 && a.r_max.is_finite(),
+        "--r-max must be >= 0"
+    );
     let problem = a.params.problem()?;
     let case = sobolev_case(&problem, a.points, a.r_max);
-    let receivers = Receivers::new(&case.scene, &case.points).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let receivers =
+        Receivers::new(&case.scene, &case.points).map_err(|e| anyhow::anyhow!("{e}"))?;
     let cfg = RunConfig {
         seed: a.seed,
         threads: a.threads,
-        stop: Stop { time: Some(a.time), ..Stop::default() },
+        stop: Stop {
+            time: Some(a.time),
+            ..Stop::default()
+        },
         ..RunConfig::default()
     };
     let exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
     println!(
         "Sobolev: h1={} h2={} rho1={} rho2={} I={} cd; {} points, r in [0, {}] m, {} s",
-        problem.h1, problem.h2, problem.rho1, problem.rho2, problem.intensity, a.points, a.r_max, a.time
+        problem.h1,
+        problem.h2,
+        problem.rho1,
+        problem.rho2,
+        problem.intensity,
+        a.points,
+        a.r_max,
+        a.time
     );
     let (result, rows) = convergence(&case.scene, &receivers, &exact, &cfg, a.quiet);
     print_table(&rows);
     let slope = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_r)).collect::<Vec<_>>());
     let slope_err = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_err)).collect::<Vec<_>>());
-    println!("log-log slope vs time: estimated R {slope:.3}, actual error {slope_err:.3} (ideal -0.5)");
-    write_report(&a.report, "sobolev", &rows, "Sobolev problem: relative error of E against run time")?;
+    println!(
+        "log-log slope vs time: estimated R {slope:.3}, actual error {slope_err:.3} (ideal -0.5)"
+    );
+    write_report(
+        &a.report,
+        "sobolev",
+        &rows,
+        "Sobolev problem: relative error of E against run time",
+    )?;
     // Per-point comparison.
-    let headers: Vec<String> =
-        ["plane", "r", "E_exact", "E", "E_stderr", "z"].iter().map(|s| s.to_string()).collect();
+    let headers: Vec<String> = ["plane", "r", "E_exact", "E", "E_stderr", "z"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
     let cells: Vec<Vec<String>> = (0..a.points)
         .map(|j| {
             let w = &result.tallies.indirect[j];
@@ -304,7 +395,10 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
             ]
         })
         .collect();
-    write_atomic(&a.report.join("sobolev_points.csv").to_string_lossy(), &to_csv(&headers, &cells))?;
+    write_atomic(
+        &a.report.join("sobolev_points.csv").to_string_lossy(),
+        &to_csv(&headers, &cells),
+    )?;
     let fin = rows.last().expect("final checkpoint");
     let bound = sidak_bound(a.alpha, a.points, Some(fin.batches));
     let pass = fin.max_z <= bound;
@@ -317,6 +411,9 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
         fin.batches,
         if pass { "PASS" } else { "FAIL" }
     );
-    anyhow::ensure!(pass, "Monte Carlo disagrees with the exact Sobolev solution");
+    anyhow::ensure!(
+        pass,
+        "Monte Carlo disagrees with the exact Sobolev solution"
+    );
     Ok(())
 }

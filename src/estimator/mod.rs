@@ -27,7 +27,11 @@ pub fn local_kernel(x: DVec3, n_x: DVec3, p: DVec3, n_p: DVec3) -> f64 {
     let d2 = d.length_squared();
     let cx = n_x.dot(d);
     let cp = -n_p.dot(d);
-    if cx <= 0.0 || cp <= 0.0 { 0.0 } else { cx * cp / (d2 * d2) }
+    if cx <= 0.0 || cp <= 0.0 {
+        0.0
+    } else {
+        cx * cp / (d2 * d2)
+    }
 }
 
 /// Error building receivers from a point list.
@@ -79,14 +83,19 @@ impl Receivers {
         let mut direct = vec![0.0; points.len()];
         for (j, (p, n)) in points.iter().enumerate() {
             if !(p.is_finite() && n.is_finite() && (n.length() - 1.0).abs() < 1e-9) {
-                return Err(ReceiverError { index: j, message: "position and unit normal must be finite".into() });
+                return Err(ReceiverError {
+                    index: j,
+                    message: "position and unit normal must be finite".into(),
+                });
             }
             for l in &scene.lights {
                 let lp = l.position();
                 if (lp - *p).length() <= 1e-12 * lp.abs().max_element().max(p.abs().max_element()) {
                     return Err(ReceiverError {
                         index: j,
-                        message: format!("point coincides with a point light at {lp:?}: illuminance is infinite"),
+                        message: format!(
+                            "point coincides with a point light at {lp:?}: illuminance is infinite"
+                        ),
                     });
                 }
                 if scene.side_mask(lp).sees(masks[j]) {
@@ -97,7 +106,10 @@ impl Receivers {
         let mut lists = Vec::with_capacity(scene.planes.len());
         let mut offset = 0;
         for (s, _) in scene.planes.iter().enumerate() {
-            let mut list = ReceiverList { offset, ..Default::default() };
+            let mut list = ReceiverList {
+                offset,
+                ..Default::default()
+            };
             for (j, (p, n)) in points.iter().enumerate() {
                 if masks[j].front & (1 << s) == 0 {
                     continue;
@@ -115,7 +127,12 @@ impl Receivers {
             offset += list.idx.len();
             lists.push(list);
         }
-        Ok(Self { n_points: points.len(), lists, total_len: offset, direct })
+        Ok(Self {
+            n_points: points.len(),
+            lists,
+            total_len: offset,
+            direct,
+        })
     }
 
     /// Number of points.
@@ -149,11 +166,17 @@ impl Receivers {
             return 0;
         }
         let material = &scene.surfaces[c.surface as usize].material;
-        let f = material.constant_brdf().expect("only Lambertian materials exist");
+        let f = material
+            .constant_brdf()
+            .expect("only Lambertian materials exist");
         let qf = c.q * f;
         let acc = &mut acc[list.offset..list.offset + len];
         let (x, n) = (c.p, c.n);
-        let xm = if list.blockers != 0 { scene.side_mask(x) } else { SideMask::default() };
+        let xm = if list.blockers != 0 {
+            scene.side_mask(x)
+        } else {
+            SideMask::default()
+        };
         if (xm.front | xm.back) & list.blockers == 0 {
             score_open(list, x, n, qf, acc);
         } else {

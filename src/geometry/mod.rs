@@ -137,10 +137,22 @@ mod tests {
     fn plane_intersection_and_sides() {
         let pl = Plane::new(DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.0, 0.0, -2.0));
         assert_eq!(pl.n, DVec3::new(0.0, 0.0, -1.0));
-        let ray = Ray { o: DVec3::ZERO, d: DVec3::new(0.0, 0.6, 0.8) };
+        let ray = Ray {
+            o: DVec3::ZERO,
+            d: DVec3::new(0.0, 0.6, 0.8),
+        };
         let t = pl.intersect(&ray, f64::INFINITY).unwrap();
         assert!((t - 1.25).abs() < 1e-15);
-        assert!(pl.intersect(&Ray { o: DVec3::ZERO, d: -ray.d }, f64::INFINITY).is_none());
+        assert!(
+            pl.intersect(
+                &Ray {
+                    o: DVec3::ZERO,
+                    d: -ray.d
+                },
+                f64::INFINITY
+            )
+            .is_none()
+        );
         assert_eq!(pl.side(DVec3::ZERO), 1);
         assert_eq!(pl.side(DVec3::new(5.0, 3.0, 1.0)), 0);
         assert_eq!(pl.side(DVec3::new(0.0, 0.0, 2.0)), -1);

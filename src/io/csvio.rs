@@ -16,7 +16,12 @@ pub enum InputError {
     #[error("{file}: {message}")]
     File { file: String, message: String },
     #[error("{file}:{line}: field `{field}`: {message}")]
-    Field { file: String, line: u64, field: String, message: String },
+    Field {
+        file: String,
+        line: u64,
+        field: String,
+        message: String,
+    },
 }
 
 /// A point list as read: raw columns (to carry through) and parsed geometry.
@@ -33,7 +38,11 @@ pub struct PointTable {
 }
 
 fn display_name(path: &str) -> String {
-    if path == "-" { "<stdin>".to_string() } else { path.to_string() }
+    if path == "-" {
+        "<stdin>".to_string()
+    } else {
+        path.to_string()
+    }
 }
 
 /// Read a CSV table from a file or `-` (standard input).
@@ -42,9 +51,14 @@ fn read_all(path: &str) -> Result<String, InputError> {
     let res = if path == "-" {
         std::io::stdin().read_to_string(&mut s).map(|_| ())
     } else {
-        std::fs::File::open(path).and_then(|mut f| f.read_to_string(&mut s)).map(|_| ())
+        std::fs::File::open(path)
+            .and_then(|mut f| f.read_to_string(&mut s))
+            .map(|_| ())
     };
-    res.map_err(|e| InputError::File { file: display_name(path), message: format!("cannot read: {e}") })?;
+    res.map_err(|e| InputError::File {
+        file: display_name(path),
+        message: format!("cannot read: {e}"),
+    })?;
     Ok(s)
 }
 
@@ -64,7 +78,10 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
         .from_reader(text.as_bytes());
     let headers: Vec<String> = rdr
         .headers()
-        .map_err(|e| InputError::File { file: file.clone(), message: format!("bad header: {e}") })?
+        .map_err(|e| InputError::File {
+            file: file.clone(),
+            message: format!("bad header: {e}"),
+        })?
         .iter()
         .map(str::to_string)
         .collect();
@@ -73,31 +90,57 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
     for rec in rdr.records() {
         let rec = rec.map_err(|e| {
             let line = e.position().map_or(0, |p| p.line());
-            InputError::Field { file: file.clone(), line, field: "*".into(), message: e.to_string() }
+            InputError::Field {
+                file: file.clone(),
+                line,
+                field: "*".into(),
+                message: e.to_string(),
+            }
         })?;
         lines.push(rec.position().map_or(0, |p| p.line()));
         rows.push(rec.iter().map(str::to_string).collect());
     }
-    Ok(RawTable { headers, rows, lines })
+    Ok(RawTable {
+        headers,
+        rows,
+        lines,
+    })
 }
 
 /// Index of each wanted column, or an error naming the missing one.
-pub(crate) fn columns(headers: &[String], wanted: &[&str], file: &str) -> Result<Vec<usize>, InputError> {
+pub(crate) fn columns(
+    headers: &[String],
+    wanted: &[&str],
+    file: &str,
+) -> Result<Vec<usize>, InputError> {
     wanted
         .iter()
         .map(|w| {
-            headers.iter().position(|h| h == w).ok_or_else(|| InputError::File {
-                file: display_name(file),
-                message: format!("missing column `{w}` in the header (found: {})", headers.join(",")),
-            })
+            headers
+                .iter()
+                .position(|h| h == w)
+                .ok_or_else(|| InputError::File {
+                    file: display_name(file),
+                    message: format!(
+                        "missing column `{w}` in the header (found: {})",
+                        headers.join(",")
+                    ),
+                })
         })
         .collect()
 }
 
 /// Parse a finite number from a cell.
 pub(crate) fn number(cell: &str, file: &str, line: u64, field: &str) -> Result<f64, InputError> {
-    let err = |m: String| InputError::Field { file: display_name(file), line, field: field.to_string(), message: m };
-    let x: f64 = cell.parse().map_err(|_| err(format!("`{cell}` is not a number")))?;
+    let err = |m: String| InputError::Field {
+        file: display_name(file),
+        line,
+        field: field.to_string(),
+        message: m,
+    };
+    let x: f64 = cell
+        .parse()
+        .map_err(|_| err(format!("`{cell}` is not a number")))?;
     if !x.is_finite() {
         return Err(err(format!("`{cell}` is not finite")));
     }
@@ -128,15 +171,27 @@ pub fn read_points(path: &str) -> Result<PointTable, InputError> {
         points.push((DVec3::new(v[0], v[1], v[2]), n / len));
     }
     if points.is_empty() {
-        return Err(InputError::File { file: display_name(path), message: "no points in the file".into() });
+        return Err(InputError::File {
+            file: display_name(path),
+            message: "no points in the file".into(),
+        });
     }
-    Ok(PointTable { headers: t.headers, rows: t.rows, lines: t.lines, points })
+    Ok(PointTable {
+        headers: t.headers,
+        rows: t.rows,
+        lines: t.lines,
+        points,
+    })
 }
 
 /// Shortest round-trip text of `x`, in scientific notation when very small or large.
 pub fn format_number(x: f64) -> String {
     let a = x.abs();
-    if x == 0.0 || (1e-4..1e15).contains(&a) { format!("{x}") } else { format!("{x:e}") }
+    if x == 0.0 || (1e-4..1e15).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// Write `contents` to `path` atomically (temporary file in the same folder,
@@ -148,8 +203,13 @@ pub fn write_atomic(path: &str, contents: &[u8]) -> std::io::Result<()> {
         return out.flush();
     }
     let target = Path::new(path);
-    let dir = target.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = target.file_name().map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let dir = target
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = target
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
     let tmp: PathBuf = dir.join(format!(".{name}.{}.tmp", std::process::id()));
     {
         let mut f = std::fs::File::create(&tmp)?;

@@ -13,8 +13,16 @@ pub struct Series {
 }
 
 /// Render a log-log plot to SVG text.
-pub fn loglog_svg(title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Result<String, String> {
-    let pts = series.iter().flat_map(|s| s.points.iter()).filter(|(x, y)| *x > 0.0 && *y > 0.0);
+pub fn loglog_svg(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<String, String> {
+    let pts = series
+        .iter()
+        .flat_map(|s| s.points.iter())
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0);
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for &(x, y) in pts {
         x0 = x0.min(x);
@@ -47,7 +55,12 @@ pub fn loglog_svg(title: &str, x_label: &str, y_label: &str, series: &[Series]) 
         let palette = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
         for (k, s) in series.iter().enumerate() {
             let color = palette[k % palette.len()];
-            let data: Vec<(f64, f64)> = s.points.iter().copied().filter(|(x, y)| *x > 0.0 && *y > 0.0).collect();
+            let data: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+                .collect();
             let style = color.stroke_width(2);
             if s.dashed {
                 chart

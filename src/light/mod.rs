@@ -36,7 +36,11 @@ impl Light {
         match *self {
             Light::Point { p, i } => {
                 let s = sample_uniform_sphere(u);
-                EmissionSample { o: p, d: s.w, phi: i / s.pdf }
+                EmissionSample {
+                    o: p,
+                    d: s.w,
+                    phi: i / s.pdf,
+                }
             }
         }
     }
@@ -56,7 +60,11 @@ impl Light {
                 let d = p - x;
                 let d2 = d.length_squared();
                 let c = n.dot(d);
-                if c <= 0.0 || d2 == 0.0 { 0.0 } else { i * c / (d2 * d2.sqrt()) }
+                if c <= 0.0 || d2 == 0.0 {
+                    0.0
+                } else {
+                    i * c / (d2 * d2.sqrt())
+                }
             }
         }
     }

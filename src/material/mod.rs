@@ -19,7 +19,11 @@ impl Material {
     pub fn eval(&self, wi: glam::DVec3, wo: glam::DVec3) -> f64 {
         match *self {
             Material::Lambertian { rho } => {
-                if wi.z > 0.0 && wo.z > 0.0 { rho * FRAC_1_PI } else { 0.0 }
+                if wi.z > 0.0 && wo.z > 0.0 {
+                    rho * FRAC_1_PI
+                } else {
+                    0.0
+                }
             }
         }
     }

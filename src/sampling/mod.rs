@@ -3,8 +3,8 @@
 //! Nothing here mentions lights or scenes: a warp takes explicit uniforms
 //! (so tests can drive it) and returns a named record with its pdf.
 
-pub mod rng;
 pub mod qmc;
+pub mod rng;
 pub mod warp;
 
 pub use rng::Philox4x32;

@@ -64,10 +64,19 @@ mod tests {
     #[test]
     fn first_points_match_sobol() {
         // First points of Sobol' dimensions 1 and 2.
-        let want = [[0.0, 0.0], [0.5, 0.5], [0.25, 0.75], [0.75, 0.25], [0.125, 0.625]];
+        let want = [
+            [0.0, 0.0],
+            [0.5, 0.5],
+            [0.25, 0.75],
+            [0.75, 0.25],
+            [0.125, 0.625],
+        ];
         for (i, w) in want.iter().enumerate() {
             let b = sobol_2d_bits(i as u32);
-            let u = [f64::from(b[0]) / 4294967296.0, f64::from(b[1]) / 4294967296.0];
+            let u = [
+                f64::from(b[0]) / 4294967296.0,
+                f64::from(b[1]) / 4294967296.0,
+            ];
             assert_eq!(u, *w, "point {i}");
         }
     }
@@ -78,7 +87,9 @@ mod tests {
         let m = 8u32;
         let n = 1u32 << m;
         let shift = DigitalShift([0x9e37_79b9, 0x7f4a_7c15]);
-        let pts: Vec<[f64; 2]> = (0..n).map(|i| shifted_sobol_2d(i, shift, [0.3, 0.7])).collect();
+        let pts: Vec<[f64; 2]> = (0..n)
+            .map(|i| shifted_sobol_2d(i, shift, [0.3, 0.7]))
+            .collect();
         for a in 0..=m {
             let (nx, ny) = (1usize << a, 1usize << (m - a));
             let mut count = vec![0u32; nx * ny];

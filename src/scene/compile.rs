@@ -54,7 +54,11 @@ impl SourceCtx<'_> {
         if a.iter().all(|x| x.is_finite()) {
             Ok(DVec3::from_array(a))
         } else {
-            Err(self.invalid(v.span(), field, format!("every component must be finite, got {a:?}")))
+            Err(self.invalid(
+                v.span(),
+                field,
+                format!("every component must be finite, got {a:?}"),
+            ))
         }
     }
 
@@ -95,7 +99,11 @@ impl std::fmt::Display for SceneSummary {
             "{} plane(s), {} point light(s), BVH: {}",
             self.planes,
             self.point_lights,
-            if self.bvh { "built" } else { "none (not needed)" }
+            if self.bvh {
+                "built"
+            } else {
+                "none (not needed)"
+            }
         )
     }
 }
@@ -144,13 +152,23 @@ impl Scene {
             .iter()
             .map(|l| {
                 acc += l.power();
-                if total_power > 0.0 { acc / total_power } else { 0.0 }
+                if total_power > 0.0 {
+                    acc / total_power
+                } else {
+                    0.0
+                }
             })
             .collect();
         if let Some(last) = light_cdf.last_mut() {
             *last = 1.0;
         }
-        Scene { surfaces: s, planes, lights, light_cdf, total_power }
+        Scene {
+            surfaces: s,
+            planes,
+            lights,
+            light_cdf,
+            total_power,
+        }
     }
 
     /// Total emitted flux [lm].
@@ -162,7 +180,11 @@ impl Scene {
     pub fn summary(&self) -> SceneSummary {
         SceneSummary {
             planes: self.planes.len(),
-            point_lights: self.lights.iter().filter(|l| matches!(l, Light::Point { .. })).count(),
+            point_lights: self
+                .lights
+                .iter()
+                .filter(|l| matches!(l, Light::Point { .. }))
+                .count(),
             bvh: false,
         }
     }
@@ -170,7 +192,10 @@ impl Scene {
     /// Pick a light with probability proportional to its power.
     #[inline]
     pub fn pick_light(&self, u: f64) -> &Light {
-        let k = self.light_cdf.partition_point(|&c| c <= u).min(self.lights.len() - 1);
+        let k = self
+            .light_cdf
+            .partition_point(|&c| c <= u)
+            .min(self.lights.len() - 1);
         &self.lights[k]
     }
 
@@ -190,7 +215,12 @@ impl Scene {
         }
         best.map(|(t, k)| {
             let pl = &self.planes[k as usize];
-            Hit { t, p: pl.project(ray.o + ray.d * t), n: pl.n, surface: k }
+            Hit {
+                t,
+                p: pl.project(ray.o + ray.d * t),
+                n: pl.n,
+                surface: k,
+            }
         })
     }
 
@@ -208,18 +238,33 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
     }
     if surfaces.len() > MAX_PLANES {
         let s = &desc.surface[MAX_PLANES];
-        return Err(ctx.invalid(s.span(), "surface", format!("at most {MAX_PLANES} planes are supported")));
+        return Err(ctx.invalid(
+            s.span(),
+            "surface",
+            format!("at most {MAX_PLANES} planes are supported"),
+        ));
     }
     if desc.light.is_empty() {
         return Err(ctx.invalid(0..0, "light", "the scene has no [[light]]"));
     }
-    let lights = desc.light.iter().map(|l| light(l, ctx)).collect::<Result<Vec<_>, _>>()?;
+    let lights = desc
+        .light
+        .iter()
+        .map(|l| light(l, ctx))
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(Scene::from_parts(surfaces, lights))
 }
 
-fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<(String, Plane, Material), SceneError> {
+fn surface(
+    s: &Spanned<SurfaceDesc>,
+    k: usize,
+    ctx: &SourceCtx,
+) -> Result<(String, Plane, Material), SceneError> {
     let d = s.get_ref();
-    let name = d.name.as_ref().map_or_else(|| format!("surface #{}", k + 1), |n| n.get_ref().clone());
+    let name = d
+        .name
+        .as_ref()
+        .map_or_else(|| format!("surface #{}", k + 1), |n| n.get_ref().clone());
     match d.kind.get_ref().as_str() {
         "plane" => {
             let p = ctx.finite_vec(ctx.required(&d.point, s.span(), "point")?, "point")?;
@@ -242,7 +287,11 @@ fn material(m: &Spanned<MaterialDesc>, ctx: &SourceCtx) -> Result<Material, Scen
             let r = ctx.required(&d.reflectance, m.span(), "reflectance")?;
             let rho = *r.get_ref();
             if !(rho.is_finite() && (0.0..=1.0).contains(&rho)) {
-                return Err(ctx.invalid(r.span(), "reflectance", format!("must lie in [0, 1], got {rho}")));
+                return Err(ctx.invalid(
+                    r.span(),
+                    "reflectance",
+                    format!("must lie in [0, 1], got {rho}"),
+                ));
             }
             Ok(Material::Lambertian { rho })
         }
@@ -263,10 +312,18 @@ fn light(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<Light, SceneError> {
                 (Some(i), None) => ctx.nonneg(i, "intensity")?,
                 (None, Some(f)) => ctx.nonneg(f, "flux")? / (4.0 * PI),
                 (Some(_), Some(f)) => {
-                    return Err(ctx.invalid(f.span(), "flux", "give either `intensity` [cd] or `flux` [lm], not both"));
+                    return Err(ctx.invalid(
+                        f.span(),
+                        "flux",
+                        "give either `intensity` [cd] or `flux` [lm], not both",
+                    ));
                 }
                 (None, None) => {
-                    return Err(ctx.invalid(l.span(), "intensity", "missing field (give `intensity` [cd] or `flux` [lm])"));
+                    return Err(ctx.invalid(
+                        l.span(),
+                        "intensity",
+                        "missing field (give `intensity` [cd] or `flux` [lm])",
+                    ));
                 }
             };
             Ok(Light::Point { p, i })

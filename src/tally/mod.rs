@@ -26,7 +26,11 @@ pub struct Welford {
 impl Welford {
     /// An empty accumulator.
     pub const fn new() -> Self {
-        Self { n: 0, mean: 0.0, m2: 0.0 }
+        Self {
+            n: 0,
+            mean: 0.0,
+            m2: 0.0,
+        }
     }
 
     /// Add one observation.
@@ -67,12 +71,20 @@ impl Welford {
 
     /// Unbiased sample variance (0 with fewer than two observations).
     pub fn variance(&self) -> f64 {
-        if self.n < 2 { 0.0 } else { (self.m2 / (self.n - 1) as f64).max(0.0) }
+        if self.n < 2 {
+            0.0
+        } else {
+            (self.m2 / (self.n - 1) as f64).max(0.0)
+        }
     }
 
     /// Standard error of the mean, `sqrt(variance / n)` (0 with fewer than two observations).
     pub fn std_error(&self) -> f64 {
-        if self.n < 2 { 0.0 } else { (self.variance() / self.n as f64).sqrt() }
+        if self.n < 2 {
+            0.0
+        } else {
+            (self.variance() / self.n as f64).sqrt()
+        }
     }
 }
 
@@ -146,7 +158,9 @@ mod tests {
 
     #[test]
     fn welford_matches_two_pass_and_merges() {
-        let xs: Vec<f64> = (0..1000).map(|i| 1e9 + ((i * 7919) % 1000) as f64 * 1e-3).collect();
+        let xs: Vec<f64> = (0..1000)
+            .map(|i| 1e9 + ((i * 7919) % 1000) as f64 * 1e-3)
+            .collect();
         let mean = xs.iter().sum::<f64>() / xs.len() as f64;
         let var = xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (xs.len() - 1) as f64;
         let mut a = Welford::new();
@@ -160,7 +174,12 @@ mod tests {
         for w in [all, a] {
             assert_eq!(w.count(), 1000);
             assert!((w.mean() - mean).abs() <= 1e-15 * mean);
-            assert!((w.variance() - var).abs() <= 1e-6 * var, "{} vs {}", w.variance(), var);
+            assert!(
+                (w.variance() - var).abs() <= 1e-6 * var,
+                "{} vs {}",
+                w.variance(),
+                var
+            );
         }
     }
 
