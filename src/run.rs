@@ -83,6 +83,21 @@ impl Default for RunConfig {
     }
 }
 
+impl RunConfig {
+    /// Defaults, stopped by wall time `seconds` only.
+    pub fn timed(seed: u64, threads: usize, seconds: f64) -> Self {
+        Self {
+            seed,
+            threads,
+            stop: Stop {
+                time: Some(seconds),
+                ..Stop::default()
+            },
+            ..Self::default()
+        }
+    }
+}
+
 /// Per-point tallies over batch means of the indirect illuminance [lx].
 #[derive(Clone, Debug)]
 pub struct Tallies {

@@ -10,7 +10,7 @@ use super::sobolev::parse_list;
 use super::validate::{checkpoint, sobolev_case};
 use crate::estimator::Receivers;
 use crate::reference::Sobolev;
-use crate::run::{Progress, RunConfig, Stop, run};
+use crate::run::{Progress, RunConfig, run};
 use clap::Args;
 
 /// Arguments of `lumest bench`.
@@ -68,15 +68,7 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
         let case = sobolev_case(&problem, n, 3.0);
         let receivers =
             Receivers::new(&case.scene, &case.points).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let cfg = RunConfig {
-            seed: a.seed,
-            threads: a.threads,
-            stop: Stop {
-                time: Some(t),
-                ..Stop::default()
-            },
-            ..RunConfig::default()
-        };
+        let cfg = RunConfig::timed(a.seed, a.threads, t);
         let r = run(&case.scene, &receivers, &cfg, &mut |_| true);
         let exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
         let cp = checkpoint(

@@ -10,7 +10,7 @@ use crate::io::{format_number, write_atomic};
 use crate::light::Light;
 use crate::material::Material;
 use crate::reference::{Sobolev, SobolevValue};
-use crate::run::{MIN_BATCHES, Progress, RunConfig, RunResult, Stop, run};
+use crate::run::{MIN_BATCHES, Progress, RunConfig, RunResult, run};
 use crate::scene::Scene;
 use crate::tally::{figure_of_merit, relative_error, sidak_bound};
 use anyhow::Context;
@@ -342,15 +342,7 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
     let case = sobolev_case(&problem, a.points, a.r_max);
     let receivers =
         Receivers::new(&case.scene, &case.points).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let cfg = RunConfig {
-        seed: a.seed,
-        threads: a.threads,
-        stop: Stop {
-            time: Some(a.time),
-            ..Stop::default()
-        },
-        ..RunConfig::default()
-    };
+    let cfg = RunConfig::timed(a.seed, a.threads, a.time);
     let exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
     println!(
         "Sobolev: h1={} h2={} rho1={} rho2={} I={} cd; {} points, r in [0, {}] m, {} s",
