@@ -58,19 +58,20 @@ impl Default for ChainParams {
 }
 
 /// Trace one chain, calling `on_collision` at every front-side collision.
-/// `u_emit` are the uniforms of the emitted direction (from `rng`, or from a
-/// stratified net over the batch); everything else draws from `rng`.
+/// `u_first` are the uniforms of the emitted direction and of the first
+/// reflection (from `rng`, or from a stratified net over the batch);
+/// everything else draws from `rng`.
 /// Returns the number of collisions.
 #[inline]
 pub fn trace<F: FnMut(&Collision)>(
     scene: &Scene,
     rng: &mut Philox4x32,
     params: &ChainParams,
-    u_emit: [f64; 2],
+    u_first: [[f64; 2]; 2],
     mut on_collision: F,
 ) -> u32 {
     let light = scene.pick_light(rng.next_f64());
-    let e = light.sample_emission(u_emit);
+    let e = light.sample_emission(u_first[0]);
     let q0 = scene.total_power();
     // A point light picked with probability power/total carries total power per chain.
     let mut q = e.phi / light.power() * q0;
@@ -101,7 +102,12 @@ pub fn trace<F: FnMut(&Collision)>(
         let m = &scene.surfaces[hit.surface as usize].material;
         let frame = Frame::from_normal(hit.n);
         let wi_local = frame.to_local(wi);
-        let s = m.sample(wi_local, rng.next_2d());
+        let u = if order == 1 {
+            u_first[1]
+        } else {
+            rng.next_2d()
+        };
+        let s = m.sample(wi_local, u);
         if s.pdf <= 0.0 || s.w.z <= 0.0 {
             break;
         }

@@ -18,7 +18,7 @@
 use crate::chain::{self, ChainParams};
 use crate::estimator::Receivers;
 use crate::sampling::Philox4x32;
-use crate::sampling::qmc::{DigitalShift, shifted_sobol_2d};
+use crate::sampling::qmc::{DigitalShift, shifted_sobol_2d, shifted_sobol_34};
 use crate::scene::Scene;
 use crate::tally::{Welford, relative_error};
 use std::collections::BTreeMap;
@@ -43,7 +43,8 @@ pub const MIN_BATCHES: u64 = 32;
 /// Run configuration.
 ///
 /// With `stratify`, the emitted directions of a batch's chains form a
-/// randomly shifted Sobol' (0,2)-net (see [`crate::sampling::qmc`]): each
+/// randomly shifted Sobol' (0,2)-net, and the first reflections use Sobol'
+/// dimensions 3-4 of the same points (see [`crate::sampling::qmc`]): each
 /// batch mean stays unbiased and batches stay independent, while the first
 /// collisions cover the surfaces evenly. Chain `c` then depends on `(seed, c)`
 /// and on its batch's shift, i.e. on `(seed, c, batch_size)`; still never on
@@ -379,15 +380,20 @@ fn run_batch(
     let mut scores = 0u64;
     // The net's shift comes from a stream no chain uses (chain indices < 2^63).
     let mut srng = Philox4x32::new(cfg.seed, (1 << 63) | b);
-    let shift = DigitalShift([srng.next_u32(), srng.next_u32()]);
+    let shift12 = DigitalShift([srng.next_u32(), srng.next_u32()]);
+    let shift34 = DigitalShift([srng.next_u32(), srng.next_u32()]);
     for c in b * bs..(b + 1) * bs {
         let mut rng = Philox4x32::new(cfg.seed, c);
-        let u_emit = if cfg.stratify {
-            shifted_sobol_2d((c - b * bs) as u32, shift, rng.next_2d())
+        let u_first = if cfg.stratify {
+            let i = (c - b * bs) as u32;
+            [
+                shifted_sobol_2d(i, shift12, rng.next_2d()),
+                shifted_sobol_34(i, shift34, rng.next_2d()),
+            ]
         } else {
-            rng.next_2d()
+            [rng.next_2d(), rng.next_2d()]
         };
-        collisions += u64::from(chain::trace(scene, &mut rng, &cfg.chain, u_emit, |col| {
+        collisions += u64::from(chain::trace(scene, &mut rng, &cfg.chain, u_first, |col| {
             let k = if k_max == 0 {
                 0
             } else {

@@ -190,7 +190,7 @@ pub fn convergence(
     let mut marks: Vec<f64> = (0..12)
         .rev()
         .map(|k| t_end / 2f64.powi(k))
-        .filter(|&t| t >= 0.05)
+        .filter(|&t| t >= 0.05 && t < 0.99 * t_end)
         .collect();
     marks.reverse(); // pop() yields the earliest
     let mut rows = Vec::new();
