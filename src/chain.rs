@@ -51,7 +51,7 @@ pub struct ChainParams {
 impl Default for ChainParams {
     fn default() -> Self {
         Self {
-            rr_weight: 0.25,
+            rr_weight: 0.1,
             max_order: None,
         }
     }
