@@ -80,7 +80,10 @@ impl RunArgs {
             "--rr-weight must lie in (0, 1], got {}",
             self.rr_weight
         );
-        anyhow::ensure!(self.batch_size != Some(0), "--batch-size must be positive");
+        anyhow::ensure!(
+            self.batch_size.is_none_or(|b| b > 0 && b <= 1 << 32),
+            "--batch-size must lie in [1, 2^32] (chains of a batch index one Sobol' net)"
+        );
         Ok(RunConfig {
             seed: self.seed,
             threads: self.threads,
