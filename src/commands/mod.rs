@@ -127,9 +127,9 @@ pub(crate) fn tick(pb: &indicatif::ProgressBar, cfg: &RunConfig, p: &crate::run:
         _ => 0,
     };
     pb.set_position(pos);
-    pb.set_message(format!(
-        "{} chains, max R {:.2e}",
-        p.chains,
-        p.tallies.max_rel_error(p.direct)
-    ));
+    if p.tallies.batches() >= 2 {
+        pb.set_message(format!("{} chains, max R {:.2e}", p.chains, p.tallies.max_rel_error(p.direct)));
+    } else {
+        pb.set_message(format!("{} chains", p.chains));
+    }
 }
