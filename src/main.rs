@@ -16,6 +16,8 @@ struct Cli {
 enum Command {
     /// Illuminance [lx] at CSV points by light-tracing chains and the local estimate.
     Illuminance(illuminance::IlluminanceArgs),
+    /// Luminance [cd/m^2] along CSV views by the double local estimate.
+    Luminance(illuminance::LuminanceArgs),
     /// Exact Sobolev solution (two Lambertian planes, isotropic point source) as CSV.
     Sobolev(sobolev::SobolevArgs),
     /// Monte Carlo against exact solutions: error against run time, table and plot.
@@ -29,6 +31,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let res = match &cli.command {
         Command::Illuminance(a) => illuminance::illuminance(a),
+        Command::Luminance(a) => illuminance::luminance(a),
         Command::Sobolev(a) => sobolev::sobolev(a),
         Command::Validate(validate::ValidateCase::Sobolev(a)) => validate::validate_sobolev(a),
         Command::Bench(a) => bench::bench(a),

@@ -203,12 +203,71 @@ pub fn default_batch_size(n_points: usize, chains: Option<u64>) -> u64 {
     bs
 }
 
-struct Batch {
-    index: u64,
+/// The sums of one batch, produced by a [`BatchWork`].
+pub struct Batch {
+    /// Batch index.
+    pub index: u64,
+    /// Chains (or paths) traced in the batch.
+    pub chains: u64,
     /// `sums[k * n + j]`: sum over the batch's chains of bucket `k`'s score at point `j`.
-    sums: Vec<f64>,
-    collisions: u64,
-    scores: u64,
+    pub sums: Vec<f64>,
+    /// Surface collisions (or path vertices) in the batch.
+    pub collisions: u64,
+    /// Receiver scores evaluated in the batch.
+    pub scores: u64,
+}
+
+/// A source of independent batches: the local estimator (chains from the
+/// lights) or the backward one (paths from the receivers).
+pub trait BatchWork: Sync {
+    /// Number of receivers.
+    fn len(&self) -> usize;
+    /// Exact first-order values per receiver.
+    fn direct(&self) -> &[f64];
+    /// Length of the per-thread scratch buffer for `buckets` buckets.
+    fn scratch_len(&self, buckets: usize) -> usize;
+    /// Default batch size for `n` receivers and an optional chain count.
+    fn default_batch_size(&self, chains: Option<u64>) -> u64;
+    /// Run batch `b` of `bs` chains; `sums[k * n + j]` over the batch for bucket `k`, receiver `j`.
+    fn run_batch(
+        &self,
+        cfg: &RunConfig,
+        b: u64,
+        bs: u64,
+        buckets: usize,
+        scratch: &mut [f64],
+    ) -> Batch;
+}
+
+/// The local estimator as batch work.
+struct LocalWork<'a> {
+    scene: &'a Scene,
+    receivers: &'a Receivers,
+}
+
+impl BatchWork for LocalWork<'_> {
+    fn len(&self) -> usize {
+        self.receivers.len()
+    }
+    fn direct(&self) -> &[f64] {
+        self.receivers.direct()
+    }
+    fn scratch_len(&self, buckets: usize) -> usize {
+        buckets * self.receivers.accumulator_len()
+    }
+    fn default_batch_size(&self, chains: Option<u64>) -> u64 {
+        default_batch_size(self.receivers.len(), chains)
+    }
+    fn run_batch(
+        &self,
+        cfg: &RunConfig,
+        b: u64,
+        bs: u64,
+        buckets: usize,
+        scratch: &mut [f64],
+    ) -> Batch {
+        run_batch(self.scene, self.receivers, cfg, b, bs, buckets, scratch)
+    }
 }
 
 /// Run the chains and tally. `observe` is called after every folded batch and
@@ -219,8 +278,45 @@ pub fn run(
     cfg: &RunConfig,
     observe: &mut dyn FnMut(&Progress) -> bool,
 ) -> RunResult {
+    if scene.total_power() <= 0.0 {
+        return no_light(receivers.direct(), cfg);
+    }
+    drive(&LocalWork { scene, receivers }, cfg, observe)
+}
+
+/// The exact answer of a scene that emits nothing: zero batches.
+pub fn no_light(direct: &[f64], cfg: &RunConfig) -> RunResult {
+    let mut tallies = Tallies::new(direct.len(), cfg.orders);
+    for _ in 0..MIN_BATCHES {
+        for w in tallies
+            .indirect
+            .iter_mut()
+            .chain(tallies.orders.iter_mut().flatten())
+        {
+            w.push(0.0);
+        }
+    }
+    RunResult {
+        direct: direct.to_vec(),
+        tallies,
+        chains: 0,
+        batch_size: 0,
+        collisions: 0,
+        scores: 0,
+        wall: 0.0,
+        threads: 0,
+        reason: StopReason::NoLight,
+    }
+}
+
+/// Drive any batch work: threads, ordered folding, stopping rules.
+pub fn drive(
+    work: &dyn BatchWork,
+    cfg: &RunConfig,
+    observe: &mut dyn FnMut(&Progress) -> bool,
+) -> RunResult {
     let start = Instant::now();
-    let n = receivers.len();
+    let n = work.len();
     let buckets = if cfg.orders == 0 {
         1
     } else {
@@ -238,7 +334,7 @@ pub fn run(
         cfg.threads
     };
     let mut tallies = Tallies::new(n, cfg.orders);
-    let direct = receivers.direct().to_vec();
+    let direct = work.direct().to_vec();
     let mut result = RunResult {
         direct: Vec::new(),
         tallies: Tallies::new(0, 0),
@@ -250,24 +346,6 @@ pub fn run(
         threads,
         reason: StopReason::Chains,
     };
-    if scene.total_power() <= 0.0 {
-        // Fill zero batches so the statistics read "exactly zero".
-        for _ in 0..MIN_BATCHES {
-            for w in tallies
-                .indirect
-                .iter_mut()
-                .chain(tallies.orders.iter_mut().flatten())
-            {
-                w.push(0.0);
-            }
-        }
-        result.reason = StopReason::NoLight;
-        result.direct = direct;
-        result.tallies = tallies;
-        result.wall = start.elapsed().as_secs_f64();
-        return result;
-    }
-
     let next = AtomicU64::new(0);
     let halt = AtomicBool::new(false);
     let (tx, rx) = mpsc::channel::<Batch>();
@@ -277,7 +355,7 @@ pub fn run(
             let tx = tx.clone();
             let (next, halt) = (&next, &halt);
             s.spawn(move || {
-                let mut acc = vec![0.0; buckets * receivers.accumulator_len()];
+                let mut acc = vec![0.0; work.scratch_len(buckets)];
                 loop {
                     if halt.load(Ordering::Relaxed) {
                         break;
@@ -286,7 +364,7 @@ pub fn run(
                     if b >= max_batches {
                         break;
                     }
-                    let batch = run_batch(scene, receivers, cfg, b, bs, buckets, &mut acc);
+                    let batch = work.run_batch(cfg, b, bs, buckets, &mut acc);
                     if tx.send(batch).is_err() {
                         break;
                     }
@@ -319,16 +397,8 @@ pub fn run(
                     folded += 1;
                     continue;
                 }
-                fold(
-                    &mut tallies,
-                    &b,
-                    bs,
-                    buckets,
-                    n,
-                    receivers,
-                    &mut batch_means,
-                );
-                result.chains += bs;
+                fold(&mut tallies, &b, bs, buckets, n, &mut batch_means);
+                result.chains += b.chains;
                 result.collisions += b.collisions;
                 result.scores += b.scores;
                 folded += 1;
@@ -355,9 +425,6 @@ pub fn run(
             }
         }
     });
-    if stop.chains.is_some() && result.reason == StopReason::Chains {
-        result.reason = StopReason::Chains;
-    }
     result.direct = direct;
     result.tallies = tallies;
     result.wall = start.elapsed().as_secs_f64();
@@ -409,22 +476,14 @@ fn run_batch(
     }
     Batch {
         index: b,
+        chains: bs,
         sums,
         collisions,
         scores,
     }
 }
 
-fn fold(
-    tallies: &mut Tallies,
-    b: &Batch,
-    bs: u64,
-    buckets: usize,
-    n: usize,
-    receivers: &Receivers,
-    means: &mut [f64],
-) {
-    let _ = receivers;
+fn fold(tallies: &mut Tallies, b: &Batch, bs: u64, buckets: usize, n: usize, means: &mut [f64]) {
     let inv = 1.0 / bs as f64;
     for (m, s) in means.iter_mut().zip(&b.sums) {
         *m = s * inv;

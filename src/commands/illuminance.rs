@@ -1,15 +1,30 @@
-//! `lumest illuminance`: illuminance at CSV points by the local estimate.
+//! `lumest illuminance` and `lumest luminance`: illuminance at CSV points and
+//! luminance along CSV views, from one pass of chains.
+//!
+//! Mixing: `illuminance --points P --out R --views V --views-out W` (or
+//! `luminance --views V --out W --points P --points-out R`) scores both lists
+//! with the same chains.
 
 use super::{RunArgs, progress_bar, tick};
-use crate::estimator::Receivers;
+use crate::estimator::{Receiver, Receivers, ViewTarget, view_target};
 use crate::io::csvio::to_csv;
-use crate::io::{format_number, read_points, write_atomic};
-use crate::run::{RunResult, run};
-use crate::scene;
-use crate::tally::{figure_of_merit, t_factor};
+use crate::io::{PointTable, ViewTable, format_number, read_points, read_views, write_atomic};
+use crate::run::{RunConfig, RunResult, run};
+use crate::scene::{self, Scene};
+use crate::tally::{figure_of_merit, relative_error, t_factor};
 use anyhow::Context;
-use clap::Args;
+use clap::{Args, ValueEnum};
 use std::path::PathBuf;
+
+/// Which estimator computes the reflected light.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum EstimatorKind {
+    /// Light-tracing chains with the local and double local estimates.
+    #[default]
+    Local,
+    /// Backward path tracing from each point with next-event estimation.
+    Backward,
+}
 
 /// Arguments of `lumest illuminance`.
 #[derive(Args, Clone, Debug)]
@@ -23,35 +38,68 @@ pub struct IlluminanceArgs {
     /// Output CSV (`-`: standard output).
     #[arg(long)]
     pub out: String,
+    /// Also compute luminance along these views (CSV x,y,z,dx,dy,dz) in the same run.
+    #[arg(long, requires = "views_out")]
+    pub views: Option<String>,
+    /// Output CSV for `--views`.
+    #[arg(long = "views-out", requires = "views")]
+    pub views_out: Option<String>,
+    /// Estimator of the reflected light.
+    #[arg(long, value_enum, default_value_t = EstimatorKind::Local)]
+    pub estimator: EstimatorKind,
     #[command(flatten)]
     pub run: RunArgs,
 }
 
-/// Result columns for one point, in lux.
-pub fn result_headers(orders: u32) -> Vec<String> {
-    let mut h: Vec<String> = [
-        "E",
-        "E_stderr",
-        "E_direct",
-        "E_indirect",
-        "E_rel_err",
-        "E_ci95",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+/// Arguments of `lumest luminance`.
+#[derive(Args, Clone, Debug)]
+pub struct LuminanceArgs {
+    /// Scene file (TOML).
+    #[arg(long)]
+    pub scene: PathBuf,
+    /// Views CSV with at least x,y,z (observer) and dx,dy,dz (looking direction).
+    #[arg(long)]
+    pub views: String,
+    /// Output CSV (`-`: standard output).
+    #[arg(long)]
+    pub out: String,
+    /// Also compute illuminance at these points in the same run.
+    #[arg(long, requires = "points_out")]
+    pub points: Option<String>,
+    /// Output CSV for `--points`.
+    #[arg(long = "points-out", requires = "points")]
+    pub points_out: Option<String>,
+    /// Estimator of the reflected light.
+    #[arg(long, value_enum, default_value_t = EstimatorKind::Local)]
+    pub estimator: EstimatorKind,
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+/// Result columns for quantity `q` (`E` [lx] or `L` [cd/m^2]).
+///
+/// Orders: for illuminance `E_order{k}` is light reflected `k` times
+/// (`E_direct` is order 0); for luminance `L_direct` is light reflected once
+/// (at the sub-point) and `L_order{k}` light reflected `k` times, `k >= 2`.
+/// `_rest` holds all higher orders.
+pub fn result_headers(q: &str, orders: u32) -> Vec<String> {
+    let mut h: Vec<String> = ["", "_stderr", "_direct", "_indirect", "_rel_err", "_ci95"]
+        .iter()
+        .map(|s| format!("{q}{s}"))
+        .collect();
+    let shift = u32::from(q == "L");
+    for k in 1..=orders {
+        h.push(format!("{q}_order{}", k + shift));
+        h.push(format!("{q}_order{}_stderr", k + shift));
+    }
     if orders > 0 {
-        for k in 1..=orders {
-            h.push(format!("E_order{k}"));
-            h.push(format!("E_order{k}_stderr"));
-        }
-        h.push("E_rest".into());
-        h.push("E_rest_stderr".into());
+        h.push(format!("{q}_rest"));
+        h.push(format!("{q}_rest_stderr"));
     }
     h
 }
 
-/// Result cells of point `j`.
+/// Result cells of receiver `j`.
 pub fn result_cells(r: &RunResult, j: usize) -> Vec<String> {
     let w = &r.tallies.indirect[j];
     let e = r.direct[j] + w.mean();
@@ -62,7 +110,7 @@ pub fn result_cells(r: &RunResult, j: usize) -> Vec<String> {
         format_number(se),
         format_number(r.direct[j]),
         format_number(w.mean()),
-        format_number(crate::tally::relative_error(e, se)),
+        format_number(relative_error(e, se)),
         format_number(ci),
     ];
     for bucket in &r.tallies.orders {
@@ -72,14 +120,24 @@ pub fn result_cells(r: &RunResult, j: usize) -> Vec<String> {
     c
 }
 
+/// Cells of an exactly zero result (a view that sees nothing or a black back side).
+fn zero_cells(orders: u32) -> Vec<String> {
+    let n = 6 + if orders > 0 {
+        2 * orders as usize + 2
+    } else {
+        0
+    };
+    vec!["0".to_string(); n]
+}
+
 /// The run summary printed to standard error.
 pub fn summary(r: &RunResult) -> String {
     let rms = r.tallies.rms_rel_error(&r.direct);
     let max = r.tallies.max_rel_error(&r.direct);
     format!(
-        "{} points, {} chains in {} batches of {}, {:.3} s on {} thread(s), stopped by {:?}\n\
+        "{} receivers, {} chains in {} batches of {}, {:.3} s on {} thread(s), stopped by {:?}\n\
          {:.4e} chains/s, {:.4e} scores/s, {:.3} collisions/chain\n\
-         relative standard error of E: RMS {:.3e}, max {:.3e}; FOM = 1/(R_rms^2 T) = {:.4e} 1/s",
+         relative standard error: RMS {:.3e}, max {:.3e}; FOM = 1/(R_rms^2 T) = {:.4e} 1/s",
         r.direct.len(),
         r.chains,
         r.tallies.batches(),
@@ -96,41 +154,178 @@ pub fn summary(r: &RunResult) -> String {
     )
 }
 
-/// Run the command.
-pub fn illuminance(args: &IlluminanceArgs) -> anyhow::Result<()> {
-    let cfg = args.run.config()?;
-    let scene = scene::load(&args.scene)?;
-    let table = read_points(&args.points)?;
-    let receivers = Receivers::new(&scene, &table.points)
-        .map_err(|e| anyhow::anyhow!("{}:{}: {}", args.points, table.lines[e.index], e.message))?;
+/// Points and views of one run, compiled into receivers.
+pub struct Job {
+    /// Illuminance points, if any.
+    pub points: Option<PointTable>,
+    /// Views, if any, with where each one ends.
+    pub views: Option<(ViewTable, Vec<ViewTarget>)>,
+    /// Receiver index of each view (None: the view sees nothing or a back side).
+    pub view_receiver: Vec<Option<usize>>,
+    /// The compiled receivers: points first, then the views that meet a front side.
+    pub receivers: Receivers,
+}
+
+impl Job {
+    /// Read the lists and compile them against `scene`.
+    pub fn new(scene: &Scene, points: Option<&str>, views: Option<&str>) -> anyhow::Result<Job> {
+        let points_t = points.map(read_points).transpose()?;
+        let views_t = views.map(read_views).transpose()?;
+        let mut rec: Vec<Receiver> = Vec::new();
+        // File and line of each receiver, for error messages.
+        let mut origin: Vec<(&str, u64)> = Vec::new();
+        if let (Some(t), Some(path)) = (&points_t, points) {
+            for (&(p, n), &line) in t.points.iter().zip(&t.lines) {
+                rec.push(Receiver::illuminance(p, n));
+                origin.push((path, line));
+            }
+        }
+        let mut view_receiver = Vec::new();
+        let views = views_t.map(|t| {
+            let targets: Vec<ViewTarget> = t
+                .views
+                .iter()
+                .map(|&(o, d)| view_target(scene, o, d))
+                .collect();
+            for (target, &line) in targets.iter().zip(&t.lines) {
+                if let ViewTarget::Front(r) = target {
+                    view_receiver.push(Some(rec.len()));
+                    rec.push(*r);
+                    origin.push((views.unwrap_or("-"), line));
+                } else {
+                    view_receiver.push(None);
+                }
+            }
+            (t, targets)
+        });
+        let receivers = Receivers::from_receivers(scene, &rec).map_err(|e| {
+            let (file, line) = origin[e.index];
+            anyhow::anyhow!("{file}:{line}: {}", e.message)
+        })?;
+        Ok(Job {
+            points: points_t,
+            views,
+            view_receiver,
+            receivers,
+        })
+    }
+
+    /// CSV text of the points' results.
+    pub fn points_csv(&self, r: &RunResult, orders: u32) -> Option<Vec<u8>> {
+        let t = self.points.as_ref()?;
+        let mut headers = t.headers.clone();
+        headers.extend(result_headers("E", orders));
+        let rows: Vec<Vec<String>> = t
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(j, row)| {
+                let mut c = row.clone();
+                c.resize(t.headers.len(), String::new());
+                c.extend(result_cells(r, j));
+                c
+            })
+            .collect();
+        Some(to_csv(&headers, &rows))
+    }
+
+    /// CSV text of the views' results, with the sub-point `sx,sy,sz` (empty when the ray leaves the scene).
+    pub fn views_csv(&self, r: &RunResult, orders: u32) -> Option<Vec<u8>> {
+        let (t, targets) = self.views.as_ref()?;
+        let mut headers = t.headers.clone();
+        headers.extend(result_headers("L", orders));
+        headers.extend(["sx", "sy", "sz"].map(String::from));
+        let rows: Vec<Vec<String>> = t
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(k, row)| {
+                let mut c = row.clone();
+                c.resize(t.headers.len(), String::new());
+                match self.view_receiver[k] {
+                    Some(j) => c.extend(result_cells(r, j)),
+                    None => c.extend(zero_cells(orders)),
+                }
+                match targets[k].sub_point() {
+                    Some(s) => c.extend([s.x, s.y, s.z].map(format_number)),
+                    None => c.extend(["", "", ""].map(String::from)),
+                }
+                c
+            })
+            .collect();
+        Some(to_csv(&headers, &rows))
+    }
+}
+
+/// Run a job with the chosen estimator.
+pub fn run_job(
+    scene: &Scene,
+    job: &Job,
+    cfg: &RunConfig,
+    estimator: EstimatorKind,
+    quiet: bool,
+) -> RunResult {
+    let pb = progress_bar(cfg, quiet);
+    let mut observe = |p: &crate::run::Progress| {
+        tick(&pb, cfg, p);
+        true
+    };
+    let result = match estimator {
+        EstimatorKind::Local => run(scene, &job.receivers, cfg, &mut observe),
+        EstimatorKind::Backward => crate::backward::run(scene, &job.receivers, cfg, &mut observe),
+    };
+    pb.finish_and_clear();
+    result
+}
+
+fn measure(
+    scene_path: &std::path::Path,
+    points: Option<(&str, &str)>,
+    views: Option<(&str, &str)>,
+    estimator: EstimatorKind,
+    run_args: &RunArgs,
+) -> anyhow::Result<()> {
+    let cfg = run_args.config()?;
+    let scene = scene::load(scene_path)?;
+    let job = Job::new(&scene, points.map(|p| p.0), views.map(|v| v.0))?;
     eprintln!(
         "lumest: scene {}: {}",
-        args.scene.display(),
+        scene_path.display(),
         scene.summary()
     );
-    let pb = progress_bar(&cfg, args.run.quiet);
-    let result = run(&scene, &receivers, &cfg, &mut |p| {
-        tick(&pb, &cfg, p);
-        true
-    });
-    pb.finish_and_clear();
-    let mut headers = table.headers.clone();
-    headers.extend(result_headers(cfg.orders));
-    let rows: Vec<Vec<String>> = table
-        .rows
-        .iter()
-        .enumerate()
-        .map(|(j, row)| {
-            let mut r = row.clone();
-            r.resize(table.headers.len(), String::new());
-            r.extend(result_cells(&result, j));
-            r
-        })
-        .collect();
-    write_atomic(&args.out, &to_csv(&headers, &rows))
-        .with_context(|| format!("writing {}", args.out))?;
+    let result = run_job(&scene, &job, &cfg, estimator, run_args.quiet);
+    if let (Some((_, out)), Some(csv)) = (points, job.points_csv(&result, cfg.orders)) {
+        write_atomic(out, &csv).with_context(|| format!("writing {out}"))?;
+    }
+    if let (Some((_, out)), Some(csv)) = (views, job.views_csv(&result, cfg.orders)) {
+        write_atomic(out, &csv).with_context(|| format!("writing {out}"))?;
+    }
     for line in summary(&result).lines() {
         eprintln!("lumest: {line}");
     }
     Ok(())
+}
+
+/// Run `lumest illuminance`.
+pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
+    let views = a.views.as_deref().zip(a.views_out.as_deref());
+    measure(
+        &a.scene,
+        Some((&a.points, &a.out)),
+        views,
+        a.estimator,
+        &a.run,
+    )
+}
+
+/// Run `lumest luminance`.
+pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
+    let points = a.points.as_deref().zip(a.points_out.as_deref());
+    measure(
+        &a.scene,
+        points,
+        Some((&a.views, &a.out)),
+        a.estimator,
+        &a.run,
+    )
 }

@@ -128,7 +128,11 @@ pub(crate) fn tick(pb: &indicatif::ProgressBar, cfg: &RunConfig, p: &crate::run:
     };
     pb.set_position(pos);
     if p.tallies.batches() >= 2 {
-        pb.set_message(format!("{} chains, max R {:.2e}", p.chains, p.tallies.max_rel_error(p.direct)));
+        pb.set_message(format!(
+            "{} chains, max R {:.2e}",
+            p.chains,
+            p.tallies.max_rel_error(p.direct)
+        ));
     } else {
         pb.set_message(format!("{} chains", p.chains));
     }

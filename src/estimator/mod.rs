@@ -9,12 +9,27 @@
 //! where `x_n` are the collisions of a light-tracing chain with weights `Q_n`
 //! [lm], `wo_n` the unit direction from `x_n` to `p`, `theta_n` the angle
 //! between `wo_n` and the surface normal at `x_n`, `theta_p` the angle between
-//! `-wo_n` and `n_p`, `d_n = |p - x_n|`, and `V` the visibility. Every
-//! collision scores into every point at once. The first-order (direct) part
-//! is computed exactly and separately ([`Receivers::direct`]).
+//! `-wo_n` and `n_p`, `d_n = |p - x_n|`, and `V` the visibility.
+//!
+//! **Double local estimate** (ibid.): the luminance seen by an observer along
+//! a view ray that first meets a surface at the sub-point `r'` (front normal
+//! `n'`, BRDF `f'`, unit direction to the observer `wo'`) is, for light
+//! reflected at least twice,
+//!
+//! `L_ind = E[ sum_n Q_n f_r(wi_n, wo_n) cos(theta_n) cos(theta') / d_n^2 V(x_n, r') f'(wi', wo') ]`
+//!
+//! with `wi' = -wo_n` the direction from `r'` back to `x_n`: a local estimate
+//! at `r'` weighted by the sub-point's BRDF towards the observer. Both kinds
+//! are *receivers*: a point, a normal and a response (`1` for illuminance,
+//! `f'(wi', wo')` [1/sr] for luminance). Every collision scores into every
+//! receiver at once. The first order (light straight from the sources) is
+//! computed exactly and separately ([`Receivers::direct`]); point sources
+//! are never seen directly, so a view adds no emitted luminance.
 
 use crate::chain::Collision;
 use crate::geometry::SideMask;
+use crate::material::Material;
+use crate::sampling::warp::Frame;
 use crate::scene::Scene;
 use glam::DVec3;
 
@@ -34,21 +49,112 @@ pub fn local_kernel(x: DVec3, n_x: DVec3, p: DVec3, n_p: DVec3) -> f64 {
     }
 }
 
+/// What a receiver measures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Response {
+    /// Illuminance [lx] on the side the normal faces.
+    Illuminance,
+    /// Luminance [cd/m^2] leaving a surface point towards an observer: the
+    /// surface's `material` and the unit direction `wo` to the observer in the
+    /// local frame of the receiver's normal.
+    Luminance { material: Material, wo: DVec3 },
+}
+
+/// A receiver: a point [m], its unit normal and its response.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Receiver {
+    /// Position [m]: the point itself, or the sub-point of a view.
+    pub p: DVec3,
+    /// Unit normal: the point's, or the front normal at the sub-point.
+    pub n: DVec3,
+    /// What is measured there.
+    pub response: Response,
+}
+
+impl Receiver {
+    /// An illuminance point.
+    pub fn illuminance(p: DVec3, n: DVec3) -> Self {
+        Self {
+            p,
+            n,
+            response: Response::Illuminance,
+        }
+    }
+
+    /// Response to light arriving from unit world direction `wi` (towards
+    /// the source): 1 for illuminance, `f'(wi, wo)` [1/sr] for luminance.
+    #[inline]
+    pub fn weight(&self, frame: &Frame, wi: DVec3) -> f64 {
+        match self.response {
+            Response::Illuminance => 1.0,
+            Response::Luminance { material, wo } => material.eval(frame.to_local(wi), wo),
+        }
+    }
+
+    /// The response when it does not depend on the direction of arrival.
+    fn constant_weight(&self) -> Option<f64> {
+        match self.response {
+            Response::Illuminance => Some(1.0),
+            Response::Luminance { material, .. } => material.constant_brdf(),
+        }
+    }
+}
+
+/// Where a view ray (observer `o`, unit direction `d`) ends.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ViewTarget {
+    /// The ray leaves the scene: luminance 0 (there is no environment).
+    Miss,
+    /// The ray meets the back side of a surface at `p`: black, luminance 0.
+    Back { p: DVec3 },
+    /// The ray meets a front side: the receiver at the sub-point.
+    Front(Receiver),
+}
+
+impl ViewTarget {
+    /// The sub-point, if the ray meets a surface.
+    pub fn sub_point(&self) -> Option<DVec3> {
+        match self {
+            ViewTarget::Miss => None,
+            ViewTarget::Back { p } => Some(*p),
+            ViewTarget::Front(r) => Some(r.p),
+        }
+    }
+}
+
+/// Trace the view ray from observer `o` [m] looking along unit `d` to its sub-point.
+pub fn view_target(scene: &Scene, o: DVec3, d: DVec3) -> ViewTarget {
+    match scene.first_hit_from(o, d) {
+        None => ViewTarget::Miss,
+        Some(h) if d.dot(h.n) >= 0.0 => ViewTarget::Back { p: h.p },
+        Some(h) => {
+            let material = scene.surfaces[h.surface as usize].material;
+            let wo = Frame::from_normal(h.n).to_local(-d);
+            ViewTarget::Front(Receiver {
+                p: h.p,
+                n: h.n,
+                response: Response::Luminance { material, wo },
+            })
+        }
+    }
+}
+
 /// Error building receivers from a point list.
 #[derive(Debug, thiserror::Error, PartialEq)]
 #[error("point {index}: {message}")]
 pub struct ReceiverError {
-    /// 0-based index of the point in the list.
+    /// 0-based index of the receiver in the list.
     pub index: usize,
     /// What is wrong.
     pub message: String,
 }
 
-/// Points that can receive light reflected at one surface, stored as
-/// structure of arrays so the scoring loop vectorises.
+/// Receivers that can be reached from one surface, as structure of arrays so
+/// the scoring loop vectorises. Entries `..n_const` have a constant response
+/// `w`; the rest (luminance at glossy sub-points) are evaluated per pair.
 #[derive(Clone, Debug, Default)]
 struct ReceiverList {
-    /// Index of each entry in the user's point list.
+    /// Index of each entry in the user's receiver list.
     idx: Vec<u32>,
     px: Vec<f64>,
     py: Vec<f64>,
@@ -56,32 +162,48 @@ struct ReceiverList {
     nx: Vec<f64>,
     ny: Vec<f64>,
     nz: Vec<f64>,
+    /// Constant response (1 or `rho/pi`); unused for general entries.
+    w: Vec<f64>,
     masks: Vec<SideMask>,
+    /// Entries with a constant response come first.
+    n_const: usize,
     /// Planes (bits) that could separate a collision on this surface from some entry.
     blockers: u64,
     /// Offset of this list in a flat accumulator.
     offset: usize,
 }
 
-/// Illuminance receivers (points with normals), compiled against a scene.
+/// Receivers compiled against a scene.
 #[derive(Clone, Debug)]
 pub struct Receivers {
-    n_points: usize,
+    all: Vec<Receiver>,
+    frames: Vec<Frame>,
     lists: Vec<ReceiverList>,
     total_len: usize,
     direct: Vec<f64>,
 }
 
 impl Receivers {
-    /// Compile points `p` [m] with unit normals `n` against `scene`.
-    ///
-    /// A point enters the list of a surface only if it lies strictly in front
-    /// of it (a collision there can score into it); the exact direct
-    /// illuminance is computed here once.
+    /// Compile illuminance points `p` [m] with unit normals `n` against `scene`.
     pub fn new(scene: &Scene, points: &[(DVec3, DVec3)]) -> Result<Self, ReceiverError> {
-        let masks: Vec<SideMask> = points.iter().map(|(p, _)| scene.side_mask(*p)).collect();
-        let mut direct = vec![0.0; points.len()];
-        for (j, (p, n)) in points.iter().enumerate() {
+        let r: Vec<Receiver> = points
+            .iter()
+            .map(|&(p, n)| Receiver::illuminance(p, n))
+            .collect();
+        Self::from_receivers(scene, &r)
+    }
+
+    /// Compile any receivers against `scene`.
+    ///
+    /// A receiver enters the list of a surface only if it lies strictly in
+    /// front of it (a collision there can score into it); the exact first
+    /// order is computed here once.
+    pub fn from_receivers(scene: &Scene, receivers: &[Receiver]) -> Result<Self, ReceiverError> {
+        let masks: Vec<SideMask> = receivers.iter().map(|r| scene.side_mask(r.p)).collect();
+        let frames: Vec<Frame> = receivers.iter().map(|r| Frame::from_normal(r.n)).collect();
+        let mut direct = vec![0.0; receivers.len()];
+        for (j, rec) in receivers.iter().enumerate() {
+            let (p, n) = (rec.p, rec.n);
             if !(p.is_finite() && n.is_finite() && (n.length() - 1.0).abs() < 1e-9) {
                 return Err(ReceiverError {
                     index: j,
@@ -90,7 +212,7 @@ impl Receivers {
             }
             for l in &scene.lights {
                 let lp = l.position();
-                if (lp - *p).length() <= 1e-12 * lp.abs().max_element().max(p.abs().max_element()) {
+                if (lp - p).length() <= 1e-12 * lp.abs().max_element().max(p.abs().max_element()) {
                     return Err(ReceiverError {
                         index: j,
                         message: format!(
@@ -99,53 +221,74 @@ impl Receivers {
                     });
                 }
                 if scene.side_mask(lp).sees(masks[j]) {
-                    direct[j] += l.direct_illuminance(*p, *n);
+                    let wi = (lp - p).normalize();
+                    direct[j] += l.direct_illuminance(p, n) * rec.weight(&frames[j], wi);
                 }
             }
         }
         let mut lists = Vec::with_capacity(scene.planes.len());
         let mut offset = 0;
-        for (s, _) in scene.planes.iter().enumerate() {
+        for s in 0..scene.planes.len() {
             let mut list = ReceiverList {
                 offset,
                 ..Default::default()
             };
-            for (j, (p, n)) in points.iter().enumerate() {
-                if masks[j].front & (1 << s) == 0 {
-                    continue;
-                }
+            let reach = |j: &usize| masks[*j].front & (1 << s) != 0;
+            let constant = (0..receivers.len())
+                .filter(reach)
+                .filter(|&j| receivers[j].constant_weight().is_some());
+            let general = (0..receivers.len())
+                .filter(reach)
+                .filter(|&j| receivers[j].constant_weight().is_none());
+            let order: Vec<usize> = constant.chain(general).collect();
+            for j in order {
+                let rec = &receivers[j];
                 list.idx.push(j as u32);
-                list.px.push(p.x);
-                list.py.push(p.y);
-                list.pz.push(p.z);
-                list.nx.push(n.x);
-                list.ny.push(n.y);
-                list.nz.push(n.z);
+                list.px.push(rec.p.x);
+                list.py.push(rec.p.y);
+                list.pz.push(rec.p.z);
+                list.nx.push(rec.n.x);
+                list.ny.push(rec.n.y);
+                list.nz.push(rec.n.z);
                 list.masks.push(masks[j]);
+                match rec.constant_weight() {
+                    Some(w) => {
+                        list.w.push(w);
+                        list.n_const += 1;
+                    }
+                    None => list.w.push(0.0),
+                }
                 list.blockers |= (masks[j].front | masks[j].back) & !(1 << s);
             }
             offset += list.idx.len();
             lists.push(list);
         }
         Ok(Self {
-            n_points: points.len(),
+            all: receivers.to_vec(),
+            frames,
             lists,
             total_len: offset,
             direct,
         })
     }
 
-    /// Number of points.
+    /// Number of receivers.
     pub fn len(&self) -> usize {
-        self.n_points
+        self.all.len()
     }
 
-    /// True when there are no points.
+    /// True when there are no receivers.
     pub fn is_empty(&self) -> bool {
-        self.n_points == 0
+        self.all.is_empty()
     }
 
-    /// Exact direct illuminance at each point [lx].
+    /// The receivers, in input order.
+    pub fn receivers(&self) -> &[Receiver] {
+        &self.all
+    }
+
+    /// Exact first order at each receiver: illuminance [lx] straight from the
+    /// sources, or the luminance [cd/m^2] of light reflected once at the sub-point.
     pub fn direct(&self) -> &[f64] {
         &self.direct
     }
@@ -155,9 +298,9 @@ impl Receivers {
         self.total_len
     }
 
-    /// Add the local-estimate scores [lx] of collision `c` into `acc` (one
-    /// bucket of length [`Self::accumulator_len`]); returns the number of
-    /// point scores evaluated.
+    /// Add the scores of collision `c` (local estimate [lx] or double local
+    /// estimate [cd/m^2]) into `acc` (one bucket of length
+    /// [`Self::accumulator_len`]); returns the number of receiver scores evaluated.
     #[inline]
     pub fn score(&self, scene: &Scene, c: &Collision, acc: &mut [f64]) -> usize {
         let list = &self.lists[c.surface as usize];
@@ -166,10 +309,6 @@ impl Receivers {
             return 0;
         }
         let material = &scene.surfaces[c.surface as usize].material;
-        let f = material
-            .constant_brdf()
-            .expect("only Lambertian materials exist");
-        let qf = c.q * f;
         let acc = &mut acc[list.offset..list.offset + len];
         let (x, n) = (c.p, c.n);
         let xm = if list.blockers != 0 {
@@ -177,15 +316,54 @@ impl Receivers {
         } else {
             SideMask::default()
         };
-        if (xm.front | xm.back) & list.blockers == 0 {
-            score_open(list, x, n, qf, acc);
-        } else {
-            score_masked(list, x, n, qf, xm, acc);
+        let open = (xm.front | xm.back) & list.blockers == 0;
+        let nc = list.n_const;
+        match material.constant_brdf() {
+            Some(f) if open => score_open(list, x, n, c.q * f, &mut acc[..nc]),
+            _ => self.score_general(list, 0..nc, material, c, xm, acc),
+        }
+        if nc < len {
+            self.score_general(list, nc..len, material, c, xm, acc);
         }
         len
     }
 
-    /// Add a flat accumulator bucket (see [`Self::score`]) into per-point sums.
+    /// Per-pair scoring: any BRDF at the collision and at the receiver, with
+    /// visibility masks.
+    fn score_general(
+        &self,
+        list: &ReceiverList,
+        range: std::ops::Range<usize>,
+        material: &Material,
+        c: &Collision,
+        xm: SideMask,
+        acc: &mut [f64],
+    ) {
+        let frame = Frame::from_normal(c.n);
+        let wi = frame.to_local(c.wi);
+        for k in range {
+            if !xm.sees(list.masks[k]) {
+                continue;
+            }
+            let p = DVec3::new(list.px[k], list.py[k], list.pz[k]);
+            let np = DVec3::new(list.nx[k], list.ny[k], list.nz[k]);
+            let g = local_kernel(c.p, c.n, p, np);
+            if g == 0.0 {
+                continue;
+            }
+            let wo = (p - c.p).normalize();
+            let f = material.eval(wi, frame.to_local(wo));
+            let j = list.idx[k] as usize;
+            let w = if k < list.n_const {
+                list.w[k]
+            } else {
+                self.all[j].weight(&self.frames[j], -wo)
+            };
+            acc[k] += c.q * f * g * w;
+        }
+    }
+
+    /// Add a flat accumulator bucket (see [`Self::score`]) into per-receiver sums.
     pub fn reduce(&self, acc: &[f64], per_point: &mut [f64]) {
         for list in &self.lists {
             for (k, &j) in list.idx.iter().enumerate() {
@@ -196,31 +374,20 @@ impl Receivers {
 }
 
 /// Score a collision at `x` (front normal `n`, weight times BRDF `qf`) into
-/// every entry of `list`, no plane in the way. Written over zipped slices so
-/// the compiler drops bounds checks and vectorises.
+/// the constant-response entries of `list`, no plane in the way. Written over
+/// zipped slices so the compiler drops bounds checks and vectorises.
 #[inline]
 fn score_open(list: &ReceiverList, x: DVec3, n: DVec3, qf: f64, acc: &mut [f64]) {
     let it = acc
         .iter_mut()
         .zip(list.px.iter().zip(&list.py).zip(&list.pz))
-        .zip(list.nx.iter().zip(&list.ny).zip(&list.nz));
-    for (a, ((px, py), pz), ((nx, ny), nz)) in it.map(|((a, p), q)| (a, p, q)) {
+        .zip(list.nx.iter().zip(&list.ny).zip(&list.nz))
+        .zip(&list.w);
+    for (((a, ((px, py), pz)), ((nx, ny), nz)), w) in it {
         let (dx, dy, dz) = (px - x.x, py - x.y, pz - x.z);
         let cx = (n.x * dx + n.y * dy + n.z * dz).max(0.0);
         let cp = (-(nx * dx + ny * dy + nz * dz)).max(0.0);
         let d2 = dx * dx + dy * dy + dz * dz;
-        *a += qf * cx * cp / (d2 * d2);
-    }
-}
-
-/// As [`score_open`], with entries hidden from `x` by a plane scoring zero.
-#[inline]
-fn score_masked(list: &ReceiverList, x: DVec3, n: DVec3, qf: f64, xm: SideMask, acc: &mut [f64]) {
-    for (k, a) in acc.iter_mut().enumerate() {
-        if xm.sees(list.masks[k]) {
-            let p = DVec3::new(list.px[k], list.py[k], list.pz[k]);
-            let np = DVec3::new(list.nx[k], list.ny[k], list.nz[k]);
-            *a += qf * local_kernel(x, n, p, np);
-        }
+        *a += qf * w * cx * cp / (d2 * d2);
     }
 }

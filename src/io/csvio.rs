@@ -184,6 +184,57 @@ pub fn read_points(path: &str) -> Result<PointTable, InputError> {
     })
 }
 
+/// A view list as read: raw columns and parsed observer rays.
+#[derive(Clone, Debug, Default)]
+pub struct ViewTable {
+    /// Header names in file order.
+    pub headers: Vec<String>,
+    /// Raw cells of each row.
+    pub rows: Vec<Vec<String>>,
+    /// Line number of each row (1-based).
+    pub lines: Vec<u64>,
+    /// Observer position [m] and unit viewing direction of each row.
+    pub views: Vec<(DVec3, DVec3)>,
+}
+
+/// Read a view list (`x,y,z,dx,dy,dz` plus any other columns): the observer
+/// position and the direction it looks in (any non-zero length).
+pub fn read_views(path: &str) -> Result<ViewTable, InputError> {
+    let t = read_table(path)?;
+    let names = ["x", "y", "z", "dx", "dy", "dz"];
+    let cols = columns(&t.headers, &names, path)?;
+    let mut views = Vec::with_capacity(t.rows.len());
+    for (row, &line) in t.rows.iter().zip(&t.lines) {
+        let mut v = [0.0; 6];
+        for (k, (&c, name)) in cols.iter().zip(names).enumerate() {
+            v[k] = number(row.get(c).map_or("", String::as_str), path, line, name)?;
+        }
+        let d = DVec3::new(v[3], v[4], v[5]);
+        let len = d.length();
+        if !(len > 0.0 && len.is_finite()) {
+            return Err(InputError::Field {
+                file: display_name(path),
+                line,
+                field: "dx,dy,dz".into(),
+                message: "the view direction has zero length".into(),
+            });
+        }
+        views.push((DVec3::new(v[0], v[1], v[2]), d / len));
+    }
+    if views.is_empty() {
+        return Err(InputError::File {
+            file: display_name(path),
+            message: "no views in the file".into(),
+        });
+    }
+    Ok(ViewTable {
+        headers: t.headers,
+        rows: t.rows,
+        lines: t.lines,
+        views,
+    })
+}
+
 /// Shortest round-trip text of `x`, in scientific notation when very small or large.
 pub fn format_number(x: f64) -> String {
     let a = x.abs();

@@ -3,4 +3,6 @@
 pub mod csvio;
 pub mod plot;
 
-pub use csvio::{InputError, PointTable, format_number, read_points, write_atomic};
+pub use csvio::{
+    InputError, PointTable, ViewTable, format_number, read_points, read_views, write_atomic,
+};

@@ -224,6 +224,30 @@ impl Scene {
         })
     }
 
+    /// First surface hit by a ray leaving `o` (an observer, possibly standing
+    /// on a surface: planes through `o` are ignored) in unit direction `d`.
+    pub fn first_hit_from(&self, o: DVec3, d: DVec3) -> Option<Hit> {
+        let mut best: Option<(f64, u32)> = None;
+        for (k, pl) in self.planes.iter().enumerate() {
+            if pl.side(o) == 0 {
+                continue;
+            }
+            let t_max = best.map_or(f64::INFINITY, |b| b.0);
+            if let Some(t) = pl.intersect(&Ray { o, d }, t_max) {
+                best = Some((t, k as u32));
+            }
+        }
+        best.map(|(t, k)| {
+            let pl = &self.planes[k as usize];
+            Hit {
+                t,
+                p: pl.project(o + d * t),
+                n: pl.n,
+                surface: k,
+            }
+        })
+    }
+
     /// Visibility masks of a point against every plane.
     pub fn side_mask(&self, q: DVec3) -> SideMask {
         SideMask::of(q, &self.planes)

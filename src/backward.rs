@@ -1,0 +1,199 @@
+//! Backward (observer-side) path tracing with next-event estimation: an
+//! estimator independent of the light-tracing chains and the local
+//! estimates, for cross-checks and honest comparisons.
+//!
+//! For each receiver a batch traces `bs` paths. A path leaves the receiver
+//! in a direction sampled from its response: cosine-weighted about the normal
+//! for illuminance (`E = pi E[L_i]`), the sub-point's BRDF for luminance
+//! (weight `f' cos / pdf`). At each surface vertex `k = 1, 2, ...` it adds
+//! next-event estimation from every point light, `beta f_k(wi_l, wo) I cos / d^2 V`,
+//! which is light reflected `k` times before it reaches the receiver (the
+//! same order buckets as the local estimate), then continues by sampling the
+//! BRDF, with Russian roulette on the throughput. The first order is the
+//! exact one shared with the local estimator ([`Receivers::direct`]).
+//!
+//! Path `s` of batch `b` at receiver `j` draws from the Philox stream
+//! `(seed ^ BACKWARD_KEY, (b bs + s) n + j)`, so results do not depend on the
+//! thread count.
+
+use crate::estimator::{Receiver, Receivers, Response};
+use crate::geometry::Ray;
+use crate::run::{Batch, BatchWork, Progress, RunConfig, RunResult, drive, no_light};
+use crate::sampling::Philox4x32;
+use crate::sampling::warp::{Frame, sample_cosine_hemisphere};
+use crate::scene::Scene;
+
+/// Key offset separating backward streams from the chains' streams.
+const BACKWARD_KEY: u64 = 0x6261_636b_7761_7264; // "backward"
+
+struct BackwardWork<'a> {
+    scene: &'a Scene,
+    receivers: &'a Receivers,
+    frames: Vec<Frame>,
+}
+
+/// Run the backward estimator on `receivers` (same statistics, stopping
+/// rules and output as [`crate::run::run`]; "chains" count paths).
+pub fn run(
+    scene: &Scene,
+    receivers: &Receivers,
+    cfg: &RunConfig,
+    observe: &mut dyn FnMut(&Progress) -> bool,
+) -> RunResult {
+    if scene.total_power() <= 0.0 {
+        return no_light(receivers.direct(), cfg);
+    }
+    let frames = receivers
+        .receivers()
+        .iter()
+        .map(|r| Frame::from_normal(r.n))
+        .collect();
+    drive(
+        &BackwardWork {
+            scene,
+            receivers,
+            frames,
+        },
+        cfg,
+        observe,
+    )
+}
+
+impl BatchWork for BackwardWork<'_> {
+    fn len(&self) -> usize {
+        self.receivers.len()
+    }
+
+    fn direct(&self) -> &[f64] {
+        self.receivers.direct()
+    }
+
+    fn scratch_len(&self, _buckets: usize) -> usize {
+        0
+    }
+
+    /// Paths per receiver per batch: about 2^18 paths per batch in all, at
+    /// least `MIN_BATCHES` batches for a `--chains` run (chains = paths per receiver).
+    fn default_batch_size(&self, chains: Option<u64>) -> u64 {
+        let n = self.receivers.len().max(1) as u64;
+        let mut bs = ((1u64 << 18) / n).clamp(1, 1 << 14);
+        if let Some(c) = chains {
+            bs = bs.min(c.div_ceil(crate::run::MIN_BATCHES)).max(1);
+        }
+        bs
+    }
+
+    fn run_batch(
+        &self,
+        cfg: &RunConfig,
+        b: u64,
+        bs: u64,
+        buckets: usize,
+        _scratch: &mut [f64],
+    ) -> Batch {
+        let n = self.receivers.len();
+        let mut sums = vec![0.0; buckets * n];
+        let mut vertices = 0u64;
+        let k_max = cfg.orders;
+        for (j, rec) in self.receivers.receivers().iter().enumerate() {
+            for s in 0..bs {
+                let stream = (b * bs + s) * n as u64 + j as u64;
+                let mut rng = Philox4x32::new(cfg.seed ^ BACKWARD_KEY, stream);
+                vertices += trace(
+                    self.scene,
+                    rec,
+                    &self.frames[j],
+                    cfg,
+                    &mut rng,
+                    |order, v| {
+                        let k = if k_max == 0 {
+                            0
+                        } else {
+                            (order.min(k_max + 1) - 1) as usize
+                        };
+                        sums[k * n + j] += v;
+                    },
+                );
+            }
+        }
+        Batch {
+            index: b,
+            chains: bs * n as u64,
+            sums,
+            collisions: vertices,
+            scores: vertices,
+        }
+    }
+}
+
+/// Trace one path from receiver `rec`; `add(order, value)` receives each
+/// next-event contribution. Returns the number of surface vertices.
+fn trace<F: FnMut(u32, f64)>(
+    scene: &Scene,
+    rec: &Receiver,
+    frame: &Frame,
+    cfg: &RunConfig,
+    rng: &mut Philox4x32,
+    mut add: F,
+) -> u64 {
+    // First direction, from the receiver's response.
+    let (d_local, mut beta) = match rec.response {
+        Response::Illuminance => {
+            let s = sample_cosine_hemisphere(rng.next_2d());
+            (s.w, std::f64::consts::PI)
+        }
+        Response::Luminance { material, wo } => {
+            let s = material.sample(wo, rng.next_2d());
+            if s.pdf <= 0.0 || s.w.z <= 0.0 {
+                return 0;
+            }
+            (s.w, material.eval(s.w, wo) * s.w.z / s.pdf)
+        }
+    };
+    let beta0 = beta;
+    let rr = cfg.chain.rr_weight * beta0;
+    let mut d = frame.to_world(d_local);
+    let mut hit = scene.first_hit_from(rec.p, d);
+    let mut order = 0u32;
+    let mut vertices = 0;
+    while let Some(h) = hit {
+        if d.dot(h.n) >= 0.0 || beta <= 0.0 {
+            break; // back side: black
+        }
+        order += 1;
+        vertices += 1;
+        let m = &scene.surfaces[h.surface as usize].material;
+        let f_frame = Frame::from_normal(h.n);
+        let wo = f_frame.to_local(-d);
+        // Next-event estimation from every point light.
+        let hm = scene.side_mask(h.p);
+        for l in &scene.lights {
+            let lp = l.position();
+            if !scene.side_mask(lp).sees(hm) {
+                continue;
+            }
+            let e = l.direct_illuminance(h.p, h.n);
+            if e > 0.0 {
+                let wi = f_frame.to_local((lp - h.p).normalize());
+                add(order, beta * m.eval(wi, wo) * e);
+            }
+        }
+        if cfg.chain.max_order.is_some_and(|k| order >= k) {
+            break;
+        }
+        let s = m.sample(wo, rng.next_2d());
+        if s.pdf <= 0.0 || s.w.z <= 0.0 {
+            break;
+        }
+        beta *= m.eval(s.w, wo) * s.w.z / s.pdf;
+        if beta < rr {
+            if rng.next_f64() >= beta / rr {
+                break;
+            }
+            beta = rr;
+        }
+        d = f_frame.to_world(s.w);
+        hit = scene.intersect(&Ray { o: h.p, d }, Some(h.surface));
+    }
+    vertices
+}
