@@ -80,6 +80,7 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
                 elapsed: r.wall,
             },
             &exact,
+            0..n,
         );
         let target = if n <= 100 { 1e-4 } else { 1e-3 };
         println!(

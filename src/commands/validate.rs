@@ -2,7 +2,7 @@
 
 use super::sobolev::SobolevParams;
 use super::{progress_bar, tick};
-use crate::estimator::Receivers;
+use crate::estimator::{Receiver, Receivers, ViewTarget, view_target};
 use crate::geometry::Plane;
 use crate::io::csvio::to_csv;
 use crate::io::plot::{Series, loglog_svg};
@@ -17,6 +17,7 @@ use anyhow::Context;
 use clap::{Args, Subcommand};
 use glam::DVec3;
 use rayon::prelude::*;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 /// Validation cases.
@@ -34,6 +35,9 @@ pub struct ValidateSobolevArgs {
     /// Number of points, half on each plane.
     #[arg(long, default_value_t = 100)]
     pub points: usize,
+    /// Number of views (luminance), half looking at each plane.
+    #[arg(long, default_value_t = 50)]
+    pub views: usize,
     /// Largest horizontal distance of the points [m].
     #[arg(long = "r-max", default_value_t = 3.0)]
     pub r_max: f64,
@@ -150,11 +154,13 @@ pub struct Checkpoint {
     pub fom: f64,
 }
 
-/// Compare the current estimate with exact totals [lx].
-pub fn checkpoint(p: &Progress, exact: &[f64]) -> Checkpoint {
-    let n = exact.len() as f64;
+/// Compare the current estimate with exact totals ([lx] or [cd/m^2]) over
+/// the receivers `range`.
+pub fn checkpoint(p: &Progress, exact: &[f64], range: Range<usize>) -> Checkpoint {
+    let n = range.len() as f64;
     let (mut se2, mut emax, mut r2, mut zmax) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
-    for (j, &ex) in exact.iter().enumerate() {
+    for j in range {
+        let ex = exact[j];
         let w = &p.tallies.indirect[j];
         let e = p.direct[j] + w.mean();
         let err = (e - ex).abs() / ex;
@@ -178,14 +184,16 @@ pub fn checkpoint(p: &Progress, exact: &[f64]) -> Checkpoint {
     }
 }
 
-/// Run a case with checkpoints at geometrically spaced times up to `cfg.stop.time`.
+/// Run a case with checkpoints at geometrically spaced times up to
+/// `cfg.stop.time`; one table of checkpoints per group of receivers.
 pub fn convergence(
     scene: &Scene,
     receivers: &Receivers,
     exact: &[f64],
+    groups: &[Range<usize>],
     cfg: &RunConfig,
     quiet: bool,
-) -> (RunResult, Vec<Checkpoint>) {
+) -> (RunResult, Vec<Vec<Checkpoint>>) {
     let t_end = cfg.stop.time.unwrap_or(10.0);
     let mut marks: Vec<f64> = (0..12)
         .rev()
@@ -193,7 +201,7 @@ pub fn convergence(
         .filter(|&t| t >= 0.05 && t < 0.99 * t_end)
         .collect();
     marks.reverse(); // pop() yields the earliest
-    let mut rows = Vec::new();
+    let mut rows = vec![Vec::new(); groups.len()];
     let pb = progress_bar(cfg, quiet);
     let result = run(scene, receivers, cfg, &mut |p| {
         tick(&pb, cfg, p);
@@ -201,7 +209,9 @@ pub fn convergence(
             while marks.last().is_some_and(|&t| p.elapsed >= t) {
                 marks.pop();
             }
-            rows.push(checkpoint(p, exact));
+            for (g, range) in groups.iter().enumerate() {
+                rows[g].push(checkpoint(p, exact, range.clone()));
+            }
         }
         true
     });
@@ -213,12 +223,14 @@ pub fn convergence(
         scores: result.scores,
         elapsed: result.wall,
     };
-    let fin = checkpoint(&last, exact);
-    if rows
-        .last()
-        .is_none_or(|r: &Checkpoint| r.chains != fin.chains)
-    {
-        rows.push(fin);
+    for (g, range) in groups.iter().enumerate() {
+        let fin = checkpoint(&last, exact, range.clone());
+        if rows[g]
+            .last()
+            .is_none_or(|r: &Checkpoint| r.chains != fin.chains)
+        {
+            rows[g].push(fin);
+        }
     }
     (result, rows)
 }
@@ -327,9 +339,62 @@ pub fn print_table(rows: &[Checkpoint]) {
     }
 }
 
-/// Run `lumest validate sobolev`. Fails when the final max |z| exceeds the Sidak bound.
+/// Views of the Sobolev case with exact luminance [cd/m^2].
+///
+/// View `k` looks from a point of one plane at a sub-point of the other
+/// plane at horizontal distance `r'` (evenly spaced in `[0, r_max]`), from a
+/// horizontal offset of `0.8 H` so that the views are oblique. For
+/// Lambertian planes the exact luminance is `rho_j E_j(r') / pi` on the
+/// plane `j` of the sub-point.
+pub fn sobolev_views(
+    s: &Sobolev,
+    scene: &Scene,
+    n_views: usize,
+    r_max: f64,
+) -> (Vec<(DVec3, DVec3)>, Vec<Receiver>, Vec<f64>) {
+    let h = s.h1 + s.h2;
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let per_plane = [n_views.div_ceil(2), n_views / 2];
+    let mut views = Vec::with_capacity(n_views);
+    let mut receivers = Vec::with_capacity(n_views);
+    let mut exact = Vec::with_capacity(n_views);
+    for j in 0..n_views {
+        let k = j / 2;
+        let target_plane = (j % 2) as u8 + 1;
+        let m = per_plane[(target_plane - 1) as usize];
+        let rk = if m > 1 {
+            r_max * k as f64 / (m - 1) as f64
+        } else {
+            0.0
+        };
+        let phi = golden * j as f64 + 1.0;
+        let (z_t, z_o) = if target_plane == 2 {
+            (h, 0.0)
+        } else {
+            (0.0, h)
+        };
+        let target = DVec3::new(rk * phi.cos(), rk * phi.sin(), z_t);
+        let offset = DVec3::new((phi + 2.0).cos(), (phi + 2.0).sin(), 0.0) * 0.8 * h;
+        let o = DVec3::new(target.x, target.y, z_o) + offset;
+        let d = (target - o).normalize();
+        let ViewTarget::Front(rec) = view_target(scene, o, d) else {
+            unreachable!("a view between the planes always meets the front side of the other plane")
+        };
+        let rho = if target_plane == 1 { s.rho1 } else { s.rho2 };
+        views.push((o, d));
+        receivers.push(rec);
+        exact.push(rho * s.illuminance(target_plane, rk).e / std::f64::consts::PI);
+    }
+    (views, receivers, exact)
+}
+
+/// Run `lumest validate sobolev`: illuminance at points and luminance along
+/// views in one run. Fails when the final max |z| exceeds the Sidak bound.
 pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(a.points >= 1, "--points must be at least 1");
+    anyhow::ensure!(
+        a.points + a.views >= 1,
+        "--points plus --views must be at least 1"
+    );
     anyhow::ensure!(
         a.time > 0.0 && a.time.is_finite(),
         "--time must be positive"
@@ -340,46 +405,78 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
     );
     let problem = a.params.problem()?;
     let case = sobolev_case(&problem, a.points, a.r_max);
+    let (_, views, view_exact) = sobolev_views(&problem, &case.scene, a.views, a.r_max);
+    let mut all: Vec<Receiver> = case
+        .points
+        .iter()
+        .map(|&(p, n)| Receiver::illuminance(p, n))
+        .collect();
+    all.extend(views);
     let receivers =
-        Receivers::new(&case.scene, &case.points).map_err(|e| anyhow::anyhow!("{e}"))?;
+        Receivers::from_receivers(&case.scene, &all).map_err(|e| anyhow::anyhow!("{e}"))?;
     let cfg = RunConfig::timed(a.seed, a.threads, a.time);
-    let exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
+    let mut exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
+    exact.extend(&view_exact);
     println!(
-        "Sobolev: h1={} h2={} rho1={} rho2={} I={} cd; {} points, r in [0, {}] m, {} s",
+        "Sobolev: h1={} h2={} rho1={} rho2={} I={} cd; {} points and {} views, r in [0, {}] m, {} s",
         problem.h1,
         problem.h2,
         problem.rho1,
         problem.rho2,
         problem.intensity,
         a.points,
+        a.views,
         a.r_max,
         a.time
     );
-    let (result, rows) = convergence(&case.scene, &receivers, &exact, &cfg, a.quiet);
-    print_table(&rows);
-    let slope = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_r)).collect::<Vec<_>>());
-    let slope_err = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_err)).collect::<Vec<_>>());
-    println!(
-        "log-log slope vs time: estimated R {slope:.3}, actual error {slope_err:.3} (ideal -0.5)"
-    );
-    write_report(
-        &a.report,
-        "sobolev",
-        &rows,
-        "Sobolev problem: relative error of E against run time",
-    )?;
-    // Per-point comparison.
-    let headers: Vec<String> = ["plane", "r", "E_exact", "E", "E_stderr", "z"]
+    let np = a.points;
+    let groups = [0..np, np..np + a.views];
+    let (result, tables) = convergence(&case.scene, &receivers, &exact, &groups, &cfg, a.quiet);
+    let names = [
+        ("sobolev", "illuminance E [lx]"),
+        ("sobolev_luminance", "luminance L [cd/m^2]"),
+    ];
+    for ((name, what), (rows, range)) in names.iter().zip(tables.iter().zip(&groups)) {
+        if range.is_empty() {
+            continue;
+        }
+        println!("{what}:");
+        print_table(rows);
+        let slope = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_r)).collect::<Vec<_>>());
+        let slope_err = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_err)).collect::<Vec<_>>());
+        println!(
+            "log-log slope vs time: estimated R {slope:.3}, actual error {slope_err:.3} (ideal -0.5)"
+        );
+        write_report(
+            &a.report,
+            name,
+            rows,
+            &format!("Sobolev problem: relative error of {what} against run time"),
+        )?;
+    }
+    // Per-receiver comparison.
+    let headers: Vec<String> = ["kind", "plane", "r", "exact", "estimate", "stderr", "z"]
         .iter()
         .map(|s| s.to_string())
         .collect();
-    let cells: Vec<Vec<String>> = (0..a.points)
+    let cells: Vec<Vec<String>> = (0..exact.len())
         .map(|j| {
             let w = &result.tallies.indirect[j];
             let e = result.direct[j] + w.mean();
+            let (kind, plane, r) = if j < np {
+                ("E", case.plane[j].to_string(), format_number(case.r[j]))
+            } else {
+                let p = receivers.receivers()[j].p;
+                (
+                    "L",
+                    if p.z > 0.0 { "2" } else { "1" }.to_string(),
+                    format_number(p.x.hypot(p.y)),
+                )
+            };
             vec![
-                case.plane[j].to_string(),
-                format_number(case.r[j]),
+                kind.to_string(),
+                plane,
+                r,
                 format_number(exact[j]),
                 format_number(e),
                 format_number(w.std_error()),
@@ -391,15 +488,23 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
         &a.report.join("sobolev_points.csv").to_string_lossy(),
         &to_csv(&headers, &cells),
     )?;
-    let fin = rows.last().expect("final checkpoint");
-    let bound = sidak_bound(a.alpha, a.points, Some(fin.batches));
+    let all_range = [0..exact.len()];
+    let last = Progress {
+        tallies: &result.tallies,
+        direct: &result.direct,
+        chains: result.chains,
+        scores: result.scores,
+        elapsed: result.wall,
+    };
+    let fin = checkpoint(&last, &exact, all_range[0].clone());
+    let bound = sidak_bound(a.alpha, exact.len(), Some(fin.batches));
     let pass = fin.max_z <= bound;
     println!(
-        "max |z| = {:.3} against the Sidak bound {:.3} (alpha {}, {} points, {} batches): {}",
+        "max |z| = {:.3} against the Sidak bound {:.3} (alpha {}, {} receivers, {} batches): {}",
         fin.max_z,
         bound,
         a.alpha,
-        a.points,
+        exact.len(),
         fin.batches,
         if pass { "PASS" } else { "FAIL" }
     );
