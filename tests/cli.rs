@@ -215,3 +215,80 @@ fn sobolev_command_prints_exact_values() {
         assert!((row[4] / o1 - 1.0).abs() < 1e-9, "{} vs {o1}", row[4]);
     }
 }
+
+#[test]
+fn luminance_views_and_mixed_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = write(dir.path(), "scene.toml", SCENE);
+    let p = write(dir.path(), "points.csv", POINTS);
+    let v = write(
+        dir.path(),
+        "views.csv",
+        "id,x,y,z,dx,dy,dz\nup,0,0,0,0,0,2\nmiss,0,0,0.5,1,0,0\nback,0,0,-1,0,0,1\n",
+    );
+    let views_out = dir.path().join("L.csv");
+    let points_out = dir.path().join("E.csv");
+    let o = lumest()
+        .args(["luminance", "--scene", &s, "--views", &v, "--out"])
+        .arg(&views_out)
+        .args(["--points", &p, "--points-out"])
+        .arg(&points_out)
+        .args(["--chains", "4000", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let l = std::fs::read_to_string(&views_out).unwrap();
+    let mut lines = l.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for c in [
+        "id",
+        "L",
+        "L_stderr",
+        "L_direct",
+        "L_indirect",
+        "sx",
+        "sy",
+        "sz",
+    ] {
+        assert!(header.contains(&c), "missing {c}");
+    }
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|x| x.split(',').collect()).collect();
+    assert!(rows[0][col("L")].parse::<f64>().unwrap() > 0.5);
+    assert_eq!(rows[0][col("sz")], "1");
+    assert_eq!(rows[1][col("L")], "0");
+    assert_eq!(rows[1][col("sx")], "");
+    assert_eq!(rows[2][col("L")], "0");
+    assert_eq!(rows[2][col("sz")], "0");
+    assert!(
+        std::fs::read_to_string(&points_out)
+            .unwrap()
+            .lines()
+            .count()
+            == 4
+    );
+    // A zero view direction is an error naming the line.
+    let bad = write(
+        dir.path(),
+        "bad.csv",
+        "x,y,z,dx,dy,dz\n0,0,0,0,0,1\n0,0,0,0,0,0\n",
+    );
+    let o = lumest()
+        .args([
+            "luminance",
+            "--scene",
+            &s,
+            "--views",
+            &bad,
+            "--out",
+            "-",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("bad.csv:3") && err.contains("dx,dy,dz"),
+        "{err}"
+    );
+}

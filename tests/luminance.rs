@@ -1,0 +1,127 @@
+//! Luminance by the double local estimate and the backward estimator against
+//! the exact Sobolev luminance `rho_j E_j(r') / pi`; views that see nothing.
+
+mod common;
+use common::chains_cfg;
+use glam::DVec3;
+use lumest::commands::validate::{sobolev_case, sobolev_views};
+use lumest::estimator::{Receiver, Receivers, ViewTarget, view_target};
+use lumest::reference::Sobolev;
+use lumest::run::{RunConfig, RunResult, Stop, run};
+use lumest::tally::sidak_bound;
+
+fn z(r: &RunResult, j: usize, exact: f64) -> f64 {
+    let w = &r.tallies.indirect[j];
+    (r.direct[j] + w.mean() - exact) / w.std_error()
+}
+
+#[test]
+fn double_local_estimate_matches_exact_luminance_with_points_in_the_same_run() {
+    let mut worst: f64 = 0.0;
+    let mut m = 0;
+    let mut batches = u64::MAX;
+    for (k, p) in [(0.5, 0.5, 0.5, 0.5), (0.3, 0.7, 0.9, 0.6)]
+        .into_iter()
+        .enumerate()
+    {
+        let s = Sobolev::new(p.0, p.1, p.2, p.3, 1.0).unwrap();
+        let case = sobolev_case(&s, 10, 2.0);
+        let (_, views, lum) = sobolev_views(&s, &case.scene, 16, 2.0);
+        let mut all: Vec<Receiver> = case
+            .points
+            .iter()
+            .map(|&(p, n)| Receiver::illuminance(p, n))
+            .collect();
+        all.extend(views);
+        let rec = Receivers::from_receivers(&case.scene, &all).unwrap();
+        let r = run(
+            &case.scene,
+            &rec,
+            &chains_cfg(200_000, 70 + k as u64, 0),
+            &mut |_| true,
+        );
+        batches = batches.min(r.tallies.batches());
+        for (j, v) in case.exact.iter().enumerate() {
+            worst = worst.max(z(&r, j, v.e).abs());
+        }
+        for (k, &l) in lum.iter().enumerate() {
+            worst = worst.max(z(&r, 10 + k, l).abs());
+        }
+        m += 26;
+    }
+    let bound = sidak_bound(1e-3, m, Some(batches));
+    assert!(worst < bound, "max |z| {worst} >= {bound}");
+}
+
+#[test]
+fn backward_estimator_matches_exact_values() {
+    let s = Sobolev::new(0.5, 0.5, 0.6, 0.7, 1.0).unwrap();
+    let case = sobolev_case(&s, 6, 2.0);
+    let (_, views, lum) = sobolev_views(&s, &case.scene, 6, 2.0);
+    let mut all: Vec<Receiver> = case
+        .points
+        .iter()
+        .map(|&(p, n)| Receiver::illuminance(p, n))
+        .collect();
+    all.extend(views);
+    let rec = Receivers::from_receivers(&case.scene, &all).unwrap();
+    let cfg = RunConfig {
+        seed: 9,
+        stop: Stop {
+            chains: Some(20_000),
+            ..Stop::default()
+        },
+        ..RunConfig::default()
+    };
+    let r = lumest::backward::run(&case.scene, &rec, &cfg, &mut |_| true);
+    let mut exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
+    exact.extend(lum);
+    let worst = (0..exact.len())
+        .map(|j| z(&r, j, exact[j]).abs())
+        .fold(0.0, f64::max);
+    let bound = sidak_bound(1e-3, exact.len(), Some(r.tallies.batches()));
+    assert!(worst < bound, "max |z| {worst} >= {bound}");
+    // Thread count does not matter for the backward estimator either.
+    let r1 = lumest::backward::run(
+        &case.scene,
+        &rec,
+        &RunConfig {
+            threads: 1,
+            ..cfg.clone()
+        },
+        &mut |_| true,
+    );
+    let r2 = lumest::backward::run(
+        &case.scene,
+        &rec,
+        &RunConfig { threads: 2, ..cfg },
+        &mut |_| true,
+    );
+    for j in 0..exact.len() {
+        assert_eq!(
+            r1.tallies.indirect[j].mean().to_bits(),
+            r2.tallies.indirect[j].mean().to_bits()
+        );
+    }
+}
+
+#[test]
+fn views_that_miss_or_meet_a_back_side_see_nothing() {
+    let s = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).unwrap();
+    let case = sobolev_case(&s, 2, 1.0);
+    // Parallel to the planes: leaves the scene.
+    assert_eq!(
+        view_target(&case.scene, DVec3::new(0.0, 0.0, 0.5), DVec3::X),
+        ViewTarget::Miss
+    );
+    // From below the floor looking up: meets the floor's back side.
+    match view_target(&case.scene, DVec3::new(0.0, 0.0, -1.0), DVec3::Z) {
+        ViewTarget::Back { p } => assert_eq!(p, DVec3::ZERO),
+        t => panic!("expected a back side, got {t:?}"),
+    }
+    // An observer standing on the floor looking up sees the ceiling, not the floor.
+    match view_target(&case.scene, DVec3::new(0.3, 0.0, 0.0), DVec3::Z) {
+        ViewTarget::Front(r) => assert!((r.p - DVec3::new(0.3, 0.0, 1.0)).length() < 1e-15),
+        t => panic!("expected the ceiling, got {t:?}"),
+    }
+}
