@@ -72,11 +72,11 @@ impl BatchWork for BackwardWork<'_> {
         0
     }
 
-    /// Paths per receiver per batch: about 2^18 paths per batch in all, at
+    /// Paths per receiver per batch: about 2^16 paths per batch in all, at
     /// least `MIN_BATCHES` batches for a `--chains` run (chains = paths per receiver).
     fn default_batch_size(&self, chains: Option<u64>) -> u64 {
         let n = self.receivers.len().max(1) as u64;
-        let mut bs = ((1u64 << 18) / n).clamp(1, 1 << 14);
+        let mut bs = ((1u64 << 16) / n).clamp(1, 1 << 14);
         if let Some(c) = chains {
             bs = bs.min(c.div_ceil(crate::run::MIN_BATCHES)).max(1);
         }

@@ -31,7 +31,8 @@ use std::time::{Duration, Instant};
 pub struct Stop {
     /// Number of chains (rounded up to whole batches).
     pub chains: Option<u64>,
-    /// Wall-clock limit [s].
+    /// Wall-clock limit [s]. Soft: a run always completes at least
+    /// [`MIN_BATCHES`] batches, so a very short limit may be exceeded.
     pub time: Option<f64>,
     /// Target for the largest relative standard error of `E` over the points.
     pub rel_error: Option<f64>,
@@ -325,7 +326,7 @@ pub fn drive(
     let stop = cfg.stop;
     let bs = cfg
         .batch_size
-        .unwrap_or_else(|| default_batch_size(n, stop.chains))
+        .unwrap_or_else(|| work.default_batch_size(stop.chains))
         .max(1);
     let max_batches = stop.chains.map_or(u64::MAX, |c| c.div_ceil(bs).max(1));
     let threads = if cfg.threads == 0 {
@@ -384,9 +385,12 @@ pub fn drive(
                 Err(mpsc::RecvTimeoutError::Timeout) => {}
                 Err(mpsc::RecvTimeoutError::Disconnected) => break,
             }
+            // The time limit is soft: at least MIN_BATCHES batches are always
+            // folded, so that every standard error has enough degrees of freedom.
             if stop
                 .time
                 .is_some_and(|t| start.elapsed().as_secs_f64() >= t)
+                && folded >= MIN_BATCHES.min(max_batches)
                 && !halt.load(Ordering::Relaxed)
             {
                 halt.store(true, Ordering::Relaxed);

@@ -29,6 +29,76 @@ pub struct BenchArgs {
     /// Seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Compare local and backward estimation at equal wall time (points and
+    /// views on the Sobolev scene) instead of the throughput run.
+    #[arg(long)]
+    pub compare: bool,
+}
+
+/// Local against backward estimation at equal wall time: for each point
+/// count, half the receivers are illuminance points and half luminance views
+/// (one point when the count is 1), on the Sobolev case with exact answers.
+pub fn compare(a: &BenchArgs, counts: &[usize], times: &[f64]) -> anyhow::Result<()> {
+    use super::illuminance::EstimatorKind;
+    use super::validate::sobolev_views;
+    use crate::estimator::Receiver;
+    let problem = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).map_err(|e| anyhow::anyhow!("{e}"))?;
+    println!(
+        "{:>7} {:>9} {:>7} {:>12} {:>11} {:>11} {:>10} {:>11}",
+        "points", "estimator", "time_s", "paths", "rms_R", "rms_err", "max|z|", "FOM"
+    );
+    for (k, &n) in counts.iter().enumerate() {
+        let t = if times.len() == 1 { times[0] } else { times[k] };
+        let n_views = n / 2;
+        let case = sobolev_case(&problem, n - n_views, 3.0);
+        let (_, views, lum) = sobolev_views(&problem, &case.scene, n_views, 3.0);
+        let mut all: Vec<Receiver> = case
+            .points
+            .iter()
+            .map(|&(p, q)| Receiver::illuminance(p, q))
+            .collect();
+        all.extend(views);
+        let receivers =
+            Receivers::from_receivers(&case.scene, &all).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let mut exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
+        exact.extend(lum);
+        let mut errs = Vec::new();
+        for est in [EstimatorKind::Local, EstimatorKind::Backward] {
+            let cfg = RunConfig::timed(a.seed, a.threads, t);
+            let r = match est {
+                EstimatorKind::Local => run(&case.scene, &receivers, &cfg, &mut |_| true),
+                EstimatorKind::Backward => {
+                    crate::backward::run(&case.scene, &receivers, &cfg, &mut |_| true)
+                }
+            };
+            let p = Progress {
+                tallies: &r.tallies,
+                direct: &r.direct,
+                chains: r.chains,
+                scores: r.scores,
+                elapsed: r.wall,
+            };
+            let cp = checkpoint(&p, &exact, 0..n);
+            errs.push(cp.fom);
+            println!(
+                "{:>7} {:>9} {:>7.1} {:>12} {:>11.3e} {:>11.3e} {:>10.2} {:>11.4e}",
+                n,
+                format!("{est:?}").to_lowercase(),
+                r.wall,
+                r.chains,
+                cp.rms_r,
+                cp.rms_err,
+                cp.max_z,
+                cp.fom
+            );
+        }
+        // Errors scale as 1/sqrt(T): at equal time their ratio is sqrt(FOM_local / FOM_backward).
+        println!(
+            "        at equal wall time, backward error / local error = {:.3}",
+            (errs[0] / errs[1]).sqrt()
+        );
+    }
+    Ok(())
 }
 
 /// Run the benchmark and print a table.
@@ -48,6 +118,9 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
         times.len() == 1 || times.len() == counts.len(),
         "--time: one value or one per point count"
     );
+    if a.compare {
+        return compare(a, &counts, &times);
+    }
     let problem = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).map_err(|e| anyhow::anyhow!("{e}"))?;
     println!(
         "{:>7} {:>7} {:>12} {:>11} {:>11} {:>10} {:>10} {:>11} {:>10} {:>8} {:>7}",
