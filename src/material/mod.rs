@@ -157,7 +157,7 @@ pub fn phong_specular_albedo(c: f64, n: f64) -> f64 {
     if s_pow < 1e-17 * c {
         return c;
     }
-    let (c2, s2) = (c * c, s2);
+    let c2 = c * c;
     let g = |x: f64| {
         let (sx, cx) = x.sin_cos();
         let sx2 = sx * sx;
