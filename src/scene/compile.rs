@@ -304,10 +304,41 @@ fn surface(
     }
 }
 
+/// Fields of a `material` table that only some types accept, with the type
+/// that accepts each.
+const MATERIAL_ONLY_FIELDS: [(&str, &str); 4] = [
+    ("reflectance", "lambertian"),
+    ("diffuse", "phong"),
+    ("specular", "phong"),
+    ("exponent", "phong"),
+];
+
+/// Reject a field given for a material type that does not take it.
+fn material_fields_allowed(
+    d: &MaterialDesc,
+    kind: &str,
+    ctx: &SourceCtx,
+) -> Result<(), SceneError> {
+    let given = [&d.reflectance, &d.diffuse, &d.specular, &d.exponent];
+    for (v, (field, owner)) in given.into_iter().zip(MATERIAL_ONLY_FIELDS) {
+        let Some(v) = v else { continue };
+        if owner != kind {
+            return Err(ctx.invalid(
+                v.span(),
+                field,
+                format!("not allowed for material type `{kind}` (it belongs to type `{owner}`)"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn material(m: &Spanned<MaterialDesc>, ctx: &SourceCtx) -> Result<Material, SceneError> {
     let d = m.get_ref();
-    match d.kind.get_ref().as_str() {
+    let kind = d.kind.get_ref().as_str();
+    match kind {
         "lambertian" => {
+            material_fields_allowed(d, kind, ctx)?;
             let r = ctx.required(&d.reflectance, m.span(), "reflectance")?;
             let rho = *r.get_ref();
             if !(rho.is_finite() && (0.0..=1.0).contains(&rho)) {
@@ -319,10 +350,29 @@ fn material(m: &Spanned<MaterialDesc>, ctx: &SourceCtx) -> Result<Material, Scen
             }
             Ok(Material::Lambertian { rho })
         }
+        "phong" => {
+            material_fields_allowed(d, kind, ctx)?;
+            let kd = ctx.nonneg(ctx.required(&d.diffuse, m.span(), "diffuse")?, "diffuse")?;
+            let s = ctx.required(&d.specular, m.span(), "specular")?;
+            let ks = ctx.nonneg(s, "specular")?;
+            let n = ctx.nonneg(ctx.required(&d.exponent, m.span(), "exponent")?, "exponent")?;
+            if kd + ks > 1.0 {
+                return Err(ctx.invalid(
+                    s.span(),
+                    "specular",
+                    format!(
+                        "`diffuse` + `specular` must be <= 1 (energy conservation), \
+                         got {kd} + {ks} = {}",
+                        kd + ks
+                    ),
+                ));
+            }
+            Ok(Material::Phong { kd, ks, n })
+        }
         other => Err(ctx.invalid(
             d.kind.span(),
             "type",
-            format!("unknown material type `{other}` (this version knows: lambertian)"),
+            format!("unknown material type `{other}` (this version knows: lambertian, phong)"),
         )),
     }
 }

@@ -36,15 +36,29 @@ pub struct SurfaceDesc {
     pub material: Option<Spanned<MaterialDesc>>,
 }
 
-/// A `material = { ... }` inline table.
+/// A `material = { ... }` inline table. Which fields are required (and
+/// allowed) depends on `type`:
+///
+/// - `"lambertian"`: `reflectance`;
+/// - `"phong"`: `diffuse`, `specular`, `exponent` (the normalised modified
+///   Phong BRDF of Lafortune and Willems 1994, see
+///   [`crate::material::Material::Phong`]), e.g.
+///   `{ type = "phong", diffuse = 0.3, specular = 0.2, exponent = 20 }`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDesc {
-    /// Material kind: `"lambertian"`.
+    /// Material kind: `"lambertian"` or `"phong"`.
     #[serde(rename = "type")]
     pub kind: Spanned<String>,
     /// Lambertian reflectance in [0, 1] (dimensionless).
     pub reflectance: Option<Spanned<f64>>,
+    /// Phong diffuse reflectance `kd >= 0` (dimensionless); `kd + ks <= 1`.
+    pub diffuse: Option<Spanned<f64>>,
+    /// Phong specular reflectance `ks >= 0` at normal incidence
+    /// (dimensionless); `kd + ks <= 1`.
+    pub specular: Option<Spanned<f64>>,
+    /// Phong exponent `n >= 0`, finite (dimensionless).
+    pub exponent: Option<Spanned<f64>>,
 }
 
 /// One `[[light]]` table.
