@@ -1,0 +1,58 @@
+//! Where no exact answer exists (a glossy Phong ceiling), the local / double
+//! local estimates and the independent backward path tracer must agree within
+//! their error bars, for illuminance and for luminance.
+
+use glam::DVec3;
+use lumest::estimator::{Receiver, Receivers, ViewTarget, view_target};
+use lumest::run::{RunConfig, Stop, run};
+use lumest::tally::sidak_bound;
+
+#[test]
+fn local_and_backward_agree_on_a_phong_scene() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sobolev_phong.toml");
+    let scene = lumest::scene::load(std::path::Path::new(path)).unwrap();
+    let mut rec = Vec::new();
+    for k in 0..4 {
+        let r = 0.6 * k as f64;
+        rec.push(Receiver::illuminance(DVec3::new(r, 0.0, 0.0), DVec3::Z));
+        rec.push(Receiver::illuminance(DVec3::new(0.0, r, 1.0), -DVec3::Z));
+    }
+    // Views of the glossy ceiling from the floor, and of the floor from the ceiling.
+    for (o, d) in [
+        (DVec3::new(0.0, 0.0, 0.0), DVec3::new(0.3, 0.0, 1.0)),
+        (DVec3::new(1.0, 0.0, 0.0), DVec3::new(-0.5, 0.2, 1.0)),
+        (DVec3::new(0.5, 0.5, 0.0), DVec3::new(0.0, 0.0, 1.0)),
+        (DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.4, 0.0, -1.0)),
+    ] {
+        let ViewTarget::Front(r) = view_target(&scene, o, d.normalize()) else {
+            panic!("view misses")
+        };
+        rec.push(r);
+    }
+    let receivers = Receivers::from_receivers(&scene, &rec).unwrap();
+    let cfg = |n| RunConfig {
+        seed: 21,
+        stop: Stop {
+            chains: Some(n),
+            ..Stop::default()
+        },
+        ..RunConfig::default()
+    };
+    let local = run(&scene, &receivers, &cfg(400_000), &mut |_| true);
+    let back = lumest::backward::run(&scene, &receivers, &cfg(20_000), &mut |_| true);
+    let b = local.tallies.batches().min(back.tallies.batches());
+    let bound = sidak_bound(1e-3, rec.len(), Some(b));
+    for j in 0..rec.len() {
+        let (a, c) = (&local.tallies.indirect[j], &back.tallies.indirect[j]);
+        assert!(a.mean() > 0.0);
+        let z = (a.mean() - c.mean()) / a.std_error().hypot(c.std_error());
+        assert!(
+            z.abs() < bound,
+            "receiver {j}: local {} +- {}, backward {} +- {} (z = {z})",
+            a.mean(),
+            a.std_error(),
+            c.mean(),
+            c.std_error()
+        );
+    }
+}
