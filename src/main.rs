@@ -1,7 +1,7 @@
 //! The `lumest` command line: arguments in, library calls, exit code out.
 
 use clap::{Parser, Subcommand};
-use lumest::commands::{bench, illuminance, sobolev, validate};
+use lumest::commands::{bench, illuminance, render, sobolev, validate};
 use std::process::ExitCode;
 
 /// Monte Carlo illumination by local estimation, with exact references.
@@ -18,6 +18,8 @@ enum Command {
     Illuminance(illuminance::IlluminanceArgs),
     /// Luminance [cd/m^2] along CSV views by the double local estimate.
     Luminance(illuminance::LuminanceArgs),
+    /// A luminance picture: HDR (cd/m^2), display PNG and false-colour PNG.
+    Render(render::RenderArgs),
     /// Exact Sobolev solution (two Lambertian planes, isotropic point source) as CSV.
     Sobolev(sobolev::SobolevArgs),
     /// Monte Carlo against exact solutions: error against run time, table and plot.
@@ -32,6 +34,7 @@ fn main() -> ExitCode {
     let res = match &cli.command {
         Command::Illuminance(a) => illuminance::illuminance(a),
         Command::Luminance(a) => illuminance::luminance(a),
+        Command::Render(a) => render::render(a),
         Command::Sobolev(a) => sobolev::sobolev(a),
         Command::Validate(validate::ValidateCase::Sobolev(a)) => validate::validate_sobolev(a),
         Command::Bench(a) => bench::bench(a),

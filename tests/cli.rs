@@ -292,3 +292,55 @@ fn luminance_views_and_mixed_run() {
         "{err}"
     );
 }
+
+#[test]
+fn fan_and_render_write_their_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = write(dir.path(), "scene.toml", SCENE);
+    let fan = dir.path().join("fan.csv");
+    let plot = dir.path().join("fan.png");
+    let o = lumest()
+        .args([
+            "luminance",
+            "--scene",
+            &s,
+            "--fan-at",
+            "0.5,0,0,0,0,1",
+            "--fan",
+            "30,90",
+            "--out",
+        ])
+        .arg(&fan)
+        .arg("--plot")
+        .arg(&plot)
+        .args(["--chains", "2000", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&fan).unwrap();
+    assert_eq!(text.lines().count(), 1 + 3 * 4);
+    assert!(text.starts_with("theta_deg,phi_deg,x,y,z,dx,dy,dz,L,"));
+    assert!(std::fs::metadata(&plot).unwrap().len() > 1000);
+
+    let out = dir.path().join("img.png");
+    let o = lumest()
+        .args([
+            "render", "--scene", &s, "--eye", "0,-2,0.5", "--look", "0,0,0.5", "--width", "8",
+            "--height", "6", "--out",
+        ])
+        .arg(&out)
+        .args(["--chains", "2000", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["img.png", "img.hdr", "img_false.png", "img.csv"] {
+        assert!(dir.path().join(f).exists(), "{f} missing");
+    }
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("img.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        1 + 48
+    );
+}

@@ -59,3 +59,26 @@ fn rel_error_stop_is_reproducible() {
     assert!(one.tallies.max_rel_error(&one.direct) <= 2e-3);
     assert_eq!(bits(&one), bits(&two));
 }
+
+#[test]
+fn a_short_time_limit_still_gives_enough_batches() {
+    let cfg = RunConfig {
+        seed: 1,
+        stop: Stop {
+            time: Some(1e-3),
+            ..Stop::default()
+        },
+        ..RunConfig::default()
+    };
+    let (_, r) = sobolev_run(
+        (0.5, 0.5, 0.5, 0.5),
+        4,
+        1.0,
+        &RunConfig {
+            batch_size: Some(64),
+            ..cfg
+        },
+    );
+    assert!(r.tallies.batches() >= lumest::run::MIN_BATCHES);
+    assert_eq!(r.reason, lumest::run::StopReason::Time);
+}

@@ -58,8 +58,18 @@ pub struct LuminanceArgs {
     #[arg(long)]
     pub scene: PathBuf,
     /// Views CSV with at least x,y,z (observer) and dx,dy,dz (looking direction).
-    #[arg(long)]
-    pub views: String,
+    #[arg(long, required_unless_present = "fan_at", conflicts_with = "fan_at")]
+    pub views: Option<String>,
+    /// Generate views over the hemisphere at one point instead: `x,y,z,nx,ny,nz`.
+    #[arg(long = "fan-at", requires = "fan", allow_hyphen_values = true)]
+    pub fan_at: Option<String>,
+    /// Angular steps of the fan in degrees: `THETA_STEP,PHI_STEP` (theta from
+    /// the normal, at the centres of the steps; phi from the local x axis).
+    #[arg(long, requires = "fan_at")]
+    pub fan: Option<String>,
+    /// With `--fan`: also draw a polar plot of L(theta, phi) to this PNG file.
+    #[arg(long, requires = "fan")]
+    pub plot: Option<String>,
     /// Output CSV (`-`: standard output).
     #[arg(long)]
     pub out: String,
@@ -169,8 +179,18 @@ pub struct Job {
 impl Job {
     /// Read the lists and compile them against `scene`.
     pub fn new(scene: &Scene, points: Option<&str>, views: Option<&str>) -> anyhow::Result<Job> {
-        let points_t = points.map(read_points).transpose()?;
         let views_t = views.map(read_views).transpose()?;
+        Self::with_views(scene, points, views_t, views.unwrap_or("-"))
+    }
+
+    /// As [`Job::new`], with a view table already built (`views_name` names it in messages).
+    pub fn with_views(
+        scene: &Scene,
+        points: Option<&str>,
+        views_t: Option<ViewTable>,
+        views_name: &str,
+    ) -> anyhow::Result<Job> {
+        let points_t = points.map(read_points).transpose()?;
         let mut rec: Vec<Receiver> = Vec::new();
         // File and line of each receiver, for error messages.
         let mut origin: Vec<(&str, u64)> = Vec::new();
@@ -191,7 +211,7 @@ impl Job {
                 if let ViewTarget::Front(r) = target {
                     view_receiver.push(Some(rec.len()));
                     rec.push(*r);
-                    origin.push((views.unwrap_or("-"), line));
+                    origin.push((views_name, line));
                 } else {
                     view_receiver.push(None);
                 }
@@ -278,6 +298,50 @@ pub fn run_job(
     result
 }
 
+/// Views over the hemisphere about `n` at `p`: theta at the centres of steps
+/// of `dt` degrees in [0, 90), phi at multiples of `dp` degrees in [0, 360).
+/// Columns `theta_deg,phi_deg,x,y,z,dx,dy,dz`.
+pub fn fan_views(p: glam::DVec3, n: glam::DVec3, dt: f64, dp: f64) -> ViewTable {
+    let frame = crate::sampling::warp::Frame::from_normal(n);
+    let mut t = ViewTable {
+        headers: ["theta_deg", "phi_deg", "x", "y", "z", "dx", "dy", "dz"]
+            .map(String::from)
+            .to_vec(),
+        ..ViewTable::default()
+    };
+    let (nt, np) = (
+        (90.0 / dt).round().max(1.0) as usize,
+        (360.0 / dp).round().max(1.0) as usize,
+    );
+    for i in 0..nt {
+        let theta = (i as f64 + 0.5) * 90.0 / nt as f64;
+        for k in 0..np {
+            let phi = k as f64 * 360.0 / np as f64;
+            let (st, ct) = theta.to_radians().sin_cos();
+            let (sp, cp) = phi.to_radians().sin_cos();
+            let d = frame.to_world(glam::DVec3::new(st * cp, st * sp, ct));
+            t.rows.push(
+                [theta, phi, p.x, p.y, p.z, d.x, d.y, d.z]
+                    .map(format_number)
+                    .to_vec(),
+            );
+            t.lines.push(t.rows.len() as u64 + 1);
+            t.views.push((p, d));
+        }
+    }
+    t
+}
+
+/// Parse `a,b,c,...` into exactly `n` finite numbers.
+fn numbers(s: &str, n: usize, what: &str) -> anyhow::Result<Vec<f64>> {
+    let v = super::sobolev::parse_list(s)?;
+    anyhow::ensure!(
+        v.len() == n,
+        "{what}: expected {n} comma-separated numbers, got `{s}`"
+    );
+    Ok(v)
+}
+
 fn measure(
     scene_path: &std::path::Path,
     points: Option<(&str, &str)>,
@@ -285,9 +349,38 @@ fn measure(
     estimator: EstimatorKind,
     run_args: &RunArgs,
 ) -> anyhow::Result<()> {
+    measure_with(
+        scene_path,
+        points,
+        views.map(|v| (v.0, None, v.1)),
+        estimator,
+        run_args,
+    )
+    .map(|_| ())
+}
+
+pub(crate) fn measure_with(
+    scene_path: &std::path::Path,
+    points: Option<(&str, &str)>,
+    views: Option<(&str, Option<ViewTable>, &str)>,
+    estimator: EstimatorKind,
+    run_args: &RunArgs,
+) -> anyhow::Result<(Job, RunResult)> {
     let cfg = run_args.config()?;
     let scene = scene::load(scene_path)?;
-    let job = Job::new(&scene, points.map(|p| p.0), views.map(|v| v.0))?;
+    let (views, table) = match views {
+        Some((name, table, out)) => (Some((name, out)), table),
+        None => (None, None),
+    };
+    let job = match table {
+        Some(t) => Job::with_views(
+            &scene,
+            points.map(|p| p.0),
+            Some(t),
+            views.map_or("-", |v| v.0),
+        )?,
+        None => Job::new(&scene, points.map(|p| p.0), views.map(|v| v.0))?,
+    };
     eprintln!(
         "lumest: scene {}: {}",
         scene_path.display(),
@@ -303,7 +396,7 @@ fn measure(
     for line in summary(&result).lines() {
         eprintln!("lumest: {line}");
     }
-    Ok(())
+    Ok((job, result))
 }
 
 /// Run `lumest illuminance`.
@@ -321,11 +414,59 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
 /// Run `lumest luminance`.
 pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
     let points = a.points.as_deref().zip(a.points_out.as_deref());
-    measure(
-        &a.scene,
-        points,
-        Some((&a.views, &a.out)),
-        a.estimator,
-        &a.run,
-    )
+    if let (Some(at), Some(steps)) = (&a.fan_at, &a.fan) {
+        let v = numbers(at, 6, "--fan-at")?;
+        let st = numbers(steps, 2, "--fan")?;
+        anyhow::ensure!(
+            st.iter().all(|&x| x > 0.0 && x <= 90.0),
+            "--fan: steps must lie in (0, 90] degrees"
+        );
+        let n = glam::DVec3::new(v[3], v[4], v[5]);
+        anyhow::ensure!(n.length() > 0.0, "--fan-at: the normal has zero length");
+        let table = fan_views(
+            glam::DVec3::new(v[0], v[1], v[2]),
+            n.normalize(),
+            st[0],
+            st[1],
+        );
+        let (job, result) = measure_with(
+            &a.scene,
+            points,
+            Some(("--fan", Some(table), &a.out)),
+            a.estimator,
+            &a.run,
+        )?;
+        if let Some(plot) = &a.plot {
+            fan_plot(&job, &result, plot)?;
+        }
+        return Ok(());
+    }
+    let views = a
+        .views
+        .as_deref()
+        .expect("clap requires --views or --fan-at");
+    measure(&a.scene, points, Some((views, &a.out)), a.estimator, &a.run)
+}
+
+/// Polar plot of a fan's luminance (linear colour scale).
+fn fan_plot(job: &Job, r: &RunResult, path: &str) -> anyhow::Result<()> {
+    let (t, _) = job.views.as_ref().expect("a fan has views");
+    let samples: Vec<(f64, f64, f64)> = t
+        .rows
+        .iter()
+        .zip(&job.view_receiver)
+        .map(|(row, rec)| {
+            let theta: f64 = row[0].parse().unwrap_or(0.0);
+            let phi: f64 = row[1].parse().unwrap_or(0.0);
+            let l = rec.map_or(0.0, |j| {
+                (r.direct[j] + r.tallies.indirect[j].mean()).max(0.0)
+            });
+            (theta.to_radians(), phi.to_radians(), l)
+        })
+        .collect();
+    let values: Vec<f64> = samples.iter().map(|s| s.2).collect();
+    let scale = crate::io::image::ColourScale::from_data(&values, false);
+    crate::io::image::write_polar_png(path, &samples, scale, "Luminance L(theta, phi)")?;
+    eprintln!("lumest: wrote {path}");
+    Ok(())
 }

@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod illuminance;
+pub mod render;
 pub mod sobolev;
 pub mod validate;
 
