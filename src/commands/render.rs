@@ -34,9 +34,19 @@ pub struct RenderArgs {
     pub height: usize,
     /// Output PNG (display image). Also written: the same name with `.hdr`
     /// (luminance in cd/m^2), `_false.png` (false colour with a scale bar) and
-    /// `.csv` (per-pixel luminance and standard error).
+    /// `.csv` (luminance and standard error per view: per pixel for a pinhole;
+    /// with a lens, per lens sample, and per pixel in `_pixels.csv`).
     #[arg(long)]
     pub out: String,
+    /// Thin-lens depth of field: aperture radius [m] (0: pinhole).
+    #[arg(long, default_value_t = 0.0)]
+    pub aperture: f64,
+    /// Thin-lens focus distance along the viewing axis [m] (default: |look - eye|).
+    #[arg(long)]
+    pub focus: Option<f64>,
+    /// Lens samples per pixel with `--aperture` (a stratified square grid: 1, 4, 9, 16, ...).
+    #[arg(long = "lens-samples", default_value_t = 16)]
+    pub lens_samples: usize,
     /// Display exposure: `auto` or a factor k (display value = k L, 1 = white).
     #[arg(long, default_value = "auto")]
     pub exposure: String,
@@ -47,8 +57,36 @@ pub struct RenderArgs {
     pub run: RunArgs,
 }
 
-/// The view table of a pinhole camera, row-major from the top-left pixel;
-/// columns `px,py,x,y,z,dx,dy,dz`.
+/// A thin lens: aperture radius [m], focus distance [m] along the viewing
+/// axis, and `k` samples per pixel on a `sqrt(k) x sqrt(k)` grid of the
+/// square mapped to the disc (Shirley-Chiu concentric map).
+#[derive(Clone, Copy, Debug)]
+pub struct Lens {
+    pub aperture: f64,
+    pub focus: f64,
+    pub k: usize,
+}
+
+/// Shirley-Chiu concentric map of `[0,1)^2` onto the unit disc.
+fn concentric_disc(u: [f64; 2]) -> (f64, f64) {
+    let (a, b) = (2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, 0.0);
+    }
+    let (r, phi) = if a.abs() > b.abs() {
+        (a, std::f64::consts::FRAC_PI_4 * (b / a))
+    } else {
+        (
+            b,
+            std::f64::consts::FRAC_PI_2 - std::f64::consts::FRAC_PI_4 * (a / b),
+        )
+    };
+    (r * phi.cos(), r * phi.sin())
+}
+
+/// The view table of a camera, row-major from the top-left pixel, `lens.k`
+/// consecutive views per pixel with a lens (one without); columns
+/// `px,py,x,y,z,dx,dy,dz`.
 pub fn camera_views(
     eye: DVec3,
     look: DVec3,
@@ -56,6 +94,7 @@ pub fn camera_views(
     fov_deg: f64,
     w: usize,
     h: usize,
+    lens: Option<Lens>,
 ) -> anyhow::Result<ViewTable> {
     let fwd = (look - eye).normalize_or_zero();
     anyhow::ensure!(fwd != DVec3::ZERO, "--look must differ from --eye");
@@ -86,11 +125,32 @@ pub fn camera_views(
             let u = (2.0 * (i as f64 + 0.5) / w as f64 - 1.0) * tx;
             let v = (1.0 - 2.0 * (j as f64 + 0.5) / h as f64) * ty;
             let d = (fwd + right * u + cam_up * v).normalize();
-            let mut row = vec![i.to_string(), j.to_string()];
-            row.extend([eye.x, eye.y, eye.z, d.x, d.y, d.z].map(format_number));
-            t.rows.push(row);
-            t.lines.push(t.rows.len() as u64 + 1);
-            t.views.push((eye, d));
+            let rays: Vec<(DVec3, DVec3)> = match lens {
+                None => vec![(eye, d)],
+                Some(l) => {
+                    // Rays through the lens point meet the pinhole ray on the focal plane.
+                    let focal = eye + d * (l.focus / d.dot(fwd));
+                    let m = (l.k as f64).sqrt().round().max(1.0) as usize;
+                    (0..m * m)
+                        .map(|s| {
+                            let uv = [
+                                ((s % m) as f64 + 0.5) / m as f64,
+                                ((s / m) as f64 + 0.5) / m as f64,
+                            ];
+                            let (x, y) = concentric_disc(uv);
+                            let o = eye + (right * x + cam_up * y) * l.aperture;
+                            (o, (focal - o).normalize())
+                        })
+                        .collect()
+                }
+            };
+            for (o, d) in rays {
+                let mut row = vec![i.to_string(), j.to_string()];
+                row.extend([o.x, o.y, o.z, d.x, d.y, d.z].map(format_number));
+                t.rows.push(row);
+                t.lines.push(t.rows.len() as u64 + 1);
+                t.views.push((o, d));
+            }
         }
     }
     Ok(t)
@@ -104,14 +164,32 @@ fn vec3(s: &str, what: &str) -> anyhow::Result<DVec3> {
 
 /// Run `lumest render`.
 pub fn render(a: &RenderArgs) -> anyhow::Result<()> {
+    let (eye, look) = (vec3(&a.eye, "--eye")?, vec3(&a.look, "--look")?);
+    anyhow::ensure!(
+        a.aperture.is_finite() && a.aperture >= 0.0,
+        "--aperture must be >= 0"
+    );
+    let lens = (a.aperture > 0.0).then(|| Lens {
+        aperture: a.aperture,
+        focus: a.focus.unwrap_or_else(|| (look - eye).length()),
+        k: a.lens_samples.max(1),
+    });
+    if let Some(l) = lens {
+        anyhow::ensure!(
+            l.focus.is_finite() && l.focus > 0.0,
+            "--focus must be positive"
+        );
+    }
     let table = camera_views(
-        vec3(&a.eye, "--eye")?,
-        vec3(&a.look, "--look")?,
+        eye,
+        look,
         vec3(&a.up, "--up")?,
         a.fov,
         a.width,
         a.height,
+        lens,
     )?;
+    let per_pixel = table.views.len() / (a.width * a.height);
     let exposure = match a.exposure.as_str() {
         "auto" => crate::io::image::Exposure::Auto,
         k => {
@@ -131,20 +209,91 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<()> {
         a.estimator,
         &a.run,
     )?;
-    let l: Vec<f64> = job
-        .view_receiver
-        .iter()
-        .map(|rec| {
-            rec.map_or(0.0, |j| {
-                (r.direct[j] + r.tallies.indirect[j].mean()).max(0.0)
-            })
+    let view = |k: usize| {
+        job.view_receiver[k].map_or((0.0, 0.0), |j| {
+            (
+                (r.direct[j] + r.tallies.indirect[j].mean()).max(0.0),
+                r.tallies.indirect[j].std_error(),
+            )
         })
-        .collect();
+    };
+    // A pixel is the mean of its lens views. Its standard error combines the
+    // chains' noise (the mean of the views' standard errors: an upper bound
+    // whatever their correlation) and the spread over the aperture (s^2 / K).
+    let mut l = Vec::with_capacity(a.width * a.height);
+    let mut se = Vec::with_capacity(a.width * a.height);
+    for p in 0..a.width * a.height {
+        let v: Vec<(f64, f64)> = (0..per_pixel).map(|s| view(p * per_pixel + s)).collect();
+        let k = v.len() as f64;
+        let mean = v.iter().map(|x| x.0).sum::<f64>() / k;
+        let chain = v.iter().map(|x| x.1).sum::<f64>() / k;
+        let spread = if v.len() > 1 {
+            v.iter().map(|x| (x.0 - mean).powi(2)).sum::<f64>() / (k - 1.0) / k
+        } else {
+            0.0
+        };
+        l.push(mean);
+        se.push((chain * chain + spread).sqrt());
+    }
+    if per_pixel > 1 {
+        let mut text = String::from("px,py,L,L_stderr\n");
+        for (p, (lv, sv)) in l.iter().zip(&se).enumerate() {
+            text.push_str(&format!(
+                "{},{},{},{}\n",
+                p % a.width,
+                p / a.width,
+                format_number(*lv),
+                format_number(*sv)
+            ));
+        }
+        crate::io::write_atomic(&format!("{base}_pixels.csv"), text.as_bytes())?;
+    }
     let img = crate::io::image::LuminanceImage::new(a.width, a.height, l)?;
     crate::io::image::write_hdr(&img, &format!("{base}.hdr"))?;
     crate::io::image::write_display_png(&img, &format!("{base}.png"), exposure)?;
     let scale = crate::io::image::ColourScale::from_data(&img.l, true);
     crate::io::image::write_false_colour_png(&img, &format!("{base}_false.png"), scale)?;
-    eprintln!("lumest: wrote {base}.png, {base}.hdr, {base}_false.png and {base}.csv");
+    eprintln!(
+        "lumest: wrote {base}.png, {base}.hdr, {base}_false.png and {base}.csv{}",
+        if per_pixel > 1 {
+            format!(" (per view; per pixel: {base}_pixels.csv)")
+        } else {
+            String::new()
+        }
+    );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lens_rays_of_a_pixel_meet_on_the_focal_plane() {
+        let (eye, look) = (DVec3::new(0.0, -2.0, 0.5), DVec3::new(0.0, 0.0, 0.5));
+        let lens = Lens {
+            aperture: 0.1,
+            focus: 1.5,
+            k: 4,
+        };
+        let t = camera_views(eye, look, DVec3::Z, 60.0, 3, 2, Some(lens)).unwrap();
+        assert_eq!(t.views.len(), 3 * 2 * 4);
+        let fwd = (look - eye).normalize();
+        for pixel in t.views.chunks(4) {
+            let meet: Vec<DVec3> = pixel
+                .iter()
+                .map(|&(o, d)| o + d * ((eye + fwd * 1.5 - o).dot(fwd) / d.dot(fwd)))
+                .collect();
+            for m in &meet {
+                assert!((*m - meet[0]).length() < 1e-12);
+            }
+            // Lens points lie on the aperture disc around the eye, in the lens plane.
+            for &(o, _) in pixel {
+                assert!((o - eye).length() <= 0.1 + 1e-15 && (o - eye).dot(fwd).abs() < 1e-15);
+            }
+        }
+        // Without a lens: one ray per pixel from the eye.
+        let t = camera_views(eye, look, DVec3::Z, 60.0, 3, 2, None).unwrap();
+        assert!(t.views.len() == 6 && t.views.iter().all(|v| v.0 == eye));
+    }
 }
