@@ -223,6 +223,10 @@ pub struct Batch {
 pub trait BatchWork: Sync {
     /// Number of receivers.
     fn len(&self) -> usize;
+    /// True when there are no receivers.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
     /// Exact first-order values per receiver.
     fn direct(&self) -> &[f64];
     /// Length of the per-thread scratch buffer for `buckets` buckets.

@@ -206,8 +206,8 @@ fn sobolev_command_prints_exact_values() {
     assert_eq!(rows.len(), 3);
     // Independent 30-digit values (data/reference/sobolev_case_A.csv), r = 0 and r = 1.
     let want = [
-        (0.0, 4.5281295258173371, 3.8773389845847300e-01),
-        (1.0, 6.5344231719438861e-01, 1.9005868565562889e-01),
+        (0.0, 4.528_129_525_817_337, 0.387_733_898_458_473),
+        (1.0, 0.653_442_317_194_388_6, 0.190_058_685_655_628_9),
     ];
     for (row, (r, e, o1)) in [&rows[0], &rows[2]].into_iter().zip(want) {
         assert_eq!(row[0], r);

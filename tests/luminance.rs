@@ -4,8 +4,8 @@
 mod common;
 use common::chains_cfg;
 use glam::DVec3;
-use lumest::commands::validate::{sobolev_case, sobolev_views};
-use lumest::estimator::{Receiver, Receivers, ViewTarget, view_target};
+use lumest::commands::validate::{sobolev_case, sobolev_receivers};
+use lumest::estimator::{Receivers, ViewTarget, view_target};
 use lumest::reference::Sobolev;
 use lumest::run::{RunConfig, RunResult, Stop, run};
 use lumest::tally::sidak_bound;
@@ -25,14 +25,7 @@ fn double_local_estimate_matches_exact_luminance_with_points_in_the_same_run() {
         .enumerate()
     {
         let s = Sobolev::new(p.0, p.1, p.2, p.3, 1.0).unwrap();
-        let case = sobolev_case(&s, 10, 2.0);
-        let (_, views, lum) = sobolev_views(&s, &case.scene, 16, 2.0);
-        let mut all: Vec<Receiver> = case
-            .points
-            .iter()
-            .map(|&(p, n)| Receiver::illuminance(p, n))
-            .collect();
-        all.extend(views);
+        let (case, all, exact) = sobolev_receivers(&s, 10, 16, 2.0);
         let rec = Receivers::from_receivers(&case.scene, &all).unwrap();
         let r = run(
             &case.scene,
@@ -41,13 +34,10 @@ fn double_local_estimate_matches_exact_luminance_with_points_in_the_same_run() {
             &mut |_| true,
         );
         batches = batches.min(r.tallies.batches());
-        for (j, v) in case.exact.iter().enumerate() {
-            worst = worst.max(z(&r, j, v.e).abs());
+        for (j, &e) in exact.iter().enumerate() {
+            worst = worst.max(z(&r, j, e).abs());
         }
-        for (k, &l) in lum.iter().enumerate() {
-            worst = worst.max(z(&r, 10 + k, l).abs());
-        }
-        m += 26;
+        m += exact.len();
     }
     let bound = sidak_bound(1e-3, m, Some(batches));
     assert!(worst < bound, "max |z| {worst} >= {bound}");
@@ -56,14 +46,7 @@ fn double_local_estimate_matches_exact_luminance_with_points_in_the_same_run() {
 #[test]
 fn backward_estimator_matches_exact_values() {
     let s = Sobolev::new(0.5, 0.5, 0.6, 0.7, 1.0).unwrap();
-    let case = sobolev_case(&s, 6, 2.0);
-    let (_, views, lum) = sobolev_views(&s, &case.scene, 6, 2.0);
-    let mut all: Vec<Receiver> = case
-        .points
-        .iter()
-        .map(|&(p, n)| Receiver::illuminance(p, n))
-        .collect();
-    all.extend(views);
+    let (case, all, exact) = sobolev_receivers(&s, 6, 6, 2.0);
     let rec = Receivers::from_receivers(&case.scene, &all).unwrap();
     let cfg = RunConfig {
         seed: 9,
@@ -74,8 +57,6 @@ fn backward_estimator_matches_exact_values() {
         ..RunConfig::default()
     };
     let r = lumest::backward::run(&case.scene, &rec, &cfg, &mut |_| true);
-    let mut exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
-    exact.extend(lum);
     let worst = (0..exact.len())
         .map(|j| z(&r, j, exact[j]).abs())
         .fold(0.0, f64::max);

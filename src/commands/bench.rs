@@ -40,8 +40,7 @@ pub struct BenchArgs {
 /// (one point when the count is 1), on the Sobolev case with exact answers.
 pub fn compare(a: &BenchArgs, counts: &[usize], times: &[f64]) -> anyhow::Result<()> {
     use super::illuminance::EstimatorKind;
-    use super::validate::sobolev_views;
-    use crate::estimator::Receiver;
+    use super::validate::sobolev_receivers;
     let problem = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).map_err(|e| anyhow::anyhow!("{e}"))?;
     println!(
         "{:>7} {:>9} {:>7} {:>12} {:>11} {:>11} {:>10} {:>11}",
@@ -49,19 +48,9 @@ pub fn compare(a: &BenchArgs, counts: &[usize], times: &[f64]) -> anyhow::Result
     );
     for (k, &n) in counts.iter().enumerate() {
         let t = if times.len() == 1 { times[0] } else { times[k] };
-        let n_views = n / 2;
-        let case = sobolev_case(&problem, n - n_views, 3.0);
-        let (_, views, lum) = sobolev_views(&problem, &case.scene, n_views, 3.0);
-        let mut all: Vec<Receiver> = case
-            .points
-            .iter()
-            .map(|&(p, q)| Receiver::illuminance(p, q))
-            .collect();
-        all.extend(views);
+        let (case, all, exact) = sobolev_receivers(&problem, n - n / 2, n / 2, 3.0);
         let receivers =
             Receivers::from_receivers(&case.scene, &all).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let mut exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
-        exact.extend(lum);
         let mut errs = Vec::new();
         for est in [EstimatorKind::Local, EstimatorKind::Backward] {
             let cfg = RunConfig::timed(a.seed, a.threads, t);

@@ -74,6 +74,25 @@ pub struct SobolevCase {
     pub exact: Vec<SobolevValue>,
 }
 
+/// Layout of item `j` of `n` spread over both planes: its plane (1 or 2,
+/// alternating), its horizontal distance (evenly spaced in `[0, r_max]` on
+/// each plane) and an azimuth spread by the golden angle.
+fn layout(j: usize, n: usize, r_max: f64) -> (u8, f64, f64) {
+    let per_plane = [n.div_ceil(2), n / 2];
+    let pl = (j % 2) as u8 + 1;
+    let m = per_plane[(pl - 1) as usize];
+    let rk = if m > 1 {
+        r_max * (j / 2) as f64 / (m - 1) as f64
+    } else {
+        0.0
+    };
+    (
+        pl,
+        rk,
+        std::f64::consts::PI * (3.0 - 5f64.sqrt()) * j as f64,
+    )
+}
+
 /// Build the Sobolev validation case.
 pub fn sobolev_case(s: &Sobolev, n_points: usize, r_max: f64) -> SobolevCase {
     let h = s.h1 + s.h2;
@@ -95,21 +114,11 @@ pub fn sobolev_case(s: &Sobolev, n_points: usize, r_max: f64) -> SobolevCase {
             i: s.intensity,
         }],
     );
-    let per_plane = [n_points.div_ceil(2), n_points / 2];
     let mut points = Vec::with_capacity(n_points);
     let mut plane = Vec::with_capacity(n_points);
     let mut r = Vec::with_capacity(n_points);
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     for j in 0..n_points {
-        let k = j / 2;
-        let pl = (j % 2) as u8 + 1;
-        let m = per_plane[(pl - 1) as usize];
-        let rk = if m > 1 {
-            r_max * k as f64 / (m - 1) as f64
-        } else {
-            0.0
-        };
-        let phi = golden * j as f64;
+        let (pl, rk, phi) = layout(j, n_points, r_max);
         let (z, n) = if pl == 1 {
             (0.0, DVec3::Z)
         } else {
@@ -353,21 +362,12 @@ pub fn sobolev_views(
     r_max: f64,
 ) -> (Vec<(DVec3, DVec3)>, Vec<Receiver>, Vec<f64>) {
     let h = s.h1 + s.h2;
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    let per_plane = [n_views.div_ceil(2), n_views / 2];
     let mut views = Vec::with_capacity(n_views);
     let mut receivers = Vec::with_capacity(n_views);
     let mut exact = Vec::with_capacity(n_views);
     for j in 0..n_views {
-        let k = j / 2;
-        let target_plane = (j % 2) as u8 + 1;
-        let m = per_plane[(target_plane - 1) as usize];
-        let rk = if m > 1 {
-            r_max * k as f64 / (m - 1) as f64
-        } else {
-            0.0
-        };
-        let phi = golden * j as f64 + 1.0;
+        let (target_plane, rk, phi) = layout(j, n_views, r_max);
+        let phi = phi + 1.0;
         let (z_t, z_o) = if target_plane == 2 {
             (h, 0.0)
         } else {
@@ -388,6 +388,27 @@ pub fn sobolev_views(
     (views, receivers, exact)
 }
 
+/// Points then views of the Sobolev case as receivers, with the exact value
+/// of each (E [lx] for points, L [cd/m^2] for views).
+pub fn sobolev_receivers(
+    s: &Sobolev,
+    n_points: usize,
+    n_views: usize,
+    r_max: f64,
+) -> (SobolevCase, Vec<Receiver>, Vec<f64>) {
+    let case = sobolev_case(s, n_points, r_max);
+    let (_, views, lum) = sobolev_views(s, &case.scene, n_views, r_max);
+    let mut all: Vec<Receiver> = case
+        .points
+        .iter()
+        .map(|&(p, n)| Receiver::illuminance(p, n))
+        .collect();
+    all.extend(views);
+    let mut exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
+    exact.extend(lum);
+    (case, all, exact)
+}
+
 /// Run `lumest validate sobolev`: illuminance at points and luminance along
 /// views in one run. Fails when the final max |z| exceeds the Sidak bound.
 pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
@@ -404,19 +425,10 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
         "--r-max must be >= 0"
     );
     let problem = a.params.problem()?;
-    let case = sobolev_case(&problem, a.points, a.r_max);
-    let (_, views, view_exact) = sobolev_views(&problem, &case.scene, a.views, a.r_max);
-    let mut all: Vec<Receiver> = case
-        .points
-        .iter()
-        .map(|&(p, n)| Receiver::illuminance(p, n))
-        .collect();
-    all.extend(views);
+    let (case, all, exact) = sobolev_receivers(&problem, a.points, a.views, a.r_max);
     let receivers =
         Receivers::from_receivers(&case.scene, &all).map_err(|e| anyhow::anyhow!("{e}"))?;
     let cfg = RunConfig::timed(a.seed, a.threads, a.time);
-    let mut exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
-    exact.extend(&view_exact);
     println!(
         "Sobolev: h1={} h2={} rho1={} rho2={} I={} cd; {} points and {} views, r in [0, {}] m, {} s",
         problem.h1,
@@ -488,7 +500,6 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
         &a.report.join("sobolev_points.csv").to_string_lossy(),
         &to_csv(&headers, &cells),
     )?;
-    let all_range = [0..exact.len()];
     let last = Progress {
         tallies: &result.tallies,
         direct: &result.direct,
@@ -496,7 +507,7 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
         scores: result.scores,
         elapsed: result.wall,
     };
-    let fin = checkpoint(&last, &exact, all_range[0].clone());
+    let fin = checkpoint(&last, &exact, 0..exact.len());
     let bound = sidak_bound(a.alpha, exact.len(), Some(fin.batches));
     let pass = fin.max_z <= bound;
     println!(

@@ -211,7 +211,7 @@ mod tests {
         // Within a few ulps of 1, including libm's own rounding of 2 pi t.
         assert!(worst < 4.0 * f64::EPSILON, "{worst:e}");
         assert_eq!(sin_cos_turns(0.0), (0.0, 1.0));
-        assert_eq!(sin_cos_turns(0.25).1.abs() < 1e-16, true);
+        assert!(sin_cos_turns(0.25).1.abs() < 1e-16);
     }
     use crate::sampling::Philox4x32;
     use core::f64::consts::PI;
