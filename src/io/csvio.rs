@@ -149,39 +149,50 @@ pub(crate) fn number(cell: &str, file: &str, line: u64, field: &str) -> Result<f
 
 /// Read a point list (`x,y,z,nx,ny,nz` plus any other columns).
 pub fn read_points(path: &str) -> Result<PointTable, InputError> {
-    let t = read_table(path)?;
-    let names = ["x", "y", "z", "nx", "ny", "nz"];
-    let cols = columns(&t.headers, &names, path)?;
-    let mut points = Vec::with_capacity(t.rows.len());
-    for (row, &line) in t.rows.iter().zip(&t.lines) {
-        let mut v = [0.0; 6];
-        for (k, (&c, name)) in cols.iter().zip(names).enumerate() {
-            v[k] = number(row.get(c).map_or("", String::as_str), path, line, name)?;
-        }
-        let n = DVec3::new(v[3], v[4], v[5]);
-        let len = n.length();
-        if !(len > 0.0 && len.is_finite()) {
-            return Err(InputError::Field {
-                file: display_name(path),
-                line,
-                field: "nx,ny,nz".into(),
-                message: "the normal has zero length".into(),
-            });
-        }
-        points.push((DVec3::new(v[0], v[1], v[2]), n / len));
-    }
-    if points.is_empty() {
-        return Err(InputError::File {
-            file: display_name(path),
-            message: "no points in the file".into(),
-        });
-    }
+    let (t, points) = read_rays(path, ["x", "y", "z", "nx", "ny", "nz"], "normal", "points")?;
     Ok(PointTable {
         headers: t.headers,
         rows: t.rows,
         lines: t.lines,
         points,
     })
+}
+
+/// Read a table of positions and directions from the six named columns;
+/// the direction is normalised (a zero one is an error naming the line).
+fn read_rays(
+    path: &str,
+    names: [&str; 6],
+    what_dir: &str,
+    what_rows: &str,
+) -> Result<(RawTable, Vec<(DVec3, DVec3)>), InputError> {
+    let t = read_table(path)?;
+    let cols = columns(&t.headers, &names, path)?;
+    let mut rays = Vec::with_capacity(t.rows.len());
+    for (row, &line) in t.rows.iter().zip(&t.lines) {
+        let mut v = [0.0; 6];
+        for (k, (&c, name)) in cols.iter().zip(names).enumerate() {
+            v[k] = number(row.get(c).map_or("", String::as_str), path, line, name)?;
+        }
+        let d = DVec3::new(v[3], v[4], v[5]);
+        let len = d.length();
+        if !(len > 0.0 && len.is_finite()) {
+            return Err(InputError::Field {
+                file: display_name(path),
+                line,
+                field: names[3..].join(","),
+                message: format!("the {what_dir} has zero length"),
+            });
+        }
+        rays.push((DVec3::new(v[0], v[1], v[2]), d / len));
+    }
+    if rays.is_empty() {
+        return Err(InputError::File {
+            file: display_name(path),
+            message: format!("no {what_rows} in the file"),
+        });
+    }
+    Ok((t, rays))
 }
 
 /// A view list as read: raw columns and parsed observer rays.
@@ -200,33 +211,12 @@ pub struct ViewTable {
 /// Read a view list (`x,y,z,dx,dy,dz` plus any other columns): the observer
 /// position and the direction it looks in (any non-zero length).
 pub fn read_views(path: &str) -> Result<ViewTable, InputError> {
-    let t = read_table(path)?;
-    let names = ["x", "y", "z", "dx", "dy", "dz"];
-    let cols = columns(&t.headers, &names, path)?;
-    let mut views = Vec::with_capacity(t.rows.len());
-    for (row, &line) in t.rows.iter().zip(&t.lines) {
-        let mut v = [0.0; 6];
-        for (k, (&c, name)) in cols.iter().zip(names).enumerate() {
-            v[k] = number(row.get(c).map_or("", String::as_str), path, line, name)?;
-        }
-        let d = DVec3::new(v[3], v[4], v[5]);
-        let len = d.length();
-        if !(len > 0.0 && len.is_finite()) {
-            return Err(InputError::Field {
-                file: display_name(path),
-                line,
-                field: "dx,dy,dz".into(),
-                message: "the view direction has zero length".into(),
-            });
-        }
-        views.push((DVec3::new(v[0], v[1], v[2]), d / len));
-    }
-    if views.is_empty() {
-        return Err(InputError::File {
-            file: display_name(path),
-            message: "no views in the file".into(),
-        });
-    }
+    let (t, views) = read_rays(
+        path,
+        ["x", "y", "z", "dx", "dy", "dz"],
+        "view direction",
+        "views",
+    )?;
     Ok(ViewTable {
         headers: t.headers,
         rows: t.rows,
