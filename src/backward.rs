@@ -18,6 +18,7 @@
 
 use crate::estimator::{Receiver, Receivers, Response};
 use crate::geometry::Ray;
+use crate::light::Light;
 use crate::run::{Batch, BatchWork, Progress, RunConfig, RunResult, drive, no_light};
 use crate::sampling::Philox4x32;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere};
@@ -165,17 +166,44 @@ fn trace<F: FnMut(u32, f64)>(
         let m = &scene.surfaces[h.surface as usize].material;
         let f_frame = Frame::from_normal(h.n);
         let wo = f_frame.to_local(-d);
-        // Next-event estimation from every point light.
+        // Next-event estimation from every light: exact for a point, one
+        // direction drawn uniformly in the cone of a sphere.
         let hm = scene.side_mask(h.p);
         for l in &scene.lights {
-            let lp = l.position();
-            if !scene.side_mask(lp).sees(hm) {
+            if !scene.side_mask(l.position()).sees(hm) {
                 continue;
             }
-            let e = l.direct_illuminance(h.p, h.n);
-            if e > 0.0 {
-                let wi = f_frame.to_local((lp - h.p).normalize());
-                add(order, beta * m.eval(wi, wo) * e);
+            match *l {
+                Light::Point { p: lp, .. } => {
+                    let e = l.direct_illuminance(h.p, h.n);
+                    if e > 0.0 {
+                        let wi = f_frame.to_local((lp - h.p).normalize());
+                        add(order, beta * m.eval(wi, wo) * e);
+                    }
+                }
+                Light::Sphere { c, r, .. } => {
+                    let to_c = c - h.p;
+                    let dist = to_c.length();
+                    let cos_a = (1.0 - (r / dist).powi(2)).max(0.0).sqrt();
+                    let u = rng.next_2d();
+                    let ct = 1.0 - u[0] * (1.0 - cos_a);
+                    let st = (1.0 - ct * ct).max(0.0).sqrt();
+                    let (sp, cp) = crate::sampling::warp::sin_cos_turns(u[1]);
+                    let wi = Frame::from_normal(to_c / dist).to_world(glam::DVec3::new(
+                        st * cp,
+                        st * sp,
+                        ct,
+                    ));
+                    let cos_n = wi.dot(h.n);
+                    if cos_n > 0.0 {
+                        let solid_angle = 2.0 * std::f64::consts::PI * (1.0 - cos_a);
+                        let wl = f_frame.to_local(wi);
+                        add(
+                            order,
+                            beta * m.eval(wl, wo) * l.luminance() * cos_n * solid_angle,
+                        );
+                    }
+                }
             }
         }
         if cfg.chain.max_order.is_some_and(|k| order >= k) {

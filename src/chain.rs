@@ -71,9 +71,9 @@ pub fn trace<F: FnMut(&Collision)>(
     mut on_collision: F,
 ) -> u32 {
     let light = scene.pick_light(rng.next_f64());
-    let e = light.sample_emission(u_first[0]);
+    let e = light.sample_emission(u_first[0], rng.next_2d());
     let q0 = scene.total_power();
-    // A point light picked with probability power/total carries total power per chain.
+    // A light picked with probability power/total carries the total power per chain.
     let mut q = e.phi / light.power() * q0;
     let mut ray = Ray { o: e.o, d: e.d };
     let mut skip = None;

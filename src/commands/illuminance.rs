@@ -6,7 +6,7 @@
 //! with the same chains.
 
 use super::{RunArgs, progress_bar, tick};
-use crate::estimator::{Receiver, Receivers, ViewTarget, view_target};
+use crate::estimator::{Receiver, Receivers, ViewTarget, emitted_luminance, view_target};
 use crate::io::csvio::to_csv;
 use crate::io::{PointTable, ViewTable, format_number, read_points, read_views, write_atomic};
 use crate::run::{RunConfig, RunResult, run};
@@ -24,6 +24,15 @@ pub enum EstimatorKind {
     Local,
     /// Backward path tracing from each point with next-event estimation.
     Backward,
+}
+
+/// The part of the luminance a fan's polar plot shows.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlotPart {
+    /// Everything: emitted, first order and reflected.
+    Total,
+    /// Light reflected at least twice (the double local estimate's part).
+    Indirect,
 }
 
 /// Arguments of `lumest illuminance`.
@@ -70,6 +79,10 @@ pub struct LuminanceArgs {
     /// With `--fan`: also draw a polar plot of L(theta, phi) to this PNG file.
     #[arg(long, requires = "fan")]
     pub plot: Option<String>,
+    /// What the polar plot shows: `total` L, or `indirect` (light reflected at
+    /// least twice, as in the seed paper's Figure 6).
+    #[arg(long = "plot-part", value_enum, default_value_t = PlotPart::Total, requires = "plot")]
+    pub plot_part: PlotPart,
     /// Output CSV (`-`: standard output).
     #[arg(long)]
     pub out: String,
@@ -111,14 +124,21 @@ pub fn result_headers(q: &str, orders: u32) -> Vec<String> {
 
 /// Result cells of receiver `j`.
 pub fn result_cells(r: &RunResult, j: usize) -> Vec<String> {
+    result_cells_plus(r, j, 0.0)
+}
+
+/// Result cells of receiver `j`, with an exact term `extra` (emitted
+/// luminance seen straight on) added to the total and to the direct part.
+pub fn result_cells_plus(r: &RunResult, j: usize, extra: f64) -> Vec<String> {
     let w = &r.tallies.indirect[j];
-    let e = r.direct[j] + w.mean();
+    let direct = r.direct[j] + extra;
+    let e = direct + w.mean();
     let se = w.std_error();
     let ci = t_factor(0.95, w.count()) * se;
     let mut c = vec![
         format_number(e),
         format_number(se),
-        format_number(r.direct[j]),
+        format_number(direct),
         format_number(w.mean()),
         format_number(relative_error(e, se)),
         format_number(ci),
@@ -130,14 +150,18 @@ pub fn result_cells(r: &RunResult, j: usize) -> Vec<String> {
     c
 }
 
-/// Cells of an exactly zero result (a view that sees nothing or a black back side).
-fn zero_cells(orders: u32) -> Vec<String> {
+/// Cells of an exact result `l` with no reflected light (a view that sees
+/// nothing or a black back side, possibly through an emitting sphere).
+fn exact_cells(l: f64, orders: u32) -> Vec<String> {
     let n = 6 + if orders > 0 {
         2 * orders as usize + 2
     } else {
         0
     };
-    vec!["0".to_string(); n]
+    let mut c = vec!["0".to_string(); n];
+    c[0] = format_number(l);
+    c[2] = format_number(l);
+    c
 }
 
 /// The run summary printed to standard error.
@@ -172,6 +196,8 @@ pub struct Job {
     pub views: Option<(ViewTable, Vec<ViewTarget>)>,
     /// Receiver index of each view (None: the view sees nothing or a back side).
     pub view_receiver: Vec<Option<usize>>,
+    /// Luminance of sphere lights seen straight along each view [cd/m^2].
+    pub emitted: Vec<f64>,
     /// The compiled receivers: points first, then the views that meet a front side.
     pub receivers: Receivers,
 }
@@ -201,7 +227,12 @@ impl Job {
             }
         }
         let mut view_receiver = Vec::new();
+        let mut emitted = Vec::new();
         let views = views_t.map(|t| {
+            for &(o, d) in &t.views {
+                let t_max = scene.first_hit_from(o, d).map_or(f64::INFINITY, |h| h.t);
+                emitted.push(emitted_luminance(scene, o, d, t_max));
+            }
             let targets: Vec<ViewTarget> = t
                 .views
                 .iter()
@@ -226,6 +257,7 @@ impl Job {
             points: points_t,
             views,
             view_receiver,
+            emitted,
             receivers,
         })
     }
@@ -263,8 +295,8 @@ impl Job {
                 let mut c = row.clone();
                 c.resize(t.headers.len(), String::new());
                 match self.view_receiver[k] {
-                    Some(j) => c.extend(result_cells(r, j)),
-                    None => c.extend(zero_cells(orders)),
+                    Some(j) => c.extend(result_cells_plus(r, j, self.emitted[k])),
+                    None => c.extend(exact_cells(self.emitted[k], orders)),
                 }
                 match targets[k].sub_point() {
                     Some(s) => c.extend([s.x, s.y, s.z].map(format_number)),
@@ -437,7 +469,7 @@ pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
             &a.run,
         )?;
         if let Some(plot) = &a.plot {
-            fan_plot(&job, &result, plot)?;
+            fan_plot(&job, &result, plot, a.plot_part)?;
         }
         return Ok(());
     }
@@ -449,24 +481,32 @@ pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
 }
 
 /// Polar plot of a fan's luminance (linear colour scale).
-fn fan_plot(job: &Job, r: &RunResult, path: &str) -> anyhow::Result<()> {
+fn fan_plot(job: &Job, r: &RunResult, path: &str, part: PlotPart) -> anyhow::Result<()> {
     let (t, _) = job.views.as_ref().expect("a fan has views");
     let samples: Vec<(f64, f64, f64)> = t
         .rows
         .iter()
-        .zip(&job.view_receiver)
-        .map(|(row, rec)| {
+        .enumerate()
+        .map(|(k, row)| {
             let theta: f64 = row[0].parse().unwrap_or(0.0);
             let phi: f64 = row[1].parse().unwrap_or(0.0);
-            let l = rec.map_or(0.0, |j| {
-                (r.direct[j] + r.tallies.indirect[j].mean()).max(0.0)
-            });
-            (theta.to_radians(), phi.to_radians(), l)
+            let indirect = job.view_receiver[k].map_or(0.0, |j| r.tallies.indirect[j].mean());
+            let l = match part {
+                PlotPart::Indirect => indirect,
+                PlotPart::Total => {
+                    job.view_receiver[k].map_or(0.0, |j| r.direct[j]) + indirect + job.emitted[k]
+                }
+            };
+            (theta.to_radians(), phi.to_radians(), l.max(0.0))
         })
         .collect();
     let values: Vec<f64> = samples.iter().map(|s| s.2).collect();
     let scale = crate::io::image::ColourScale::from_data(&values, false);
-    crate::io::image::write_polar_png(path, &samples, scale, "Luminance L(theta, phi)")?;
+    let title = match part {
+        PlotPart::Total => "Luminance L(theta, phi)",
+        PlotPart::Indirect => "Luminance of multiply reflected light",
+    };
+    crate::io::image::write_polar_png(path, &samples, scale, title)?;
     eprintln!("lumest: wrote {path}");
     Ok(())
 }

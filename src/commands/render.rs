@@ -210,12 +210,13 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<()> {
         &a.run,
     )?;
     let view = |k: usize| {
-        job.view_receiver[k].map_or((0.0, 0.0), |j| {
+        let (l, se) = job.view_receiver[k].map_or((0.0, 0.0), |j| {
             (
-                (r.direct[j] + r.tallies.indirect[j].mean()).max(0.0),
+                r.direct[j] + r.tallies.indirect[j].mean(),
                 r.tallies.indirect[j].std_error(),
             )
-        })
+        });
+        ((l + job.emitted[k]).max(0.0), se)
     };
     // A pixel is the mean of its lens views. Its standard error combines the
     // chains' noise (the mean of the views' standard errors: an upper bound

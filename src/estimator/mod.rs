@@ -122,6 +122,18 @@ impl ViewTarget {
     }
 }
 
+/// Luminance [cd/m^2] of the sphere lights that the ray `o + t d` (unit `d`)
+/// enters before `t_max` [m]: seen straight on, an emitting surface adds its
+/// luminance (sphere lights do not block what lies behind them).
+pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
+    scene
+        .lights
+        .iter()
+        .filter(|l| l.hit(o, d, t_max).is_some())
+        .map(|l| l.luminance())
+        .sum()
+}
+
 /// Trace the view ray from observer `o` [m] looking along unit `d` to its sub-point.
 pub fn view_target(scene: &Scene, o: DVec3, d: DVec3) -> ViewTarget {
     match scene.first_hit_from(o, d) {
@@ -211,18 +223,24 @@ impl Receivers {
                 });
             }
             for l in &scene.lights {
-                let lp = l.position();
-                if (lp - p).length() <= 1e-12 * lp.abs().max_element().max(p.abs().max_element()) {
+                if l.contains(p) {
                     return Err(ReceiverError {
                         index: j,
                         message: format!(
-                            "point coincides with a point light at {lp:?}: illuminance is infinite"
+                            "point lies on or inside a light at {:?}: its illuminance is not finite",
+                            l.position()
                         ),
                     });
                 }
-                if scene.side_mask(lp).sees(masks[j]) {
-                    let wi = (lp - p).normalize();
-                    direct[j] += l.direct_illuminance(p, n) * rec.weight(&frames[j], wi);
+                // A sphere light lies wholly on one side of every plane, so its
+                // centre decides its visibility.
+                if scene.side_mask(l.position()).sees(masks[j]) {
+                    direct[j] += match rec.response {
+                        Response::Illuminance => l.direct_illuminance(p, n),
+                        Response::Luminance { .. } => {
+                            l.direct_weighted(p, n, &|wi| rec.weight(&frames[j], wi))
+                        }
+                    };
                 }
             }
         }

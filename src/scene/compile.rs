@@ -88,6 +88,8 @@ pub struct SceneSummary {
     pub planes: usize,
     /// Number of point lights.
     pub point_lights: usize,
+    /// Number of sphere lights.
+    pub sphere_lights: usize,
     /// Whether an acceleration structure (BVH) was built.
     pub bvh: bool,
 }
@@ -96,9 +98,10 @@ impl std::fmt::Display for SceneSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} plane(s), {} point light(s), BVH: {}",
+            "{} plane(s), {} point light(s), {} sphere light(s), BVH: {}",
             self.planes,
             self.point_lights,
+            self.sphere_lights,
             if self.bvh {
                 "built"
             } else {
@@ -184,6 +187,11 @@ impl Scene {
                 .lights
                 .iter()
                 .filter(|l| matches!(l, Light::Point { .. }))
+                .count(),
+            sphere_lights: self
+                .lights
+                .iter()
+                .filter(|l| matches!(l, Light::Sphere { .. }))
                 .count(),
             bvh: false,
         }
@@ -271,10 +279,11 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
     if desc.light.is_empty() {
         return Err(ctx.invalid(0..0, "light", "the scene has no [[light]]"));
     }
+    let planes: Vec<Plane> = surfaces.iter().map(|s| s.1).collect();
     let lights = desc
         .light
         .iter()
-        .map(|l| light(l, ctx))
+        .map(|l| light(l, ctx, &planes))
         .collect::<Result<Vec<_>, _>>()?;
     Ok(Scene::from_parts(surfaces, lights))
 }
@@ -377,35 +386,81 @@ fn material(m: &Spanned<MaterialDesc>, ctx: &SourceCtx) -> Result<Material, Scen
     }
 }
 
-fn light(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<Light, SceneError> {
+fn light(l: &Spanned<LightDesc>, ctx: &SourceCtx, planes: &[Plane]) -> Result<Light, SceneError> {
     let d = l.get_ref();
+    // Fields that belong to the other kind of light are rejected.
+    let not_for = |kind: &str, fields: &[(&str, Option<Range<usize>>)]| -> Result<(), SceneError> {
+        match fields.iter().find(|f| f.1.is_some()) {
+            Some((name, Some(span))) => Err(ctx.invalid(
+                span.clone(),
+                name,
+                format!("not allowed for a `{kind}` light"),
+            )),
+            _ => Ok(()),
+        }
+    };
+    let i = match (&d.intensity, &d.flux) {
+        (Some(i), None) => ctx.nonneg(i, "intensity")?,
+        (None, Some(f)) => ctx.nonneg(f, "flux")? / (4.0 * PI),
+        (Some(_), Some(f)) => {
+            return Err(ctx.invalid(
+                f.span(),
+                "flux",
+                "give either `intensity` [cd] or `flux` [lm], not both",
+            ));
+        }
+        (None, None) => {
+            return Err(ctx.invalid(
+                l.span(),
+                "intensity",
+                "missing field (give `intensity` [cd] or `flux` [lm])",
+            ));
+        }
+    };
     match d.kind.get_ref().as_str() {
         "point" => {
+            not_for(
+                "point",
+                &[
+                    ("center", d.center.as_ref().map(Spanned::span)),
+                    ("radius", d.radius.as_ref().map(Spanned::span)),
+                ],
+            )?;
             let p = ctx.finite_vec(ctx.required(&d.position, l.span(), "position")?, "position")?;
-            let i = match (&d.intensity, &d.flux) {
-                (Some(i), None) => ctx.nonneg(i, "intensity")?,
-                (None, Some(f)) => ctx.nonneg(f, "flux")? / (4.0 * PI),
-                (Some(_), Some(f)) => {
-                    return Err(ctx.invalid(
-                        f.span(),
-                        "flux",
-                        "give either `intensity` [cd] or `flux` [lm], not both",
-                    ));
-                }
-                (None, None) => {
-                    return Err(ctx.invalid(
-                        l.span(),
-                        "intensity",
-                        "missing field (give `intensity` [cd] or `flux` [lm])",
-                    ));
-                }
-            };
             Ok(Light::Point { p, i })
+        }
+        "sphere" => {
+            not_for(
+                "sphere",
+                &[("position", d.position.as_ref().map(Spanned::span))],
+            )?;
+            let cs = ctx.required(&d.center, l.span(), "center")?;
+            let c = ctx.finite_vec(cs, "center")?;
+            let rs = ctx.required(&d.radius, l.span(), "radius")?;
+            let r = *rs.get_ref();
+            if !(r.is_finite() && r > 0.0) {
+                return Err(ctx.invalid(
+                    rs.span(),
+                    "radius",
+                    format!("must be finite and > 0, got {r}"),
+                ));
+            }
+            if let Some(k) = planes
+                .iter()
+                .position(|pl| pl.signed_distance(c).abs() <= r)
+            {
+                return Err(ctx.invalid(
+                    rs.span(),
+                    "radius",
+                    format!("the sphere light cuts plane surface #{} (it must lie wholly on one side of every plane)", k + 1),
+                ));
+            }
+            Ok(Light::Sphere { c, r, i })
         }
         other => Err(ctx.invalid(
             d.kind.span(),
             "type",
-            format!("unknown light type `{other}` (this version knows: point)"),
+            format!("unknown light type `{other}` (this version knows: point, sphere)"),
         )),
     }
 }

@@ -65,13 +65,17 @@ pub struct MaterialDesc {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
-    /// Light kind: `"point"`.
+    /// Light kind: `"point"` or `"sphere"`.
     #[serde(rename = "type")]
     pub kind: Spanned<String>,
     /// Optional name used in messages and summaries.
     pub name: Option<Spanned<String>>,
-    /// Position [m].
+    /// Position of a point light [m].
     pub position: Option<Spanned<[f64; 3]>>,
+    /// Centre of a sphere light [m].
+    pub center: Option<Spanned<[f64; 3]>>,
+    /// Radius of a sphere light [m].
+    pub radius: Option<Spanned<f64>>,
     /// Luminous intensity [cd] (isotropic point source). Exclusive with `flux`.
     pub intensity: Option<Spanned<f64>>,
     /// Luminous flux [lm]. Exclusive with `intensity`.
