@@ -126,12 +126,12 @@ impl ViewTarget {
 /// enters before `t_max` [m]: seen straight on, an emitting surface adds its
 /// luminance (sphere lights do not block what lies behind them).
 pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
+    // A fold from +0 (an empty f64 sum is -0, which would print as "-0").
     scene
         .lights
         .iter()
         .filter(|l| l.hit(o, d, t_max).is_some())
-        .map(|l| l.luminance())
-        .sum()
+        .fold(0.0, |a, l| a + l.luminance())
 }
 
 /// Trace the view ray from observer `o` [m] looking along unit `d` to its sub-point.
