@@ -20,7 +20,7 @@ use crate::estimator::Receivers;
 use crate::sampling::Philox4x32;
 use crate::sampling::qmc::{DigitalShift, shifted_sobol_2d, shifted_sobol_34};
 use crate::scene::Scene;
-use crate::tally::{Welford, relative_error};
+use crate::tally::{Diagnostics, Welford, relative_error};
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc;
@@ -107,6 +107,8 @@ pub struct Tallies {
     pub indirect: Vec<Welford>,
     /// `orders[k][j]`: order `k+1` for `k < K`, and all orders above `K` for `k = K`.
     pub orders: Vec<Vec<Welford>>,
+    /// `R^2 B` of each point's total at batch counts 32, 64, 128, ... (for the FOM check).
+    pub snapshots: Vec<(u64, Vec<f64>)>,
 }
 
 impl Tallies {
@@ -115,7 +117,32 @@ impl Tallies {
         Self {
             indirect: vec![Welford::new(); n],
             orders: vec![vec![Welford::new(); n]; buckets],
+            snapshots: Vec::new(),
         }
+    }
+
+    /// Record `R^2 B` of every point (total = `direct` + indirect).
+    fn snapshot(&mut self, direct: &[f64]) {
+        let b = self.batches();
+        let v = self
+            .indirect
+            .iter()
+            .zip(direct)
+            .map(|(w, d)| relative_error(d + w.mean(), w.std_error()).powi(2) * b as f64)
+            .collect();
+        self.snapshots.push((b, v));
+    }
+
+    /// Statistical checks of point `j` whose exact part is `direct`.
+    pub fn diagnostics(&self, j: usize, direct: f64) -> Diagnostics {
+        let b = self.batches();
+        let half = self
+            .snapshots
+            .iter()
+            .rev()
+            .find(|(n, _)| 2 * n <= b)
+            .map(|(_, v)| v[j]);
+        Diagnostics::of(&self.indirect[j], direct, half)
     }
 
     /// Number of batches folded in.
@@ -406,6 +433,10 @@ pub fn drive(
                     continue;
                 }
                 fold(&mut tallies, &b, bs, buckets, n, &mut batch_means);
+                let folded_batches = tallies.batches();
+                if folded_batches >= 32 && folded_batches.is_power_of_two() {
+                    tallies.snapshot(&direct);
+                }
                 result.chains += b.chains;
                 result.collisions += b.collisions;
                 result.scores += b.scores;

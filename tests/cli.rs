@@ -344,3 +344,40 @@ fn fan_and_render_write_their_files() {
         1 + 48
     );
 }
+
+#[test]
+fn diagnostics_flag_a_point_next_to_a_lit_surface() {
+    // 1 mm above the floor, facing it: the local-estimate kernel 1/d^4 has
+    // (nearly) infinite variance there; the checks must say so.
+    let dir = tempfile::tempdir().unwrap();
+    let s = write(dir.path(), "scene.toml", SCENE);
+    let p = write(
+        dir.path(),
+        "near.csv",
+        "id,x,y,z,nx,ny,nz\nnear,0.3,0,1e-3,0,0,-1\nfine,0.3,0,0,0,0,1\n",
+    );
+    let o = lumest()
+        .args([
+            "illuminance",
+            "--scene",
+            &s,
+            "--points",
+            &p,
+            "--out",
+            "-",
+            "--chains",
+            "100000",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let out = String::from_utf8(o.stdout).unwrap();
+    let mut lines = out.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let flag = header.iter().position(|h| *h == "E_flag").unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_ne!(rows[0][flag], "ok", "near-surface point not flagged");
+    assert_eq!(rows[1][flag], "ok");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("statistical checks FAILED"));
+}

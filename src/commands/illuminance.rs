@@ -119,6 +119,11 @@ pub fn result_headers(q: &str, orders: u32) -> Vec<String> {
         h.push(format!("{q}_rest"));
         h.push(format!("{q}_rest_stderr"));
     }
+    h.extend(
+        ["_vov", "_fom_ratio", "_flag"]
+            .iter()
+            .map(|s| format!("{q}{s}")),
+    );
     h
 }
 
@@ -147,6 +152,10 @@ pub fn result_cells_plus(r: &RunResult, j: usize, extra: f64) -> Vec<String> {
         c.push(format_number(bucket[j].mean()));
         c.push(format_number(bucket[j].std_error()));
     }
+    let d = r.tallies.diagnostics(j, direct);
+    c.push(format_number(d.vov));
+    c.push(d.fom_ratio.map_or(String::new(), format_number));
+    c.push(d.flag());
     c
 }
 
@@ -161,6 +170,7 @@ fn exact_cells(l: f64, orders: u32) -> Vec<String> {
     let mut c = vec!["0".to_string(); n];
     c[0] = format_number(l);
     c[2] = format_number(l);
+    c.extend(["0".to_string(), String::new(), "ok".to_string()]);
     c
 }
 
@@ -168,7 +178,26 @@ fn exact_cells(l: f64, orders: u32) -> Vec<String> {
 pub fn summary(r: &RunResult) -> String {
     let rms = r.tallies.rms_rel_error(&r.direct);
     let max = r.tallies.max_rel_error(&r.direct);
-    format!(
+    let mut counts = std::collections::BTreeMap::new();
+    for j in 0..r.direct.len() {
+        let flag = r.tallies.diagnostics(j, r.direct[j]).flag();
+        if flag != "ok" {
+            for f in flag.split(';') {
+                *counts.entry(f.to_string()).or_insert(0usize) += 1;
+            }
+        }
+    }
+    let flags = if counts.is_empty() {
+        "statistical checks: all receivers pass (R <= 0.1, VOV <= 0.1, stable FOM, no heavy tail)"
+            .to_string()
+    } else {
+        let list: Vec<String> = counts.iter().map(|(k, v)| format!("{k}: {v}")).collect();
+        format!(
+            "statistical checks FAILED for some receivers ({}); see the _flag column",
+            list.join(", ")
+        )
+    };
+    let text = format!(
         "{} receivers, {} chains in {} batches of {}, {:.3} s on {} thread(s), stopped by {:?}\n\
          {:.4e} chains/s, {:.4e} scores/s, {:.3} collisions/chain\n\
          relative standard error: RMS {:.3e}, max {:.3e}; FOM = 1/(R_rms^2 T) = {:.4e} 1/s",
@@ -185,7 +214,8 @@ pub fn summary(r: &RunResult) -> String {
         rms,
         max,
         figure_of_merit(rms, r.wall),
-    )
+    );
+    format!("{text}\n{flags}")
 }
 
 /// Points and views of one run, compiled into receivers.

@@ -11,16 +11,44 @@
 //! - relative error `R = se / |m|`
 //! - figure of merit `FOM = 1 / (R^2 T)` with `T` the wall-clock time [s].
 //!
+//! Diagnostics of a tally (in the spirit of MCNP's statistical checks, but on
+//! batch means), see [`Diagnostics`]:
+//!
+//! - variance of the variance `VOV = sum (x_b - m)^4 / (sum (x_b - m)^2)^2 - 1/B`,
+//!   the relative variance of the estimated variance; about `2/B` for
+//!   well-behaved (normal) batch means. Flagged above 0.1.
+//! - FOM stability: `FOM(B/2) / FOM(B) = (R_h^2 B_h) / (R^2 B)` between the
+//!   largest power-of-two batch count `B_h <= B/2` and the end; near 1 when
+//!   the error falls like `1/sqrt(T)`. Flagged outside [0.5, 2].
+//! - heavy tail: the largest `|x_b - m| / s` over the batches against the
+//!   Sidak bound for `B` normal values at rate 0.001; a batch that far out
+//!   means rare huge scores (a heavy tail). Flagged when above.
+//! - `R > 0.1` is flagged: the estimate is not yet trustworthy.
+//!
+//! Higher moments are accumulated with the one-pass updates and merges of
+//! Pébay (2008), never raw power sums.
+//!
 //! Numbers in, statistics out: nothing here knows about scenes or chains.
 
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 
-/// Mergeable running mean and variance (Welford 1962; Chan, Golub & LeVeque 1979).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// Mergeable running mean, variance, third and fourth central moments and
+/// extremes (Welford 1962; Chan, Golub & LeVeque 1979; Pébay 2008).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Welford {
     n: u64,
     mean: f64,
     m2: f64,
+    m3: f64,
+    m4: f64,
+    min: f64,
+    max: f64,
+}
+
+impl Default for Welford {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Welford {
@@ -30,16 +58,29 @@ impl Welford {
             n: 0,
             mean: 0.0,
             m2: 0.0,
+            m3: 0.0,
+            m4: 0.0,
+            min: f64::INFINITY,
+            max: f64::NEG_INFINITY,
         }
     }
 
     /// Add one observation.
     #[inline]
     pub fn push(&mut self, x: f64) {
+        let n1 = self.n as f64;
         self.n += 1;
+        let n = self.n as f64;
         let delta = x - self.mean;
-        self.mean += delta / self.n as f64;
-        self.m2 += delta * (x - self.mean);
+        let dn = delta / n;
+        let dn2 = dn * dn;
+        let term1 = delta * dn * n1;
+        self.mean += dn;
+        self.m4 += term1 * dn2 * (n * n - 3.0 * n + 3.0) + 6.0 * dn2 * self.m2 - 4.0 * dn * self.m3;
+        self.m3 += term1 * dn * (n - 2.0) - 3.0 * dn * self.m2;
+        self.m2 += term1;
+        self.min = self.min.min(x);
+        self.max = self.max.max(x);
     }
 
     /// Merge another accumulator into this one (order-independent up to rounding).
@@ -51,12 +92,55 @@ impl Welford {
             *self = *other;
             return;
         }
-        let n = self.n + other.n;
-        let delta = other.mean - self.mean;
-        let fo = other.n as f64 / n as f64;
-        self.mean += delta * fo;
-        self.m2 += other.m2 + delta * delta * self.n as f64 * fo;
-        self.n = n;
+        let (na, nb) = (self.n as f64, other.n as f64);
+        let n = na + nb;
+        let d = other.mean - self.mean;
+        let (d2, d3, d4) = (d * d, d * d * d, d * d * d * d);
+        let m2 = self.m2 + other.m2 + d2 * na * nb / n;
+        let m3 = self.m3
+            + other.m3
+            + d3 * na * nb * (na - nb) / (n * n)
+            + 3.0 * d * (na * other.m2 - nb * self.m2) / n;
+        let m4 = self.m4
+            + other.m4
+            + d4 * na * nb * (na * na - na * nb + nb * nb) / (n * n * n)
+            + 6.0 * d2 * (na * na * other.m2 + nb * nb * self.m2) / (n * n)
+            + 4.0 * d * (na * other.m3 - nb * self.m3) / n;
+        self.mean += d * nb / n;
+        self.m2 = m2;
+        self.m3 = m3;
+        self.m4 = m4;
+        self.n += other.n;
+        self.min = self.min.min(other.min);
+        self.max = self.max.max(other.max);
+    }
+
+    /// Variance of the variance, `M4 / M2^2 - 1/n` (0 when the values are all equal).
+    pub fn vov(&self) -> f64 {
+        if self.n < 2 || self.m2 <= 0.0 {
+            0.0
+        } else {
+            self.m4 / (self.m2 * self.m2) - 1.0 / self.n as f64
+        }
+    }
+
+    /// Skewness of the observations (0 when they are all equal).
+    pub fn skewness(&self) -> f64 {
+        if self.n < 2 || self.m2 <= 0.0 {
+            0.0
+        } else {
+            (self.n as f64).sqrt() * self.m3 / self.m2.powf(1.5)
+        }
+    }
+
+    /// Largest `|x - mean| / s` over the observations (0 when `s = 0`).
+    pub fn max_deviation(&self) -> f64 {
+        let s = self.variance().sqrt();
+        if s == 0.0 || self.n == 0 {
+            0.0
+        } else {
+            (self.max - self.mean).max(self.mean - self.min) / s
+        }
     }
 
     /// Number of observations.
@@ -136,6 +220,60 @@ pub fn sidak_bound(alpha: f64, m: usize, batches: Option<u64>) -> f64 {
     }
 }
 
+/// Statistical checks of one tally (formulas in the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Diagnostics {
+    /// Relative error `R` of the total (exact part included).
+    pub rel_err: f64,
+    /// Variance of the variance.
+    pub vov: f64,
+    /// `FOM(B_h) / FOM(B)`, when a snapshot at `B_h <= B/2` batches exists.
+    pub fom_ratio: Option<f64>,
+    /// Largest batch deviation `|x_b - m| / s`.
+    pub max_deviation: f64,
+    /// Sidak bound the largest deviation is checked against.
+    pub deviation_bound: f64,
+}
+
+impl Diagnostics {
+    /// Checks of accumulator `w` for an estimate whose total is `exact + w.mean()`,
+    /// with `r2b_half = R^2 B` at an earlier batch count, if any.
+    pub fn of(w: &Welford, exact: f64, r2b_half: Option<f64>) -> Self {
+        let rel_err = relative_error(exact + w.mean(), w.std_error());
+        let r2b = rel_err * rel_err * w.count() as f64;
+        let fom_ratio = r2b_half.filter(|_| r2b > 0.0).map(|h| h / r2b);
+        Self {
+            rel_err,
+            vov: w.vov(),
+            fom_ratio,
+            max_deviation: w.max_deviation(),
+            deviation_bound: sidak_bound(1e-3, w.count().max(1) as usize, None),
+        }
+    }
+
+    /// The failed checks, as `R`, `VOV`, `FOM`, `tail`, joined by `;`, or `ok`.
+    pub fn flag(&self) -> String {
+        let mut f = Vec::new();
+        if self.rel_err > 0.1 {
+            f.push("R");
+        }
+        if self.vov > 0.1 {
+            f.push("VOV");
+        }
+        if self.fom_ratio.is_some_and(|r| !(0.5..=2.0).contains(&r)) {
+            f.push("FOM");
+        }
+        if self.max_deviation > self.deviation_bound {
+            f.push("tail");
+        }
+        if f.is_empty() {
+            "ok".to_string()
+        } else {
+            f.join(";")
+        }
+    }
+}
+
 /// Summary of one estimated quantity.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Estimate {
@@ -181,6 +319,68 @@ mod tests {
                 var
             );
         }
+    }
+
+    #[test]
+    fn higher_moments_match_two_pass_and_merge() {
+        // A skewed sample: squares of a ramp.
+        let xs: Vec<f64> = (0..500)
+            .map(|i| ((i * 37 % 500) as f64 / 100.0).powi(2))
+            .collect();
+        let n = xs.len() as f64;
+        let mean = xs.iter().sum::<f64>() / n;
+        let m = |k: i32| xs.iter().map(|x| (x - mean).powi(k)).sum::<f64>();
+        let (m2, m3, m4) = (m(2), m(3), m(4));
+        let mut all = Welford::new();
+        let (mut a, mut b) = (Welford::new(), Welford::new());
+        for (i, &x) in xs.iter().enumerate() {
+            all.push(x);
+            if i % 3 == 0 { a.push(x) } else { b.push(x) }
+        }
+        a.merge(&b);
+        for w in [all, a] {
+            assert!((w.vov() - (m4 / (m2 * m2) - 1.0 / n)).abs() < 1e-12);
+            assert!((w.skewness() - n.sqrt() * m3 / m2.powf(1.5)).abs() < 1e-12);
+            let s = (m2 / (n - 1.0)).sqrt();
+            let dev = xs.iter().map(|x| (x - mean).abs()).fold(0.0, f64::max) / s;
+            assert!((w.max_deviation() - dev).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn diagnostics_flag_what_they_should() {
+        // Normal-looking batch means: nothing flagged.
+        let mut w = Welford::new();
+        for i in 0..64 {
+            w.push(1.0 + 0.01 * ((i * 7919 % 64) as f64 / 64.0 - 0.5));
+        }
+        assert_eq!(Diagnostics::of(&w, 0.0, None).flag(), "ok");
+        // The same R^2 B at half the batches: a stable FOM.
+        let r2b = Diagnostics::of(&w, 0.0, None).rel_err.powi(2) * 64.0;
+        assert_eq!(Diagnostics::of(&w, 0.0, Some(r2b)).fom_ratio, Some(1.0));
+        assert!(
+            Diagnostics::of(&w, 0.0, Some(3.0 * r2b))
+                .flag()
+                .contains("FOM")
+        );
+        // One huge batch among many small ones: a heavy tail and a large VOV.
+        let mut h = Welford::new();
+        for _ in 0..63 {
+            h.push(1.0);
+        }
+        h.push(1000.0);
+        let d = Diagnostics::of(&h, 0.0, None);
+        assert!(
+            d.flag().contains("VOV") && d.flag().contains("tail"),
+            "{}",
+            d.flag()
+        );
+        // A relative error above 0.1.
+        let mut r = Welford::new();
+        for x in [0.0, 2.0, 0.0, 2.0] {
+            r.push(x);
+        }
+        assert!(Diagnostics::of(&r, 0.0, None).flag().contains('R'));
     }
 
     #[test]
