@@ -40,6 +40,7 @@ pub mod geometry;
 pub mod io;
 pub mod light;
 pub mod material;
+pub mod math;
 pub mod reference;
 pub mod run;
 pub mod sampling;

@@ -9,7 +9,7 @@
 use core::f64::consts::{FRAC_PI_2, PI, TAU};
 use glam::DVec3;
 use lumest::material::Material;
-use lumest::reference::quadrature::panel;
+use lumest::math::quadrature::panel;
 use lumest::sampling::warp::sample_uniform_sphere;
 use lumest::sampling::{Frame, Philox4x32};
 use statrs::distribution::{ChiSquared, ContinuousCDF};

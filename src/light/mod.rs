@@ -9,7 +9,7 @@
 //!   globe; for a small luminaire the difference from an opaque body is
 //!   negligible). Seen from outside it has luminance `L`.
 
-use crate::reference::quadrature::panel;
+use crate::math::quadrature::panel;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
 use glam::DVec3;
 use std::f64::consts::PI;

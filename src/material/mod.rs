@@ -4,7 +4,7 @@
 //! the local frame whose z axis is the front normal; the BRDF `f_r` is in
 //! [1/sr]. Sampling densities are per solid angle [1/sr].
 
-use crate::reference::quadrature::{CompensatedSum, panel};
+use crate::math::quadrature::{CompensatedSum, panel};
 use crate::sampling::warp::{
     DirectionSample, Frame, cosine_hemisphere_pdf, sample_cosine_hemisphere, sin_cos_turns,
 };
@@ -125,7 +125,7 @@ fn sample_phong_lobe(r: DVec3, n: f64, u: [f64; 2]) -> DVec3 {
 /// coincide, i.e. at normal incidence.
 ///
 /// Quadrature: composite 20-point Gauss-Legendre
-/// ([`crate::reference::quadrature::panel`]). The integrand has features at
+/// ([`crate::math::quadrature::panel`]). The integrand has features at
 /// the scales `x ~ c/s` (the factor `sin^2 x / (c^2 + s^2 sin^2 x)`, whose
 /// poles are at `sin x = +-i c/s`) and `x ~ 1/sqrt(n)` (the `cos^n` peak),
 /// both at `x = 0`, so `[0, pi/4]` is split into panels `[2^-(k+1), 2^-k] pi/4`

@@ -6,4 +6,5 @@
 pub mod quadrature;
 pub mod sobolev;
 
-pub use sobolev::{Sobolev, SobolevValue};
+pub use quadrature::QuadOptions;
+pub use sobolev::{Path, Settings, Sobolev, SobolevError, SobolevValue};

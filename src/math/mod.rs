@@ -1,0 +1,3 @@
+//! Numerical building blocks that know nothing of scenes or light.
+
+pub mod quadrature;
