@@ -8,11 +8,13 @@
 
 use core::f64::consts::{FRAC_PI_2, PI, TAU};
 use glam::DVec3;
+
+mod common;
+use common::chi2_pvalue;
 use lumest::material::Material;
 use lumest::math::quadrature::panel;
 use lumest::sampling::warp::sample_uniform_sphere;
 use lumest::sampling::{Frame, Philox4x32};
-use statrs::distribution::{ChiSquared, ContinuousCDF};
 use std::path::Path;
 
 /// Seed shared by all tests; each test uses its own stream.
@@ -299,42 +301,6 @@ fn pdf_integrates_to_above_horizon_probability_and_matches_samples() {
 /// Per-test level `1 - (1 - alpha)^(1/m)` (Šidák 1967).
 fn sidak_alpha() -> f64 {
     1.0 - (1.0 - ALPHA_FAMILY).powf(1.0 / f64::from(NUM_CHI2_TESTS))
-}
-
-/// Pearson's statistic with pooling of cells whose expected count is < 5
-/// (as in `tests/sampling_chi2.rs`). Returns `(p, stat, dof)` with
-/// `p = P[chi2_dof > stat]`; panics if a cell of zero expectation got samples.
-fn chi2_pvalue(observed: &[f64], expected: &[f64]) -> (f64, f64, usize) {
-    assert_eq!(observed.len(), expected.len());
-    let mut cells: Vec<(f64, f64)> = observed
-        .iter()
-        .copied()
-        .zip(expected.iter().copied())
-        .collect();
-    for &(o, e) in &cells {
-        assert!(
-            !(e == 0.0 && o > 0.0),
-            "{o} samples in a cell of zero expected mass"
-        );
-    }
-    cells.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let (mut pool_o, mut pool_e) = (0.0, 0.0);
-    let mut bins: Vec<(f64, f64)> = Vec::new();
-    for (o, e) in cells {
-        if e < 5.0 || (pool_e > 0.0 && pool_e < 5.0) {
-            pool_o += o;
-            pool_e += e;
-        } else {
-            bins.push((o, e));
-        }
-    }
-    if pool_e > 0.0 {
-        bins.push((pool_o, pool_e));
-    }
-    let stat: f64 = bins.iter().map(|&(o, e)| (o - e) * (o - e) / e).sum();
-    let dof = bins.len() - 1;
-    let p = ChiSquared::new(dof as f64).unwrap().sf(stat);
-    (p, stat, dof)
 }
 
 /// Cells in polar coordinates `(alpha, phi)` around the mirror direction

@@ -8,11 +8,13 @@
 
 use core::f64::consts::{FRAC_PI_2, PI, TAU};
 use glam::DVec3;
+
+mod common;
+use common::chi2_pvalue;
 use lumest::sampling::Philox4x32;
 use lumest::sampling::warp::{
     cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf,
 };
-use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Family-wise significance level of all chi-square tests in this file.
 const ALPHA_FAMILY: f64 = 0.01;
@@ -26,44 +28,6 @@ const SEED: u64 = 0x5EED_C412_2024_0001;
 /// Per-test level `1 - (1 - α)^(1/m)` (Šidák 1967).
 fn sidak_alpha() -> f64 {
     1.0 - (1.0 - ALPHA_FAMILY).powf(1.0 / f64::from(NUM_TESTS))
-}
-
-/// Pearson's statistic with pooling of cells whose expected count is < 5.
-/// Returns the p-value `P[χ²_dof > stat]`; panics if a cell with zero
-/// expectation received samples.
-fn chi2_pvalue(observed: &[f64], expected: &[f64]) -> (f64, f64, usize) {
-    assert_eq!(observed.len(), expected.len());
-    let mut cells: Vec<(f64, f64)> = observed
-        .iter()
-        .copied()
-        .zip(expected.iter().copied())
-        .collect();
-    for &(o, e) in &cells {
-        assert!(
-            !(e == 0.0 && o > 0.0),
-            "{o} samples in a cell of zero expected mass"
-        );
-    }
-    // Sort by expectation; pool the small ones (and, if the pool ends up
-    // below 5, merge it into the next-smallest cell).
-    cells.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let (mut pool_o, mut pool_e) = (0.0, 0.0);
-    let mut bins: Vec<(f64, f64)> = Vec::new();
-    for (o, e) in cells {
-        if e < 5.0 || (pool_e > 0.0 && pool_e < 5.0) {
-            pool_o += o;
-            pool_e += e;
-        } else {
-            bins.push((o, e));
-        }
-    }
-    if pool_e > 0.0 {
-        bins.push((pool_o, pool_e));
-    }
-    let stat: f64 = bins.iter().map(|&(o, e)| (o - e) * (o - e) / e).sum();
-    let dof = bins.len() - 1;
-    let p = ChiSquared::new(dof as f64).unwrap().sf(stat);
-    (p, stat, dof)
 }
 
 /// Composite Simpson rule with `m` (even) subintervals.

@@ -55,33 +55,8 @@
 use gauss_quad::GaussLegendre;
 use std::num::NonZeroUsize;
 
-/// Compensated (Neumaier / Kahan–Babuška) summation.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Neumaier {
-    sum: f64,
-    c: f64,
-}
-
-impl Neumaier {
-    /// Empty sum.
-    pub fn new() -> Self {
-        Self::default()
-    }
-    /// Adds `x`, carrying the rounding error separately.
-    pub fn add(&mut self, x: f64) {
-        let t = self.sum + x;
-        if self.sum.abs() >= x.abs() {
-            self.c += (self.sum - t) + x;
-        } else {
-            self.c += (x - t) + self.sum;
-        }
-        self.sum = t;
-    }
-    /// The compensated sum.
-    pub fn value(&self) -> f64 {
-        self.sum + self.c
-    }
-}
+/// Compensated (Neumaier / Kahan–Babuška) summation (shared with [`crate::math::quadrature`]).
+pub use crate::math::quadrature::CompensatedSum as Neumaier;
 
 /// Gauss–Legendre nodes and weights on `[-1, 1]` (from `gauss-quad`).
 #[derive(Clone, Debug)]
@@ -171,7 +146,7 @@ pub fn hankel_real(
         e *= ratio;
     }
     ends.push(w);
-    let mut acc = vec![Neumaier::new(); m];
+    let mut acc = vec![Neumaier::default(); m];
     let mut buf = vec![0.0; m];
     let mut part = vec![0.0; m];
     // one panel [a, b] into acc; `j` = Some(index) for a panel [jπ/(R r), (j+1)π/(R r)]
@@ -232,7 +207,7 @@ pub fn hankel_real(
         );
         a = w * (n + 1) as f64;
     }
-    acc.iter().map(Neumaier::value).collect()
+    acc.iter().map(Neumaier::total).collect()
 }
 
 /// `J0(x)` at `x = jπ/R + t` (`0 ≤ t ≤ π/R`) with the phase `x − π/4`
@@ -320,7 +295,7 @@ pub fn hankel_contour(
 ) -> Vec<f64> {
     let rule = Rule::new(opts.nodes);
     let ratio = 1.15f64.powf(1.0 / opts.refine.max(1) as f64);
-    let mut acc = vec![Neumaier::new(); m];
+    let mut acc = vec![Neumaier::default(); m];
     let mut buf = vec![0.0; m];
     let mut a = 0.0;
     let mut b = 1e-5f64.min(l);
@@ -342,7 +317,7 @@ pub fn hankel_contour(
         b = (b * ratio).min(l);
     }
     let f = -2.0 / (std::f64::consts::PI * r * r);
-    acc.iter().map(|s| s.value() * f).collect()
+    acc.iter().map(|s| s.total() * f).collect()
 }
 
 #[cfg(test)]
@@ -356,11 +331,11 @@ mod tests {
 
     #[test]
     fn neumaier_recovers_lost_bits() {
-        let mut s = Neumaier::new();
+        let mut s = Neumaier::default();
         for x in [1.0, 1e100, 1.0, -1e100] {
             s.add(x);
         }
-        assert_eq!(s.value(), 2.0);
+        assert_eq!(s.total(), 2.0);
     }
 
     #[test]

@@ -5,6 +5,7 @@ use lumest::commands::validate::{SobolevCase, sobolev_case};
 use lumest::estimator::Receivers;
 use lumest::reference::Sobolev;
 use lumest::run::{RunConfig, RunResult, Stop, run};
+use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// A Sobolev case with `n` points and a run of `chains` chains.
 pub fn sobolev_run(
@@ -37,4 +38,42 @@ pub fn chains_cfg(chains: u64, seed: u64, threads: usize) -> RunConfig {
 pub fn z(r: &RunResult, j: usize, exact: f64) -> f64 {
     let w = &r.tallies.indirect[j];
     (r.direct[j] + w.mean() - exact) / w.std_error()
+}
+
+/// Pearson's statistic with pooling of cells whose expected count is < 5.
+/// Returns the p-value `P[χ²_dof > stat]`; panics if a cell with zero
+/// expectation received samples.
+pub fn chi2_pvalue(observed: &[f64], expected: &[f64]) -> (f64, f64, usize) {
+    assert_eq!(observed.len(), expected.len());
+    let mut cells: Vec<(f64, f64)> = observed
+        .iter()
+        .copied()
+        .zip(expected.iter().copied())
+        .collect();
+    for &(o, e) in &cells {
+        assert!(
+            !(e == 0.0 && o > 0.0),
+            "{o} samples in a cell of zero expected mass"
+        );
+    }
+    // Sort by expectation; pool the small ones (and, if the pool ends up
+    // below 5, merge it into the next-smallest cell).
+    cells.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let (mut pool_o, mut pool_e) = (0.0, 0.0);
+    let mut bins: Vec<(f64, f64)> = Vec::new();
+    for (o, e) in cells {
+        if e < 5.0 || (pool_e > 0.0 && pool_e < 5.0) {
+            pool_o += o;
+            pool_e += e;
+        } else {
+            bins.push((o, e));
+        }
+    }
+    if pool_e > 0.0 {
+        bins.push((pool_o, pool_e));
+    }
+    let stat: f64 = bins.iter().map(|&(o, e)| (o - e) * (o - e) / e).sum();
+    let dof = bins.len() - 1;
+    let p = ChiSquared::new(dof as f64).unwrap().sf(stat);
+    (p, stat, dof)
 }
