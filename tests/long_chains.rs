@@ -1,0 +1,52 @@
+//! Long chains as the reflectance approaches 1: the analog walk has the
+//! geometric length 1/(1 - rho), and the default Russian roulette leaves no
+//! truncation bias at rho = 0.99 (against the exact solution).
+
+mod common;
+use common::{chains_cfg, sobolev_run, z};
+use lumest::chain::ChainParams;
+use lumest::run::RunConfig;
+use lumest::tally::sidak_bound;
+
+#[test]
+fn analog_chain_length_is_geometric() {
+    // Between the Sobolev planes every ray meets a plane; with the analog game
+    // (rr_weight = 1) each collision survives with probability rho, so the
+    // number of collisions is geometric with mean 1/(1-rho), variance rho/(1-rho)^2.
+    let rhos = [0.5, 0.9, 0.99];
+    let bound = sidak_bound(1e-3, rhos.len(), None);
+    for (k, rho) in rhos.into_iter().enumerate() {
+        let cfg = RunConfig {
+            chain: ChainParams {
+                rr_weight: 1.0,
+                max_order: None,
+            },
+            ..chains_cfg(200_000, 90 + k as u64, 0)
+        };
+        let (_, r) = sobolev_run((0.5, 0.5, rho, rho), 2, 1.0, &cfg);
+        let n = r.chains as f64;
+        let mean = r.collisions as f64 / n;
+        let se = (rho / (1.0 - rho).powi(2) / n).sqrt();
+        let zz = (mean - 1.0 / (1.0 - rho)) / se;
+        assert!(
+            zz.abs() < bound,
+            "rho {rho}: mean length {mean}, expected {} (z = {zz})",
+            1.0 / (1.0 - rho)
+        );
+    }
+}
+
+#[test]
+fn no_truncation_bias_at_rho_099() {
+    let p = (0.5, 0.5, 0.99, 0.99);
+    let n = 8;
+    let (case, r) = sobolev_run(p, n, 2.0, &chains_cfg(100_000, 7, 0));
+    // About ln(0.1)/ln(0.99) + 1/(1 - 0.99) = 329 collisions per chain.
+    let length = r.collisions as f64 / r.chains as f64;
+    assert!(length > 250.0 && length < 400.0, "{length}");
+    let bound = sidak_bound(1e-3, n, Some(r.tallies.batches()));
+    for j in 0..n {
+        let zz = z(&r, j, case.exact[j].e);
+        assert!(zz.abs() < bound, "point {j}: z = {zz}");
+    }
+}
