@@ -61,12 +61,8 @@ pub fn run(
 }
 
 impl BatchWork for BackwardWork<'_> {
-    fn len(&self) -> usize {
-        self.receivers.len()
-    }
-
-    fn direct(&self) -> &[f64] {
-        self.receivers.direct()
+    fn receivers(&self) -> &Receivers {
+        self.receivers
     }
 
     fn scratch_len(&self, _buckets: usize) -> usize {

@@ -219,6 +219,19 @@ pub struct RunResult {
     pub reason: StopReason,
 }
 
+impl RunResult {
+    /// The final state as a [`Progress`] view.
+    pub fn progress(&self) -> Progress<'_> {
+        Progress {
+            tallies: &self.tallies,
+            direct: &self.direct,
+            chains: self.chains,
+            scores: self.scores,
+            elapsed: self.wall,
+        }
+    }
+}
+
 /// Chains per batch when not given: about a million point scores per batch,
 /// a power of two between 16 and 65536, and at least `MIN_BATCHES` batches for
 /// a `--chains` run. Depends only on the inputs, never on the machine.
@@ -248,14 +261,20 @@ pub struct Batch {
 /// A source of independent batches: the local estimator (chains from the
 /// lights) or the backward one (paths from the receivers).
 pub trait BatchWork: Sync {
+    /// The receivers scored.
+    fn receivers(&self) -> &Receivers;
     /// Number of receivers.
-    fn len(&self) -> usize;
+    fn len(&self) -> usize {
+        self.receivers().len()
+    }
     /// True when there are no receivers.
     fn is_empty(&self) -> bool {
         self.len() == 0
     }
     /// Exact first-order values per receiver.
-    fn direct(&self) -> &[f64];
+    fn direct(&self) -> &[f64] {
+        self.receivers().direct()
+    }
     /// Length of the per-thread scratch buffer for `buckets` buckets.
     fn scratch_len(&self, buckets: usize) -> usize;
     /// Default batch size for `n` receivers and an optional chain count.
@@ -278,11 +297,8 @@ struct LocalWork<'a> {
 }
 
 impl BatchWork for LocalWork<'_> {
-    fn len(&self) -> usize {
-        self.receivers.len()
-    }
-    fn direct(&self) -> &[f64] {
-        self.receivers.direct()
+    fn receivers(&self) -> &Receivers {
+        self.receivers
     }
     fn scratch_len(&self, buckets: usize) -> usize {
         buckets * self.receivers.accumulator_len()

@@ -10,7 +10,7 @@ use super::sobolev::parse_list;
 use super::validate::{checkpoint, sobolev_case};
 use crate::estimator::Receivers;
 use crate::reference::Sobolev;
-use crate::run::{Progress, RunConfig, run};
+use crate::run::{RunConfig, run};
 use clap::Args;
 
 /// Arguments of `lumest bench`.
@@ -60,13 +60,7 @@ pub fn compare(a: &BenchArgs, counts: &[usize], times: &[f64]) -> anyhow::Result
                     crate::backward::run(&case.scene, &receivers, &cfg, &mut |_| true)
                 }
             };
-            let p = Progress {
-                tallies: &r.tallies,
-                direct: &r.direct,
-                chains: r.chains,
-                scores: r.scores,
-                elapsed: r.wall,
-            };
+            let p = r.progress();
             let cp = checkpoint(&p, &exact, 0..n);
             errs.push(cp.fom);
             println!(
@@ -133,17 +127,7 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
         let cfg = RunConfig::timed(a.seed, a.threads, t);
         let r = run(&case.scene, &receivers, &cfg, &mut |_| true);
         let exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
-        let cp = checkpoint(
-            &Progress {
-                tallies: &r.tallies,
-                direct: &r.direct,
-                chains: r.chains,
-                scores: r.scores,
-                elapsed: r.wall,
-            },
-            &exact,
-            0..n,
-        );
+        let cp = checkpoint(&r.progress(), &exact, 0..n);
         let target = if n <= 100 { 1e-4 } else { 1e-3 };
         println!(
             "{:>7} {:>7.1} {:>12} {:>11.4e} {:>11.4e} {:>10.3e} {:>10.3e} {:>11.4e} {:>10.3e} {:>8.0e} {:>7}",

@@ -225,13 +225,7 @@ pub fn convergence(
         true
     });
     pb.finish_and_clear();
-    let last = Progress {
-        tallies: &result.tallies,
-        direct: &result.direct,
-        chains: result.chains,
-        scores: result.scores,
-        elapsed: result.wall,
-    };
+    let last = result.progress();
     for (g, range) in groups.iter().enumerate() {
         let fin = checkpoint(&last, exact, range.clone());
         if rows[g]
@@ -500,13 +494,7 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
         &a.report.join("sobolev_points.csv").to_string_lossy(),
         &to_csv(&headers, &cells),
     )?;
-    let last = Progress {
-        tallies: &result.tallies,
-        direct: &result.direct,
-        chains: result.chains,
-        scores: result.scores,
-        elapsed: result.wall,
-    };
+    let last = result.progress();
     let fin = checkpoint(&last, &exact, 0..exact.len());
     let bound = sidak_bound(a.alpha, exact.len(), Some(fin.batches));
     let pass = fin.max_z <= bound;
