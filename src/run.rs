@@ -375,7 +375,8 @@ pub fn drive(
         .batch_size
         .unwrap_or_else(|| work.default_batch_size(stop.chains))
         .max(1);
-    let max_batches = stop.chains.map_or(u64::MAX, |c| c.div_ceil(bs).max(1));
+    // At least two batches, so that every standard error exists.
+    let max_batches = stop.chains.map_or(u64::MAX, |c| c.div_ceil(bs).max(2));
     let threads = if cfg.threads == 0 {
         std::thread::available_parallelism().map_or(1, |p| p.get())
     } else {

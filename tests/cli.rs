@@ -381,3 +381,31 @@ fn diagnostics_flag_a_point_next_to_a_lit_surface() {
     assert_eq!(rows[1][flag], "ok");
     assert!(String::from_utf8_lossy(&o.stderr).contains("statistical checks FAILED"));
 }
+
+#[test]
+fn a_single_chain_still_gives_finite_error_bars() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = write(dir.path(), "scene.toml", SCENE);
+    let o = lumest()
+        .args([
+            "illuminance",
+            "--scene",
+            &s,
+            "--points",
+            "-",
+            "--out",
+            "-",
+            "--chains",
+            "1",
+            "--quiet",
+        ])
+        .write_stdin(POINTS)
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let out = String::from_utf8(o.stdout).unwrap();
+    assert!(
+        !out.to_lowercase().contains("nan") && !out.contains("inf"),
+        "{out}"
+    );
+}

@@ -139,7 +139,11 @@ pub fn result_cells_plus(r: &RunResult, j: usize, extra: f64) -> Vec<String> {
     let direct = r.direct[j] + extra;
     let e = direct + w.mean();
     let se = w.std_error();
-    let ci = t_factor(0.95, w.count()) * se;
+    let ci = if se > 0.0 {
+        t_factor(0.95, w.count()) * se
+    } else {
+        0.0
+    };
     let mut c = vec![
         format_number(e),
         format_number(se),

@@ -24,6 +24,8 @@
 //!   Sidak bound for `B` normal values at rate 0.001; a batch that far out
 //!   means rare huge scores (a heavy tail). Flagged when above.
 //! - `R > 0.1` is flagged: the estimate is not yet trustworthy.
+//! - fewer than 32 batches is flagged: too few for the error bar or the
+//!   checks to be trusted (a `--chains` run below 32 chains).
 //!
 //! Higher moments are accumulated with the one-pass updates and merges of
 //! Pébay (2008), never raw power sums.
@@ -233,6 +235,8 @@ pub struct Diagnostics {
     pub max_deviation: f64,
     /// Sidak bound the largest deviation is checked against.
     pub deviation_bound: f64,
+    /// Number of batches behind the estimate.
+    pub batches: u64,
 }
 
 impl Diagnostics {
@@ -248,12 +252,17 @@ impl Diagnostics {
             fom_ratio,
             max_deviation: w.max_deviation(),
             deviation_bound: sidak_bound(1e-3, w.count().max(1) as usize, None),
+            batches: w.count(),
         }
     }
 
-    /// The failed checks, as `R`, `VOV`, `FOM`, `tail`, joined by `;`, or `ok`.
+    /// The failed checks, as `R`, `VOV`, `FOM`, `tail`, `batches` (fewer than
+    /// 32, too few for the checks themselves), joined by `;`, or `ok`.
     pub fn flag(&self) -> String {
         let mut f = Vec::new();
+        if self.batches < 32 {
+            f.push("batches");
+        }
         if self.rel_err > 0.1 {
             f.push("R");
         }
