@@ -19,7 +19,7 @@
 use crate::estimator::{Receiver, Receivers, Response};
 use crate::geometry::Ray;
 use crate::light::Light;
-use crate::run::{Batch, BatchWork, Progress, RunConfig, RunResult, drive, no_light};
+use crate::run::{Batch, BatchWork, Progress, RunConfig, RunResult, drive};
 use crate::sampling::Philox4x32;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere};
 use crate::scene::Scene;
@@ -41,9 +41,6 @@ pub fn run(
     cfg: &RunConfig,
     observe: &mut dyn FnMut(&Progress) -> bool,
 ) -> RunResult {
-    if scene.total_power() <= 0.0 {
-        return no_light(receivers.direct(), cfg);
-    }
     let frames = receivers
         .receivers()
         .iter()
@@ -61,6 +58,9 @@ pub fn run(
 }
 
 impl BatchWork for BackwardWork<'_> {
+    fn scene(&self) -> &Scene {
+        self.scene
+    }
     fn receivers(&self) -> &Receivers {
         self.receivers
     }

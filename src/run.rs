@@ -261,6 +261,8 @@ pub struct Batch {
 /// A source of independent batches: the local estimator (chains from the
 /// lights) or the backward one (paths from the receivers).
 pub trait BatchWork: Sync {
+    /// The scene traced.
+    fn scene(&self) -> &Scene;
     /// The receivers scored.
     fn receivers(&self) -> &Receivers;
     /// Number of receivers.
@@ -297,6 +299,9 @@ struct LocalWork<'a> {
 }
 
 impl BatchWork for LocalWork<'_> {
+    fn scene(&self) -> &Scene {
+        self.scene
+    }
     fn receivers(&self) -> &Receivers {
         self.receivers
     }
@@ -326,14 +331,11 @@ pub fn run(
     cfg: &RunConfig,
     observe: &mut dyn FnMut(&Progress) -> bool,
 ) -> RunResult {
-    if scene.total_power() <= 0.0 {
-        return no_light(receivers.direct(), cfg);
-    }
     drive(&LocalWork { scene, receivers }, cfg, observe)
 }
 
 /// The exact answer of a scene that emits nothing: zero batches.
-pub fn no_light(direct: &[f64], cfg: &RunConfig) -> RunResult {
+fn no_light(direct: &[f64], cfg: &RunConfig) -> RunResult {
     let mut tallies = Tallies::new(direct.len(), cfg.orders);
     for _ in 0..MIN_BATCHES {
         for w in tallies
@@ -363,6 +365,9 @@ pub fn drive(
     cfg: &RunConfig,
     observe: &mut dyn FnMut(&Progress) -> bool,
 ) -> RunResult {
+    if work.scene().total_power() <= 0.0 {
+        return no_light(work.direct(), cfg);
+    }
     let start = Instant::now();
     let n = work.len();
     let buckets = if cfg.orders == 0 {
