@@ -33,6 +33,28 @@ fn write(dir: &Path, name: &str, text: &str) -> String {
     p.to_string_lossy().into_owned()
 }
 
+/// Run `illuminance` on SCENE with POINTS on standard input and the CSV on
+/// standard output, with extra arguments.
+fn illuminance_stdin(extra: &[&str]) -> std::process::Output {
+    let dir = tempfile::tempdir().unwrap();
+    let s = write(dir.path(), "scene.toml", SCENE);
+    lumest()
+        .args([
+            "illuminance",
+            "--scene",
+            &s,
+            "--points",
+            "-",
+            "--out",
+            "-",
+            "--quiet",
+        ])
+        .args(extra)
+        .write_stdin(POINTS)
+        .output()
+        .unwrap()
+}
+
 /// Run `illuminance` on a scene text and return (success, stderr).
 fn run_scene(scene: &str, points: &str) -> (bool, String, String) {
     let dir = tempfile::tempdir().unwrap();
@@ -90,26 +112,7 @@ fn illuminance_writes_input_columns_and_results() {
 
 #[test]
 fn orders_columns_and_stdin_stdout() {
-    let dir = tempfile::tempdir().unwrap();
-    let s = write(dir.path(), "scene.toml", SCENE);
-    let o = lumest()
-        .args([
-            "illuminance",
-            "--scene",
-            &s,
-            "--points",
-            "-",
-            "--out",
-            "-",
-            "--chains",
-            "2000",
-            "--orders",
-            "2",
-            "--quiet",
-        ])
-        .write_stdin(POINTS)
-        .output()
-        .unwrap();
+    let o = illuminance_stdin(&["--chains", "2000", "--orders", "2"]);
     assert!(o.status.success());
     let out = String::from_utf8(o.stdout).unwrap();
     let header = out.lines().next().unwrap();
@@ -384,24 +387,7 @@ fn diagnostics_flag_a_point_next_to_a_lit_surface() {
 
 #[test]
 fn a_single_chain_still_gives_finite_error_bars() {
-    let dir = tempfile::tempdir().unwrap();
-    let s = write(dir.path(), "scene.toml", SCENE);
-    let o = lumest()
-        .args([
-            "illuminance",
-            "--scene",
-            &s,
-            "--points",
-            "-",
-            "--out",
-            "-",
-            "--chains",
-            "1",
-            "--quiet",
-        ])
-        .write_stdin(POINTS)
-        .output()
-        .unwrap();
+    let o = illuminance_stdin(&["--chains", "1"]);
     assert!(o.status.success());
     let out = String::from_utf8(o.stdout).unwrap();
     assert!(
