@@ -165,8 +165,11 @@ fn trace<F: FnMut(u32, f64)>(
         // Next-event estimation from every light: exact for a point, one
         // direction drawn uniformly in the cone of a sphere.
         let hm = scene.side_mask(h.p);
+        let from = Some((h.surface, h.prim));
         for l in &scene.lights {
-            if !scene.side_mask(l.position()).sees(hm) {
+            if !scene.side_mask(l.position()).sees(hm)
+                || (!scene.planes_only() && scene.blocked_by_shapes(h.p, from, l.position(), 0))
+            {
                 continue;
             }
             match *l {
@@ -217,7 +220,7 @@ fn trace<F: FnMut(u32, f64)>(
             beta = rr;
         }
         d = f_frame.to_world(s.w);
-        hit = scene.intersect(&Ray { o: h.p, d }, Some(h.surface));
+        hit = scene.intersect(&Ray { o: h.p, d }, from);
     }
     vertices
 }

@@ -34,6 +34,8 @@ pub struct Collision {
     pub q: f64,
     /// Surface index.
     pub surface: u32,
+    /// Primitive within the surface (a mesh's triangle; 0 otherwise).
+    pub prim: u32,
     /// Collision number: 1 for the first hit after emission. Light reflected
     /// here and scored at a point is of reflection order `order`.
     pub order: u32,
@@ -57,6 +59,19 @@ impl Default for ChainParams {
     }
 }
 
+/// How a chain ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChainEnd {
+    /// The ray left the scene (in a closed scene: a leak).
+    Escaped,
+    /// The ray met a black back side and was absorbed there.
+    BackSide,
+    /// Russian roulette, a zero weight, or a sampled direction below the surface.
+    Absorbed,
+    /// Stopped by `max_order`.
+    Truncated,
+}
+
 /// Trace one chain, calling `on_collision` at every front-side collision.
 /// `u_first` are the uniforms of the emitted direction and of the first
 /// reflection (from `rng`, or from a stratified net over the batch);
@@ -68,8 +83,20 @@ pub fn trace<F: FnMut(&Collision)>(
     rng: &mut Philox4x32,
     params: &ChainParams,
     u_first: [[f64; 2]; 2],
-    mut on_collision: F,
+    on_collision: F,
 ) -> u32 {
+    trace_ex(scene, rng, params, u_first, on_collision).0
+}
+
+/// [`trace`], also reporting how the chain ended.
+#[inline]
+pub fn trace_ex<F: FnMut(&Collision)>(
+    scene: &Scene,
+    rng: &mut Philox4x32,
+    params: &ChainParams,
+    u_first: [[f64; 2]; 2],
+    mut on_collision: F,
+) -> (u32, ChainEnd) {
     let light = scene.pick_light(rng.next_f64());
     let e = light.sample_emission(u_first[0], rng.next_2d());
     let q0 = scene.total_power();
@@ -79,11 +106,14 @@ pub fn trace<F: FnMut(&Collision)>(
     let mut skip = None;
     let rr = params.rr_weight * q0;
     let mut order = 0;
+    let mut end = ChainEnd::Absorbed;
     while q > 0.0 {
         let Some(hit) = scene.intersect(&ray, skip) else {
+            end = ChainEnd::Escaped;
             break;
         };
         if ray.d.dot(hit.n) >= 0.0 {
+            end = ChainEnd::BackSide;
             break; // back side: absorbed
         }
         order += 1;
@@ -94,9 +124,11 @@ pub fn trace<F: FnMut(&Collision)>(
             wi,
             q,
             surface: hit.surface,
+            prim: hit.prim,
             order,
         });
         if params.max_order.is_some_and(|m| order >= m) {
+            end = ChainEnd::Truncated;
             break;
         }
         let m = &scene.surfaces[hit.surface as usize].material;
@@ -123,7 +155,7 @@ pub fn trace<F: FnMut(&Collision)>(
             o: hit.p,
             d: frame.to_world(s.w),
         };
-        skip = Some(hit.surface);
+        skip = Some((hit.surface, hit.prim));
     }
-    order
+    (order, end)
 }

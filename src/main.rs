@@ -36,7 +36,7 @@ fn main() -> ExitCode {
         Command::Luminance(a) => illuminance::luminance(a),
         Command::Render(a) => render::render(a),
         Command::Sobolev(a) => sobolev::sobolev(a),
-        Command::Validate(validate::ValidateCase::Sobolev(a)) => validate::validate_sobolev(a),
+        Command::Validate(c) => validate::validate(c),
         Command::Bench(a) => bench::bench(a),
     };
     match res {

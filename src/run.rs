@@ -308,8 +308,34 @@ impl BatchWork for LocalWork<'_> {
     fn scratch_len(&self, buckets: usize) -> usize {
         buckets * self.receivers.accumulator_len()
     }
+    /// As [`default_batch_size`], but with the cost of a chain measured by a
+    /// fixed pilot of 256 chains (its own streams, so the batch size still
+    /// depends only on the scene and the receivers, never on the thread
+    /// count or the seed): long chains (reflectances near 1) get smaller
+    /// batches, so a batch stays about 2^20 scores.
     fn default_batch_size(&self, chains: Option<u64>) -> u64 {
-        default_batch_size(self.receivers.len(), chains)
+        const PILOT: u64 = 256;
+        const PILOT_KEY: u64 = 0x5049_4c4f_54; // "PILOT"
+        let n = self.receivers.len() as u64;
+        let mut cost = 0u64;
+        if self.scene.total_power() > 0.0 {
+            let params = crate::chain::ChainParams::default();
+            for c in 0..PILOT {
+                let mut rng = Philox4x32::new(PILOT_KEY, c);
+                let u = [rng.next_2d(), rng.next_2d()];
+                crate::chain::trace(self.scene, &mut rng, &params, u, |col| {
+                    cost += 16 + self.receivers.list_len(col.surface) as u64;
+                });
+            }
+        }
+        let per_chain = (cost / PILOT).max(n + 16);
+        let mut bs = ((1u64 << 20) / per_chain)
+            .clamp(16, 1 << 16)
+            .next_power_of_two();
+        if let Some(c) = chains {
+            bs = bs.min(c.div_ceil(MIN_BATCHES)).max(1);
+        }
+        bs
     }
     fn run_batch(
         &self,

@@ -2,6 +2,7 @@
 //! arguments and maps errors to exit codes).
 
 pub mod bench;
+pub mod cases;
 pub mod illuminance;
 pub mod render;
 pub mod sobolev;

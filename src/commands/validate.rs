@@ -25,6 +25,25 @@ use std::path::{Path, PathBuf};
 pub enum ValidateCase {
     /// Two infinite Lambertian planes and a point source, against the exact solution.
     Sobolev(ValidateSobolevArgs),
+    /// Integrating sphere with an off-centre point source: uniform indirect illuminance.
+    #[command(name = "integrating-sphere")]
+    IntegratingSphere(super::cases::SphereArgs),
+    /// Point source above a square Lambertian plate, against 2-D quadrature
+    /// (checked itself against the closed-form corner form factor).
+    Plate(super::cases::PlateArgs),
+    /// Flux balance in a closed box room: absorbed flux equals emitted flux, no leaks.
+    #[command(name = "box")]
+    BoxFlux(super::cases::BoxArgs),
+}
+
+/// Run a validation case.
+pub fn validate(case: &ValidateCase) -> anyhow::Result<()> {
+    match case {
+        ValidateCase::Sobolev(a) => validate_sobolev(a),
+        ValidateCase::IntegratingSphere(a) => super::cases::validate_sphere(a),
+        ValidateCase::Plate(a) => super::cases::validate_plate(a),
+        ValidateCase::BoxFlux(a) => super::cases::validate_box(a),
+    }
 }
 
 /// Arguments of `lumest validate sobolev`.
@@ -286,7 +305,12 @@ pub fn checkpoint_csv(rows: &[Checkpoint]) -> Vec<u8> {
     to_csv(&headers, &cells)
 }
 
-fn write_report(dir: &Path, name: &str, rows: &[Checkpoint], title: &str) -> anyhow::Result<()> {
+pub(crate) fn write_report(
+    dir: &Path,
+    name: &str,
+    rows: &[Checkpoint],
+    title: &str,
+) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let csv_path = dir.join(format!("{name}_convergence.csv"));
     write_atomic(&csv_path.to_string_lossy(), &checkpoint_csv(rows))?;
@@ -298,10 +322,10 @@ fn write_report(dir: &Path, name: &str, rows: &[Checkpoint], title: &str) -> any
     let svg = loglog_svg(
         title,
         "wall time T [s]",
-        "relative error of E",
+        "relative error",
         &[
             Series {
-                name: "RMS |E - E_exact| / E_exact".into(),
+                name: "RMS |X - X_exact| / X_exact".into(),
                 points: err,
                 dashed: false,
             },

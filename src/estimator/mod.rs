@@ -30,7 +30,7 @@ use crate::chain::Collision;
 use crate::geometry::SideMask;
 use crate::material::Material;
 use crate::sampling::warp::Frame;
-use crate::scene::Scene;
+use crate::scene::{Scene, ShapeRef};
 use glam::DVec3;
 
 /// The geometric kernel `cos(theta_x) cos(theta_p) / d^2` [1/m^2] between a
@@ -177,6 +177,10 @@ struct ReceiverList {
     /// Constant response (1 or `rho/pi`); unused for general entries.
     w: Vec<f64>,
     masks: Vec<SideMask>,
+    /// Spheres and boxes each entry lies inside or on ([`Scene::inside_mask`]).
+    inside: Vec<u64>,
+    /// AND of `inside` over the entries.
+    inside_all: u64,
     /// Entries with a constant response come first.
     n_const: usize,
     /// Planes (bits) that could separate a collision on this surface from some entry.
@@ -212,6 +216,7 @@ impl Receivers {
     /// order is computed here once.
     pub fn from_receivers(scene: &Scene, receivers: &[Receiver]) -> Result<Self, ReceiverError> {
         let masks: Vec<SideMask> = receivers.iter().map(|r| scene.side_mask(r.p)).collect();
+        let inside: Vec<u64> = receivers.iter().map(|r| scene.inside_mask(r.p)).collect();
         let frames: Vec<Frame> = receivers.iter().map(|r| Frame::from_normal(r.n)).collect();
         let mut direct = vec![0.0; receivers.len()];
         for (j, rec) in receivers.iter().enumerate() {
@@ -232,9 +237,12 @@ impl Receivers {
                         ),
                     });
                 }
-                // A sphere light lies wholly on one side of every plane, so its
-                // centre decides its visibility.
-                if scene.side_mask(l.position()).sees(masks[j]) {
+                // A sphere light lies wholly on one side of every plane (and
+                // exists only in planes-only scenes), so its centre decides
+                // its visibility.
+                let seen = scene.side_mask(l.position()).sees(masks[j])
+                    && (scene.planes_only() || !scene.blocked_by_shapes(l.position(), None, p, 0));
+                if seen {
                     direct[j] += match rec.response {
                         Response::Illuminance => l.direct_illuminance(p, n),
                         Response::Luminance { .. } => {
@@ -244,14 +252,32 @@ impl Receivers {
                 }
             }
         }
-        let mut lists = Vec::with_capacity(scene.planes.len());
+        let mut lists = Vec::with_capacity(scene.surfaces.len());
         let mut offset = 0;
-        for s in 0..scene.planes.len() {
+        for s in 0..scene.surfaces.len() {
             let mut list = ReceiverList {
                 offset,
+                inside_all: u64::MAX,
                 ..Default::default()
             };
-            let reach = |j: &usize| masks[*j].front & (1 << s) != 0;
+            // Which receivers a collision on surface `s` can score into: those
+            // strictly on the reflecting side of a flat surface's plane; all
+            // for a curved one (the kernel's cosine sorts them out).
+            let own_bit = match scene.surfaces[s].shape {
+                ShapeRef::Plane(i) => 1u64 << i,
+                _ => 0,
+            };
+            let support = scene.support_plane(s as u32);
+            let reach = |j: &usize| {
+                if own_bit != 0 {
+                    return masks[*j].front & own_bit != 0;
+                }
+                match support {
+                    Some((pl, false)) => pl.side(receivers[*j].p) == 1,
+                    Some((pl, true)) => pl.side(receivers[*j].p) != 0,
+                    None => true,
+                }
+            };
             let constant = (0..receivers.len())
                 .filter(reach)
                 .filter(|&j| receivers[j].constant_weight().is_some());
@@ -269,6 +295,8 @@ impl Receivers {
                 list.ny.push(rec.n.y);
                 list.nz.push(rec.n.z);
                 list.masks.push(masks[j]);
+                list.inside.push(inside[j]);
+                list.inside_all &= inside[j];
                 match rec.constant_weight() {
                     Some(w) => {
                         list.w.push(w);
@@ -276,7 +304,7 @@ impl Receivers {
                     }
                     None => list.w.push(0.0),
                 }
-                list.blockers |= (masks[j].front | masks[j].back) & !(1 << s);
+                list.blockers |= (masks[j].front | masks[j].back) & !own_bit;
             }
             offset += list.idx.len();
             lists.push(list);
@@ -311,6 +339,11 @@ impl Receivers {
         &self.direct
     }
 
+    /// Number of receivers a collision on surface `s` scores into.
+    pub fn list_len(&self, s: u32) -> usize {
+        self.lists[s as usize].idx.len()
+    }
+
     /// Length of the flat per-bucket accumulator used by [`Self::score`].
     pub fn accumulator_len(&self) -> usize {
         self.total_len
@@ -335,22 +368,32 @@ impl Receivers {
             SideMask::default()
         };
         let open = (xm.front | xm.back) & list.blockers == 0;
+        // Spheres and boxes holding both the collision and every entry never block.
+        let x_inside = if scene.planes_only() {
+            0
+        } else {
+            scene.inside_mask(x)
+        };
+        let shapes_open = scene.planes_only() || scene.nothing_blocks(x_inside & list.inside_all);
         let nc = list.n_const;
         match material.constant_brdf() {
-            Some(f) if open => score_open(list, x, n, c.q * f, &mut acc[..nc]),
-            _ => self.score_general(list, 0..nc, material, c, xm, acc),
+            Some(f) if open && shapes_open => score_open(list, x, n, c.q * f, &mut acc[..nc]),
+            _ => self.score_general(scene, list, x_inside, 0..nc, material, c, xm, acc),
         }
         if nc < len {
-            self.score_general(list, nc..len, material, c, xm, acc);
+            self.score_general(scene, list, x_inside, nc..len, material, c, xm, acc);
         }
         len
     }
 
     /// Per-pair scoring: any BRDF at the collision and at the receiver, with
     /// visibility masks.
+    #[allow(clippy::too_many_arguments)]
     fn score_general(
         &self,
+        scene: &Scene,
         list: &ReceiverList,
+        x_inside: u64,
         range: std::ops::Range<usize>,
         material: &Material,
         c: &Collision,
@@ -359,6 +402,8 @@ impl Receivers {
     ) {
         let frame = Frame::from_normal(c.n);
         let wi = frame.to_local(c.wi);
+        let planes_only = scene.planes_only();
+        let from = Some((c.surface, c.prim));
         for k in range {
             if !xm.sees(list.masks[k]) {
                 continue;
@@ -366,7 +411,10 @@ impl Receivers {
             let p = DVec3::new(list.px[k], list.py[k], list.pz[k]);
             let np = DVec3::new(list.nx[k], list.ny[k], list.nz[k]);
             let g = local_kernel(c.p, c.n, p, np);
-            if g == 0.0 {
+            if g == 0.0
+                || (!planes_only
+                    && scene.blocked_by_shapes(c.p, from, p, x_inside & list.inside[k]))
+            {
                 continue;
             }
             let wo = (p - c.p).normalize();

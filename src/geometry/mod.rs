@@ -5,6 +5,8 @@
 //! material; the back side is black (a perfect absorber). Every surface is
 //! opaque from both sides.
 
+pub mod shapes;
+
 use glam::DVec3;
 
 /// A ray `o + t d`, `t > 0`, with unit direction `d`.
@@ -27,6 +29,8 @@ pub struct Hit {
     pub n: DVec3,
     /// Index of the surface in the compiled scene.
     pub surface: u32,
+    /// Primitive within the surface (a mesh's triangle; 0 otherwise).
+    pub prim: u32,
 }
 
 /// An infinite plane `n . x = c`, front side towards `n`.

@@ -3,7 +3,9 @@
 
 use super::SceneError;
 use super::desc::{LightDesc, MaterialDesc, SceneDesc, SurfaceDesc};
-use crate::geometry::{Hit, Plane, Ray, SideMask};
+use super::world::{MAX_PLANES, Scene, Sides, SurfaceSpec};
+use crate::geometry::Plane;
+use crate::geometry::shapes::{AaBox, Disc, Rect, Sphere};
 use crate::light::Light;
 use crate::material::Material;
 use glam::DVec3;
@@ -81,234 +83,228 @@ impl SourceCtx<'_> {
     }
 }
 
-/// Kinds of shape present in a compiled scene (only these are built).
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct SceneSummary {
-    /// Number of infinite planes.
-    pub planes: usize,
-    /// Number of point lights.
-    pub point_lights: usize,
-    /// Number of sphere lights.
-    pub sphere_lights: usize,
-    /// Whether an acceleration structure (BVH) was built.
-    pub bvh: bool,
-}
-
-impl std::fmt::Display for SceneSummary {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{} plane(s), {} point light(s), {} sphere light(s), BVH: {}",
-            self.planes,
-            self.point_lights,
-            self.sphere_lights,
-            if self.bvh {
-                "built"
-            } else {
-                "none (not needed)"
-            }
-        )
-    }
-}
-
-/// A reflecting surface of the compiled scene.
-#[derive(Clone, Debug)]
-pub struct Surface {
-    /// Name from the file, or `surface #k`.
-    pub name: String,
-    /// Its material.
-    pub material: Material,
-}
-
-/// The compiled scene. Units: metres, candela, lumen; lights selected in
-/// proportion to their power.
-#[derive(Clone, Debug)]
-pub struct Scene {
-    /// Surfaces; surface `k` has geometry `planes[k]` (planes are the only shape yet).
-    pub surfaces: Vec<Surface>,
-    /// Plane geometry, indexed like `surfaces`.
-    pub planes: Vec<Plane>,
-    /// Light sources.
-    pub lights: Vec<Light>,
-    /// Cumulative power fractions for picking a light (last entry 1).
-    light_cdf: Vec<f64>,
-    /// Total emitted flux [lm].
-    total_power: f64,
-}
-
-/// Largest number of planes the bit-mask visibility supports.
-pub const MAX_PLANES: usize = 64;
-
-impl Scene {
-    /// Build a scene from parts (validated by the caller); used by `compile`
-    /// and by programmatic scenes such as the Sobolev validation case.
-    pub fn from_parts(surfaces: Vec<(String, Plane, Material)>, lights: Vec<Light>) -> Self {
-        let mut s = Vec::with_capacity(surfaces.len());
-        let mut planes = Vec::with_capacity(surfaces.len());
-        for (name, pl, m) in surfaces {
-            s.push(Surface { name, material: m });
-            planes.push(pl);
-        }
-        let total_power: f64 = lights.iter().map(Light::power).sum();
-        let mut acc = 0.0;
-        let mut light_cdf: Vec<f64> = lights
-            .iter()
-            .map(|l| {
-                acc += l.power();
-                if total_power > 0.0 {
-                    acc / total_power
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        if let Some(last) = light_cdf.last_mut() {
-            *last = 1.0;
-        }
-        Scene {
-            surfaces: s,
-            planes,
-            lights,
-            light_cdf,
-            total_power,
-        }
-    }
-
-    /// Total emitted flux [lm].
-    pub fn total_power(&self) -> f64 {
-        self.total_power
-    }
-
-    /// What the compiled scene holds.
-    pub fn summary(&self) -> SceneSummary {
-        SceneSummary {
-            planes: self.planes.len(),
-            point_lights: self
-                .lights
-                .iter()
-                .filter(|l| matches!(l, Light::Point { .. }))
-                .count(),
-            sphere_lights: self
-                .lights
-                .iter()
-                .filter(|l| matches!(l, Light::Sphere { .. }))
-                .count(),
-            bvh: false,
-        }
-    }
-
-    /// Pick a light with probability proportional to its power.
-    #[inline]
-    pub fn pick_light(&self, u: f64) -> &Light {
-        let k = self
-            .light_cdf
-            .partition_point(|&c| c <= u)
-            .min(self.lights.len() - 1);
-        &self.lights[k]
-    }
-
-    /// Nearest surface hit along `ray`, ignoring surface `skip` (the flat
-    /// surface the ray leaves, which it cannot hit again).
-    #[inline]
-    pub fn intersect(&self, ray: &Ray, skip: Option<u32>) -> Option<Hit> {
-        let mut best: Option<(f64, u32)> = None;
-        for (k, pl) in self.planes.iter().enumerate() {
-            if Some(k as u32) == skip {
-                continue;
-            }
-            let t_max = best.map_or(f64::INFINITY, |b| b.0);
-            if let Some(t) = pl.intersect(ray, t_max) {
-                best = Some((t, k as u32));
-            }
-        }
-        best.map(|(t, k)| {
-            let pl = &self.planes[k as usize];
-            Hit {
-                t,
-                p: pl.project(ray.o + ray.d * t),
-                n: pl.n,
-                surface: k,
-            }
-        })
-    }
-
-    /// First surface hit by a ray leaving `o` (an observer, possibly standing
-    /// on a surface: planes through `o` are ignored) in unit direction `d`.
-    pub fn first_hit_from(&self, o: DVec3, d: DVec3) -> Option<Hit> {
-        let mut best: Option<(f64, u32)> = None;
-        for (k, pl) in self.planes.iter().enumerate() {
-            if pl.side(o) == 0 {
-                continue;
-            }
-            let t_max = best.map_or(f64::INFINITY, |b| b.0);
-            if let Some(t) = pl.intersect(&Ray { o, d }, t_max) {
-                best = Some((t, k as u32));
-            }
-        }
-        best.map(|(t, k)| {
-            let pl = &self.planes[k as usize];
-            Hit {
-                t,
-                p: pl.project(o + d * t),
-                n: pl.n,
-                surface: k,
-            }
-        })
-    }
-
-    /// Visibility masks of a point against every plane.
-    pub fn side_mask(&self, q: DVec3) -> SideMask {
-        SideMask::of(q, &self.planes)
-    }
-}
-
 /// Validate a parsed description and build the scene.
 pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
     let mut surfaces = Vec::with_capacity(desc.surface.len());
+    let mut n_planes = 0;
     for (k, s) in desc.surface.iter().enumerate() {
-        surfaces.push(surface(s, k, ctx)?);
-    }
-    if surfaces.len() > MAX_PLANES {
-        let s = &desc.surface[MAX_PLANES];
-        return Err(ctx.invalid(
-            s.span(),
-            "surface",
-            format!("at most {MAX_PLANES} planes are supported"),
-        ));
+        let spec = surface(s, k, ctx)?;
+        if matches!(spec, SurfaceSpec::Plane(..)) {
+            n_planes += 1;
+            if n_planes > MAX_PLANES {
+                return Err(ctx.invalid(
+                    s.span(),
+                    "surface",
+                    format!("at most {MAX_PLANES} infinite planes are supported"),
+                ));
+            }
+        }
+        surfaces.push(spec);
     }
     if desc.light.is_empty() {
         return Err(ctx.invalid(0..0, "light", "the scene has no [[light]]"));
     }
-    let planes: Vec<Plane> = surfaces.iter().map(|s| s.1).collect();
+    let planes: Vec<Plane> = surfaces
+        .iter()
+        .filter_map(|s| match s {
+            SurfaceSpec::Plane(_, p, _) => Some(*p),
+            _ => None,
+        })
+        .collect();
+    let only_planes = planes.len() == surfaces.len();
     let lights = desc
         .light
         .iter()
-        .map(|l| light(l, ctx, &planes))
+        .map(|l| light(l, ctx, &planes, only_planes))
         .collect::<Result<Vec<_>, _>>()?;
-    Ok(Scene::from_parts(surfaces, lights))
+    Ok(Scene::build(surfaces, lights))
 }
 
-fn surface(
-    s: &Spanned<SurfaceDesc>,
-    k: usize,
+/// The fields each surface type takes (besides `type`, `name`, `material`).
+const SURFACE_FIELDS: [(&str, &[&str]); 5] = [
+    ("plane", &["point", "normal"]),
+    ("rectangle", &["corner", "edge1", "edge2", "sides"]),
+    ("disc", &["center", "normal", "radius", "sides"]),
+    ("sphere", &["center", "radius", "sides"]),
+    ("box", &["min", "max", "normals", "faces"]),
+];
+
+/// Reject a field that the surface's type does not take.
+fn surface_fields_allowed(d: &SurfaceDesc, kind: &str, ctx: &SourceCtx) -> Result<(), SceneError> {
+    let Some((_, allowed)) = SURFACE_FIELDS.iter().find(|f| f.0 == kind) else {
+        return Ok(());
+    };
+    let span = |v: &Option<Spanned<[f64; 3]>>| v.as_ref().map(Spanned::span);
+    let given: [(&str, Option<Range<usize>>); 16] = [
+        ("point", span(&d.point)),
+        ("normal", span(&d.normal)),
+        ("corner", span(&d.corner)),
+        ("edge1", span(&d.edge1)),
+        ("edge2", span(&d.edge2)),
+        ("center", span(&d.center)),
+        ("radius", d.radius.as_ref().map(Spanned::span)),
+        ("sides", d.sides.as_ref().map(Spanned::span)),
+        ("min", span(&d.min)),
+        ("max", span(&d.max)),
+        ("normals", d.normals.as_ref().map(Spanned::span)),
+        ("faces", d.faces.as_ref().map(Spanned::span)),
+        ("file", d.file.as_ref().map(Spanned::span)),
+        ("coefficients", d.coefficients.as_ref().map(Spanned::span)),
+        ("translate", span(&d.translate)),
+        ("rotate", span(&d.rotate)),
+    ];
+    for (field, sp) in given {
+        if let Some(sp) = sp
+            && !allowed.contains(&field)
+        {
+            return Err(ctx.invalid(
+                sp,
+                field,
+                format!(
+                    "not allowed for surface type `{kind}` (it takes: {})",
+                    allowed.join(", ")
+                ),
+            ));
+        }
+    }
+    if let Some(sc) = &d.scale
+        && !allowed.contains(&"scale")
+    {
+        return Err(ctx.invalid(
+            sc.span(),
+            "scale",
+            format!("not allowed for surface type `{kind}`"),
+        ));
+    }
+    Ok(())
+}
+
+/// Parse a `sides` value among `names` (the first is the default), mapped to `values`.
+fn sides(
+    d: &Option<Spanned<String>>,
+    names: [&str; 3],
+    values: [Sides; 3],
     ctx: &SourceCtx,
-) -> Result<(String, Plane, Material), SceneError> {
+) -> Result<Sides, SceneError> {
+    let Some(v) = d else { return Ok(values[0]) };
+    names
+        .iter()
+        .position(|n| n == v.get_ref())
+        .map(|k| values[k])
+        .ok_or_else(|| {
+            ctx.invalid(
+                v.span(),
+                "sides",
+                format!(
+                    "must be one of {}, got `{}`",
+                    names.map(|n| format!("`{n}`")).join(", "),
+                    v.get_ref()
+                ),
+            )
+        })
+}
+
+fn positive(v: &Spanned<f64>, field: &str, ctx: &SourceCtx) -> Result<f64, SceneError> {
+    let x = *v.get_ref();
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(ctx.invalid(v.span(), field, format!("must be finite and > 0, got {x}")))
+    }
+}
+
+const FLAT_SIDES: [&str; 3] = ["front", "back", "both"];
+const FLAT_VALUES: [Sides; 3] = [Sides::Front, Sides::Back, Sides::Both];
+const ROUND_SIDES: [&str; 3] = ["outside", "inside", "both"];
+
+fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<SurfaceSpec, SceneError> {
     let d = s.get_ref();
     let name = d
         .name
         .as_ref()
         .map_or_else(|| format!("surface #{}", k + 1), |n| n.get_ref().clone());
-    match d.kind.get_ref().as_str() {
+    let kind = d.kind.get_ref().as_str();
+    surface_fields_allowed(d, kind, ctx)?;
+    let vec = |v: &Option<Spanned<[f64; 3]>>, field: &str| {
+        ctx.finite_vec(ctx.required(v, s.span(), field)?, field)
+    };
+    let mat = || material(ctx.required(&d.material, s.span(), "material")?, ctx);
+    match kind {
         "plane" => {
-            let p = ctx.finite_vec(ctx.required(&d.point, s.span(), "point")?, "point")?;
+            let p = vec(&d.point, "point")?;
             let n = ctx.unit_vec(ctx.required(&d.normal, s.span(), "normal")?, "normal")?;
-            let m = material(ctx.required(&d.material, s.span(), "material")?, ctx)?;
-            Ok((name, Plane::new(p, n), m))
+            Ok(SurfaceSpec::Plane(name, Plane::new(p, n), mat()?))
+        }
+        "rectangle" => {
+            let o = vec(&d.corner, "corner")?;
+            let e1 = vec(&d.edge1, "edge1")?;
+            let e2 = vec(&d.edge2, "edge2")?;
+            let r = Rect::new(o, e1, e2).ok_or_else(|| {
+                ctx.invalid(
+                    d.edge2.as_ref().map_or(s.span(), Spanned::span),
+                    "edge2",
+                    "the edges must be non-zero and not parallel",
+                )
+            })?;
+            let sd = sides(&d.sides, FLAT_SIDES, FLAT_VALUES, ctx)?;
+            Ok(SurfaceSpec::Rect(name, r, sd, mat()?))
+        }
+        "disc" => {
+            let c = vec(&d.center, "center")?;
+            let n = ctx.unit_vec(ctx.required(&d.normal, s.span(), "normal")?, "normal")?;
+            let r = positive(ctx.required(&d.radius, s.span(), "radius")?, "radius", ctx)?;
+            let sd = sides(&d.sides, FLAT_SIDES, FLAT_VALUES, ctx)?;
+            Ok(SurfaceSpec::Disc(name, Disc::new(c, n, r), sd, mat()?))
+        }
+        "sphere" => {
+            let c = vec(&d.center, "center")?;
+            let r = positive(ctx.required(&d.radius, s.span(), "radius")?, "radius", ctx)?;
+            let sd = sides(&d.sides, ROUND_SIDES, FLAT_VALUES, ctx)?;
+            Ok(SurfaceSpec::Sphere(name, Sphere { c, r }, sd, mat()?))
+        }
+        "box" => {
+            let lo = vec(&d.min, "min")?;
+            let hi = vec(&d.max, "max")?;
+            if !(lo.cmplt(hi).all()) {
+                return Err(ctx.invalid(
+                    d.max.as_ref().map_or(s.span(), Spanned::span),
+                    "max",
+                    format!("every component must exceed `min`'s, got min {lo} and max {hi}"),
+                ));
+            }
+            let sd = sides(&d.normals, ["inward", "outward", "inward"], [Sides::Back, Sides::Front, Sides::Back], ctx)
+                .map_err(|e| match e {
+                    SceneError::Invalid { file, line, column, message, .. } => SceneError::Invalid {
+                        file,
+                        line,
+                        column,
+                        field: "normals".into(),
+                        message: message.replace("`inward`, `outward`, `inward`", "`inward`, `outward`"),
+                    },
+                    e => e,
+                })?;
+            let faces = d.faces.as_ref().map(|f| f.get_ref());
+            let mut ms = Vec::with_capacity(6);
+            for (f, fname) in crate::geometry::shapes::BOX_FACES.iter().enumerate() {
+                let own = faces.and_then(|fs| {
+                    [&fs.x_min, &fs.x_max, &fs.y_min, &fs.y_max, &fs.z_min, &fs.z_max][f].as_ref()
+                });
+                ms.push(match own {
+                    Some(m) => material(m, ctx)?,
+                    None => material(ctx.required(&d.material, s.span(), "material").map_err(|_| {
+                        ctx.invalid(s.span(), "material", format!("missing field (needed for face `{fname}`, which `faces` does not give)"))
+                    })?, ctx)?,
+                });
+            }
+            let ms: [Material; 6] = ms.try_into().expect("six faces");
+            Ok(SurfaceSpec::Box(name, AaBox { lo, hi }, sd, ms))
         }
         other => Err(ctx.invalid(
             d.kind.span(),
             "type",
-            format!("unknown surface type `{other}` (this version knows: plane)"),
+            format!(
+                "unknown surface type `{other}` (this version knows: plane, rectangle, disc, sphere, box)"
+            ),
         )),
     }
 }
@@ -386,7 +382,12 @@ fn material(m: &Spanned<MaterialDesc>, ctx: &SourceCtx) -> Result<Material, Scen
     }
 }
 
-fn light(l: &Spanned<LightDesc>, ctx: &SourceCtx, planes: &[Plane]) -> Result<Light, SceneError> {
+fn light(
+    l: &Spanned<LightDesc>,
+    ctx: &SourceCtx,
+    planes: &[Plane],
+    only_planes: bool,
+) -> Result<Light, SceneError> {
     let d = l.get_ref();
     // Fields that belong to the other kind of light are rejected.
     let not_for = |kind: &str, fields: &[(&str, Option<Range<usize>>)]| -> Result<(), SceneError> {
@@ -443,6 +444,15 @@ fn light(l: &Spanned<LightDesc>, ctx: &SourceCtx, planes: &[Plane]) -> Result<Li
                     rs.span(),
                     "radius",
                     format!("must be finite and > 0, got {r}"),
+                ));
+            }
+            if !only_planes {
+                return Err(ctx.invalid(
+                    d.kind.span(),
+                    "type",
+                    "sphere lights are supported only in scenes of infinite planes \
+                     (their partial occlusion by finite shapes is not implemented); \
+                     use a point light",
                 ));
             }
             if let Some(k) = planes

@@ -19,21 +19,67 @@ pub struct SceneDesc {
     pub light: Vec<Spanned<LightDesc>>,
 }
 
-/// One `[[surface]]` table. Which fields are required depends on `type`.
+/// One `[[surface]]` table. Which fields are required (and allowed) depends
+/// on `type`; see the README for each shape. All lengths in metres.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SurfaceDesc {
-    /// Shape kind: `"plane"`.
+    /// Shape kind: `"plane"`, `"rectangle"`, `"disc"`, `"sphere"`, `"box"`,
+    /// `"mesh"` or `"sh"`.
     #[serde(rename = "type")]
     pub kind: Spanned<String>,
     /// Optional name used in messages and summaries.
     pub name: Option<Spanned<String>>,
-    /// A point of the plane [m].
+    /// A point of a plane [m].
     pub point: Option<Spanned<[f64; 3]>>,
-    /// Normal of the plane (any length > 0; normalised on compile).
+    /// Normal of a plane or disc (any length > 0; normalised on compile).
     pub normal: Option<Spanned<[f64; 3]>>,
+    /// Corner of a rectangle [m].
+    pub corner: Option<Spanned<[f64; 3]>>,
+    /// First edge of a rectangle [m]; the front normal is `edge1 x edge2`.
+    pub edge1: Option<Spanned<[f64; 3]>>,
+    /// Second edge of a rectangle [m].
+    pub edge2: Option<Spanned<[f64; 3]>>,
+    /// Centre of a disc, sphere or SH object [m].
+    pub center: Option<Spanned<[f64; 3]>>,
+    /// Radius of a disc or sphere [m].
+    pub radius: Option<Spanned<f64>>,
+    /// Reflecting side(s): `"front"`, `"back"`, `"both"` (rectangle, disc,
+    /// mesh) or `"outside"`, `"inside"`, `"both"` (sphere, SH object).
+    pub sides: Option<Spanned<String>>,
+    /// Lower corner of a box [m].
+    pub min: Option<Spanned<[f64; 3]>>,
+    /// Upper corner of a box [m].
+    pub max: Option<Spanned<[f64; 3]>>,
+    /// Normals of a box: `"inward"` (a room, default) or `"outward"` (a solid block).
+    pub normals: Option<Spanned<String>>,
+    /// Per-face materials of a box overriding `material`.
+    pub faces: Option<Spanned<BoxFacesDesc>>,
+    /// OBJ file of a mesh, or CSV file `k,m,a,b` of SH coefficients;
+    /// relative to the scene file's folder.
+    pub file: Option<Spanned<String>>,
+    /// Inline SH coefficients `[[k, m, a, b], ...]` (instead of `file`).
+    pub coefficients: Option<Spanned<Vec<[f64; 4]>>>,
+    /// Translation of a mesh [m] (applied last).
+    pub translate: Option<Spanned<[f64; 3]>>,
+    /// Rotation of a mesh or SH object: angles in degrees about x, then y, then z.
+    pub rotate: Option<Spanned<[f64; 3]>>,
+    /// Uniform scale of a mesh or SH object (dimensionless, > 0).
+    pub scale: Option<Spanned<f64>>,
     /// The surface's material (inline table).
     pub material: Option<Spanned<MaterialDesc>>,
+}
+
+/// Per-face materials of a box: `faces = { z_min = { type = "lambertian", reflectance = 0.2 } }`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxFacesDesc {
+    pub x_min: Option<Spanned<MaterialDesc>>,
+    pub x_max: Option<Spanned<MaterialDesc>>,
+    pub y_min: Option<Spanned<MaterialDesc>>,
+    pub y_max: Option<Spanned<MaterialDesc>>,
+    pub z_min: Option<Spanned<MaterialDesc>>,
+    pub z_max: Option<Spanned<MaterialDesc>>,
 }
 
 /// A `material = { ... }` inline table. Which fields are required (and

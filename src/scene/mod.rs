@@ -7,8 +7,9 @@
 
 pub mod compile;
 pub mod desc;
+pub mod world;
 
-pub use compile::{Scene, SceneSummary};
+pub use world::{MAX_PLANES, Scene, SceneSummary, ShapeRef, Sides, Surface, SurfaceSpec};
 
 use std::path::{Path, PathBuf};
 

@@ -1,0 +1,530 @@
+//! The compiled scene: surfaces with their shapes and materials, lights, and
+//! the two geometric queries the estimators need (nearest hit, visibility).
+//!
+//! **What is built is what the scene uses.** Shapes are kept in one list per
+//! kind; a kind absent from the scene costs an empty loop and nothing else.
+//! A planes-only scene has no BVH, no SH machinery and takes the bit-mask
+//! visibility fast path ([`Scene::planes_only`]); the mesh BVH is built only
+//! for meshes and the spherical-harmonic root finder only for SH objects.
+//! [`Scene::summary`] reports it.
+//!
+//! **Sides.** Every shape has a *geometric* normal (a plane's, rectangle's or
+//! disc's given normal, outward for spheres, boxes and SH objects, the
+//! winding normal of mesh triangles). A surface reflects on the side(s) its
+//! [`Sides`] names; the other side is black. Every surface is opaque.
+
+use crate::geometry::shapes::{AaBox, Disc, Inside, Rect, Sphere};
+use crate::geometry::{Hit, Plane, Ray, SideMask};
+use crate::light::Light;
+use crate::material::Material;
+use glam::DVec3;
+
+/// Which side(s) of a surface reflect, relative to its geometric normal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sides {
+    /// The side the geometric normal faces (a sphere's or box's outside).
+    Front,
+    /// The opposite side (a sphere's or box's inside).
+    Back,
+    /// Both sides, with the same material.
+    Both,
+}
+
+impl Sides {
+    /// The reflecting normal for light arriving along `d` at a point with
+    /// geometric normal `ng`: the normal facing the arriving light when that
+    /// side reflects; otherwise a normal with `d . n >= 0` (a black side).
+    #[inline]
+    pub fn orient(self, ng: DVec3, d: DVec3) -> DVec3 {
+        match self {
+            Sides::Front => ng,
+            Sides::Back => -ng,
+            Sides::Both => {
+                if d.dot(ng) > 0.0 {
+                    -ng
+                } else {
+                    ng
+                }
+            }
+        }
+    }
+}
+
+/// The shape of a surface: an index into the scene's list of that kind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShapeRef {
+    /// Infinite plane `planes[i]` (bit `i` of the side masks).
+    Plane(u32),
+    /// Parallelogram `rects[i]`.
+    Rect(u32),
+    /// Disc `discs[i]`.
+    Disc(u32),
+    /// Sphere `spheres[i]`.
+    Sphere(u32),
+    /// Face `f` of box `boxes[i]` (face order [`crate::geometry::shapes::BOX_FACES`]).
+    BoxFace(u32, u8),
+}
+
+/// A reflecting surface of the compiled scene.
+#[derive(Clone, Debug)]
+pub struct Surface {
+    /// Name from the file, or `surface #k` (box faces: `name.z_min` etc.).
+    pub name: String,
+    /// Its material.
+    pub material: Material,
+    /// Its shape.
+    pub shape: ShapeRef,
+    /// Which side(s) reflect.
+    pub sides: Sides,
+}
+
+/// A surface as handed to [`Scene::build`]: name, shape, sides, material(s).
+#[derive(Clone, Debug)]
+pub enum SurfaceSpec {
+    /// Infinite plane, front side towards its normal.
+    Plane(String, Plane, Material),
+    /// Parallelogram.
+    Rect(String, Rect, Sides, Material),
+    /// Disc.
+    Disc(String, Disc, Sides, Material),
+    /// Sphere (geometric normal outward).
+    Sphere(String, Sphere, Sides, Material),
+    /// Axis-aligned box, one material per face (geometric normals outward).
+    Box(String, AaBox, Sides, [Material; 6]),
+}
+
+/// Kinds and counts of what a compiled scene holds (only these are built).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SceneSummary {
+    /// Number of infinite planes.
+    pub planes: usize,
+    /// Number of rectangles (parallelograms).
+    pub rects: usize,
+    /// Number of discs.
+    pub discs: usize,
+    /// Number of spheres.
+    pub spheres: usize,
+    /// Number of boxes.
+    pub boxes: usize,
+    /// Number of triangle meshes.
+    pub meshes: usize,
+    /// Number of spherical-harmonic objects.
+    pub sh_objects: usize,
+    /// Number of point lights.
+    pub point_lights: usize,
+    /// Number of sphere lights.
+    pub sphere_lights: usize,
+    /// Whether an acceleration structure (BVH) was built.
+    pub bvh: bool,
+    /// Whether the spherical-harmonic machinery was built.
+    pub sh: bool,
+}
+
+impl std::fmt::Display for SceneSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let kinds = [
+            (self.planes, "plane(s)"),
+            (self.rects, "rectangle(s)"),
+            (self.discs, "disc(s)"),
+            (self.spheres, "sphere(s)"),
+            (self.boxes, "box(es)"),
+            (self.meshes, "mesh(es)"),
+            (self.sh_objects, "SH object(s)"),
+        ];
+        let shapes: Vec<String> = kinds
+            .iter()
+            .filter(|k| k.0 > 0)
+            .map(|k| format!("{} {}", k.0, k.1))
+            .collect();
+        write!(
+            f,
+            "{}, {} point light(s), {} sphere light(s), BVH: {}, SH: {}",
+            if shapes.is_empty() {
+                "no surfaces".to_string()
+            } else {
+                shapes.join(", ")
+            },
+            self.point_lights,
+            self.sphere_lights,
+            if self.bvh {
+                "built"
+            } else {
+                "none (not needed)"
+            },
+            if self.sh {
+                "built"
+            } else {
+                "none (not needed)"
+            }
+        )
+    }
+}
+
+/// Largest number of infinite planes the bit-mask visibility supports.
+pub const MAX_PLANES: usize = 64;
+
+/// The compiled scene. Units: metres, candela, lumen; lights selected in
+/// proportion to their power.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Surfaces (a box contributes six, one per face).
+    pub surfaces: Vec<Surface>,
+    /// Infinite planes (front side towards the normal); `plane_surface[i]` is its surface.
+    pub planes: Vec<Plane>,
+    plane_surface: Vec<u32>,
+    rects: Vec<(Rect, u32)>,
+    discs: Vec<(Disc, u32)>,
+    spheres: Vec<(Sphere, u32)>,
+    /// Boxes with the surface index of their `x_min` face (faces follow in order).
+    boxes: Vec<(AaBox, u32)>,
+    /// Light sources.
+    pub lights: Vec<Light>,
+    /// Cumulative power fractions for picking a light (last entry 1).
+    light_cdf: Vec<f64>,
+    /// Total emitted flux [lm].
+    total_power: f64,
+}
+
+/// Where a ray starts, for deciding which surface it must not meet at `t ~ 0`.
+#[derive(Clone, Copy, Debug)]
+enum Start {
+    /// On surface `.0` (primitive `.1`): a collision the ray leaves.
+    On(u32, u32),
+    /// An observer that may stand on any surfaces: tested per shape.
+    Observer,
+}
+
+impl Scene {
+    /// Build a planes-only scene (validated by the caller); used by programmatic
+    /// scenes such as the Sobolev validation case.
+    pub fn from_parts(surfaces: Vec<(String, Plane, Material)>, lights: Vec<Light>) -> Self {
+        Self::build(
+            surfaces
+                .into_iter()
+                .map(|(n, p, m)| SurfaceSpec::Plane(n, p, m))
+                .collect(),
+            lights,
+        )
+    }
+
+    /// Build a scene from surfaces and lights (validated by the caller).
+    ///
+    /// # Panics
+    /// With more than [`MAX_PLANES`] infinite planes.
+    pub fn build(specs: Vec<SurfaceSpec>, lights: Vec<Light>) -> Self {
+        let mut scene = Scene {
+            surfaces: Vec::new(),
+            planes: Vec::new(),
+            plane_surface: Vec::new(),
+            rects: Vec::new(),
+            discs: Vec::new(),
+            spheres: Vec::new(),
+            boxes: Vec::new(),
+            lights: Vec::new(),
+            light_cdf: Vec::new(),
+            total_power: 0.0,
+        };
+        for spec in specs {
+            let k = scene.surfaces.len() as u32;
+            let mut push = |name: String, material, shape, sides| {
+                scene.surfaces.push(Surface {
+                    name,
+                    material,
+                    shape,
+                    sides,
+                })
+            };
+            match spec {
+                SurfaceSpec::Plane(name, p, m) => {
+                    push(
+                        name,
+                        m,
+                        ShapeRef::Plane(scene.planes.len() as u32),
+                        Sides::Front,
+                    );
+                    scene.planes.push(p);
+                    scene.plane_surface.push(k);
+                }
+                SurfaceSpec::Rect(name, r, sides, m) => {
+                    push(name, m, ShapeRef::Rect(scene.rects.len() as u32), sides);
+                    scene.rects.push((r, k));
+                }
+                SurfaceSpec::Disc(name, d, sides, m) => {
+                    push(name, m, ShapeRef::Disc(scene.discs.len() as u32), sides);
+                    scene.discs.push((d, k));
+                }
+                SurfaceSpec::Sphere(name, s, sides, m) => {
+                    push(name, m, ShapeRef::Sphere(scene.spheres.len() as u32), sides);
+                    scene.spheres.push((s, k));
+                }
+                SurfaceSpec::Box(name, b, sides, ms) => {
+                    let i = scene.boxes.len() as u32;
+                    for (f, m) in ms.into_iter().enumerate() {
+                        let face = crate::geometry::shapes::BOX_FACES[f];
+                        push(
+                            format!("{name}.{face}"),
+                            m,
+                            ShapeRef::BoxFace(i, f as u8),
+                            sides,
+                        );
+                    }
+                    scene.boxes.push((b, k));
+                }
+            }
+        }
+        assert!(
+            scene.planes.len() <= MAX_PLANES,
+            "at most {MAX_PLANES} planes"
+        );
+        scene.set_lights(lights);
+        scene
+    }
+
+    fn set_lights(&mut self, lights: Vec<Light>) {
+        let total_power: f64 = lights.iter().map(Light::power).sum();
+        let mut acc = 0.0;
+        let mut light_cdf: Vec<f64> = lights
+            .iter()
+            .map(|l| {
+                acc += l.power();
+                if total_power > 0.0 {
+                    acc / total_power
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        if let Some(last) = light_cdf.last_mut() {
+            *last = 1.0;
+        }
+        self.lights = lights;
+        self.light_cdf = light_cdf;
+        self.total_power = total_power;
+    }
+
+    /// Total emitted flux [lm].
+    pub fn total_power(&self) -> f64 {
+        self.total_power
+    }
+
+    /// True when every surface is an infinite plane: visibility is then
+    /// decided by side masks alone and scoring takes the vectorised path.
+    #[inline]
+    pub fn planes_only(&self) -> bool {
+        self.planes.len() == self.surfaces.len()
+    }
+
+    /// What the compiled scene holds.
+    pub fn summary(&self) -> SceneSummary {
+        let count = |f: fn(&Light) -> bool| self.lights.iter().filter(|l| f(l)).count();
+        SceneSummary {
+            planes: self.planes.len(),
+            rects: self.rects.len(),
+            discs: self.discs.len(),
+            spheres: self.spheres.len(),
+            boxes: self.boxes.len(),
+            meshes: 0,
+            sh_objects: 0,
+            point_lights: count(|l| matches!(l, Light::Point { .. })),
+            sphere_lights: count(|l| matches!(l, Light::Sphere { .. })),
+            bvh: false,
+            sh: false,
+        }
+    }
+
+    /// Pick a light with probability proportional to its power.
+    #[inline]
+    pub fn pick_light(&self, u: f64) -> &Light {
+        let k = self
+            .light_cdf
+            .partition_point(|&c| c <= u)
+            .min(self.lights.len() - 1);
+        &self.lights[k]
+    }
+
+    /// The plane a flat surface lies in, with its normal turned to the
+    /// reflecting side, and whether both sides reflect; `None` for curved
+    /// surfaces. Used to decide which points a collision can score into.
+    pub fn support_plane(&self, s: u32) -> Option<(Plane, bool)> {
+        let surf = &self.surfaces[s as usize];
+        let pl = match surf.shape {
+            ShapeRef::Plane(i) => self.planes[i as usize],
+            ShapeRef::Rect(i) => self.rects[i as usize].0.plane,
+            ShapeRef::Disc(i) => self.discs[i as usize].0.plane,
+            ShapeRef::BoxFace(i, f) => self.boxes[i as usize].0.face_plane(f as usize),
+            ShapeRef::Sphere(_) => return None,
+        };
+        match surf.sides {
+            Sides::Front => Some((pl, false)),
+            Sides::Back => Some((Plane::new(pl.p, -pl.n), false)),
+            Sides::Both => Some((pl, true)),
+        }
+    }
+
+    /// Nearest surface hit along `ray`; `from` is the `(surface, primitive)`
+    /// the ray leaves (a collision), which it does not meet again at its origin.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, from: Option<(u32, u32)>) -> Option<Hit> {
+        match from {
+            Some((s, p)) => self.nearest(ray, Start::On(s, p)),
+            None => self.nearest(ray, Start::On(u32::MAX, 0)),
+        }
+    }
+
+    /// First surface hit by a ray leaving `o` (an observer, possibly standing
+    /// on surfaces: a surface through `o` is not hit at `t ~ 0`) in unit direction `d`.
+    pub fn first_hit_from(&self, o: DVec3, d: DVec3) -> Option<Hit> {
+        self.nearest(&Ray { o, d }, Start::Observer)
+    }
+
+    fn nearest(&self, ray: &Ray, start: Start) -> Option<Hit> {
+        let on = |s: u32| matches!(start, Start::On(x, _) if x == s);
+        let observer = matches!(start, Start::Observer);
+        let mut best_t = f64::INFINITY;
+        // (surface, primitive, geometric normal or none yet)
+        let mut best: Option<(u32, u32)> = None;
+        for (i, pl) in self.planes.iter().enumerate() {
+            let s = self.plane_surface[i];
+            if on(s) || (observer && pl.side(ray.o) == 0) {
+                continue;
+            }
+            if let Some(t) = pl.intersect(ray, best_t) {
+                (best_t, best) = (t, Some((s, 0)));
+            }
+        }
+        for (r, s) in &self.rects {
+            if on(*s) || (observer && r.plane.side(ray.o) == 0) {
+                continue;
+            }
+            if let Some(t) = r.intersect(ray, best_t) {
+                (best_t, best) = (t, Some((*s, 0)));
+            }
+        }
+        for (dc, s) in &self.discs {
+            if on(*s) || (observer && dc.plane.side(ray.o) == 0) {
+                continue;
+            }
+            if let Some(t) = dc.intersect(ray, best_t) {
+                (best_t, best) = (t, Some((*s, 0)));
+            }
+        }
+        for (sp, s) in &self.spheres {
+            let leaving = on(*s) || (observer && sp.classify(ray.o) == Inside::On);
+            if let Some(t) = sp.intersect(ray, best_t, leaving) {
+                (best_t, best) = (t, Some((*s, 0)));
+            }
+        }
+        for (b, s0) in &self.boxes {
+            let leaving = match start {
+                Start::On(x, _) if (*s0..*s0 + 6).contains(&x) => Some((x - s0) as usize),
+                Start::Observer if b.classify(ray.o) == Inside::On => {
+                    (0..6).find(|&f| b.face_plane(f).side(ray.o) == 0)
+                }
+                _ => None,
+            };
+            if let Some((t, f)) = b.intersect(ray, best_t, leaving) {
+                (best_t, best) = (t, Some((s0 + f as u32, 0)));
+            }
+        }
+        let (s, prim) = best?;
+        let surf = &self.surfaces[s as usize];
+        let q = ray.o + ray.d * best_t;
+        let (p, ng) = match surf.shape {
+            ShapeRef::Plane(i) => {
+                let pl = &self.planes[i as usize];
+                (pl.project(q), pl.n)
+            }
+            ShapeRef::Rect(i) => {
+                let pl = &self.rects[i as usize].0.plane;
+                (pl.project(q), pl.n)
+            }
+            ShapeRef::Disc(i) => {
+                let pl = &self.discs[i as usize].0.plane;
+                (pl.project(q), pl.n)
+            }
+            ShapeRef::Sphere(i) => self.spheres[i as usize].0.surface_point(q),
+            ShapeRef::BoxFace(i, f) => {
+                let b = &self.boxes[i as usize].0;
+                (
+                    b.face_point(q, f as usize),
+                    AaBox::outward_normal(f as usize),
+                )
+            }
+        };
+        Some(Hit {
+            t: best_t,
+            p,
+            n: surf.sides.orient(ng, ray.d),
+            surface: s,
+            prim,
+        })
+    }
+
+    /// Visibility masks of a point against every infinite plane.
+    pub fn side_mask(&self, q: DVec3) -> SideMask {
+        SideMask::of(q, &self.planes)
+    }
+
+    /// Bit mask of the spheres and boxes (bits `0..` spheres, then boxes; the
+    /// first 64 in all) that `p` lies inside or on. A segment between two
+    /// points inside or on the same convex shape never crosses it.
+    pub fn inside_mask(&self, p: DVec3) -> u64 {
+        let mut m = 0u64;
+        let convex = self
+            .spheres
+            .iter()
+            .map(|(s, _)| s.classify(p))
+            .chain(self.boxes.iter().map(|(b, _)| b.classify(p)));
+        for (k, c) in convex.take(64).enumerate() {
+            if c != Inside::Out {
+                m |= 1 << k;
+            }
+        }
+        m
+    }
+
+    /// Whether every shape that could block a segment is a sphere or box
+    /// whose bit is set in `inside_both` (see [`Self::inside_mask`]).
+    #[inline]
+    pub fn nothing_blocks(&self, inside_both: u64) -> bool {
+        let n = self.spheres.len() + self.boxes.len();
+        self.rects.is_empty()
+            && self.discs.is_empty()
+            && n <= 64
+            && inside_both.count_ones() as usize == n
+    }
+
+    /// Whether a shape other than an infinite plane blocks the open segment
+    /// from `a` to `b`; `from` is the `(surface, primitive)` `a` lies on, if
+    /// any. Planes are handled by [`Self::side_mask`]; end points lying on a
+    /// surface are never shadowed by it. `inside_both`: spheres and boxes
+    /// known to contain both points (see [`Self::inside_mask`]), skipped.
+    pub fn blocked_by_shapes(
+        &self,
+        a: DVec3,
+        _from: Option<(u32, u32)>,
+        b: DVec3,
+        inside_both: u64,
+    ) -> bool {
+        let ns = self.spheres.len();
+        let skip = |k: usize| k < 64 && inside_both & (1 << k) != 0;
+        self.rects.iter().any(|(r, _)| r.crosses(a, b))
+            || self.discs.iter().any(|(d, _)| d.crosses(a, b))
+            || self
+                .spheres
+                .iter()
+                .enumerate()
+                .any(|(k, (s, _))| !skip(k) && s.crosses(a, b))
+            || self
+                .boxes
+                .iter()
+                .enumerate()
+                .any(|(k, (x, _))| !skip(ns + k) && x.crosses(a, b))
+    }
+
+    /// Whether `a` (on surface/primitive `from`, if any) and `b` see each other.
+    #[inline]
+    pub fn visible(&self, a: DVec3, from: Option<(u32, u32)>, b: DVec3) -> bool {
+        self.side_mask(a).sees(self.side_mask(b)) && !self.blocked_by_shapes(a, from, b, 0)
+    }
+}
