@@ -145,7 +145,7 @@ pub struct PlateArgs {
 /// A point source of 100 cd at `(0.3, 0.6, 0.8) a` over the plate
 /// `[0, a]^2`; half the points on the normal through the corner at heights
 /// `0.05 a .. 2 a` facing the plate, the rest above the plate at scattered
-/// positions and tilts (some lit directly), and three points under the plate
+/// positions and tilts (the plate wholly above their horizon), and three points under the plate
 /// (direct light only: two lit past its edges, the last in its shadow).
 pub fn plate_case(a: f64, rho: f64, n_points: usize) -> Case {
     let pc = PlateCase {
@@ -174,12 +174,29 @@ pub fn plate_case(a: f64, rho: f64, n_points: usize) -> Case {
         let h = a * (0.05 + 1.95 * k as f64 / (n_corner.max(2) - 1) as f64);
         receivers.push(Receiver::illuminance(DVec3::new(0.0, 0.0, h), -DVec3::Z));
     }
-    while receivers.len() + 3 < n_points {
+    // Rejection sampling below accepts about half the candidates; the cap
+    // keeps it finite whatever happens.
+    let mut tries = 0;
+    while receivers.len() + 3 < n_points && tries < 1000 * n_points {
+        tries += 1;
         let [u, v] = rng.next_2d();
         let [w, t] = rng.next_2d();
         let p = DVec3::new(-0.5 + 2.0 * u, -0.5 + 2.0 * v, 0.1 + 1.2 * w) * a;
         let n = DVec3::new(t - 0.5, 0.3 * (w - 0.5), -1.0).normalize();
-        receivers.push(Receiver::illuminance(p, n));
+        // Keep the plate wholly above the receiver's horizon, so that the
+        // reference integrand is smooth (a horizon cut would be a kink).
+        let corners = [
+            DVec3::ZERO,
+            DVec3::X * a,
+            DVec3::Y * a,
+            DVec3::new(a, a, 0.0),
+        ];
+        if corners
+            .iter()
+            .all(|&c| (c - p).dot(n) > 0.05 * (c - p).length())
+        {
+            receivers.push(Receiver::illuminance(p, n));
+        }
     }
     // Under the plate: two lit past its edges, one in its shadow (last: exact 0).
     receivers.extend([
