@@ -5,6 +5,8 @@
 //! material; the back side is black (a perfect absorber). Every surface is
 //! opaque from both sides.
 
+pub mod bvh;
+pub mod mesh;
 pub mod shapes;
 
 use glam::DVec3;
