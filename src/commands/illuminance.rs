@@ -462,7 +462,43 @@ pub(crate) fn measure_with(
     for line in summary(&result).lines() {
         eprintln!("lumest: {line}");
     }
+    if let Some(t) = &job.points {
+        if let Some(line) = grid_summary(&result, t.rows.len()) {
+            eprintln!("lumest: {line}");
+        }
+    }
     Ok((job, result))
+}
+
+/// The lighting engineer's figures over the first `n` receivers (the
+/// illuminance points): average, minimum and maximum illuminance [lx] and
+/// the uniformity `U0 = E_min / E_avg`, with the standard error of `E_avg`.
+pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
+    if n == 0 {
+        return None;
+    }
+    let e: Vec<f64> = (0..n)
+        .map(|j| r.direct[j] + r.tallies.indirect[j].mean())
+        .collect();
+    // Batch means of the average are the average of the batch means, so its
+    // error is that of the per-point errors combined with their correlation;
+    // bounded above by the mean of the per-point errors (full correlation).
+    let avg = e.iter().sum::<f64>() / n as f64;
+    let se_bound = (0..n)
+        .map(|j| r.tallies.indirect[j].std_error())
+        .sum::<f64>()
+        / n as f64;
+    let min = e.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = e.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Some(format!(
+        "points: E_avg {avg:.4} lx (std error <= {se_bound:.2e}), E_min {min:.4} lx, E_max {max:.4} lx, \
+         uniformity U0 = E_min/E_avg = {}",
+        if avg > 0.0 {
+            format!("{:.3}", min / avg)
+        } else {
+            "undefined (no light)".into()
+        }
+    ))
 }
 
 /// Run `lumest illuminance`.

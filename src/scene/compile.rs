@@ -5,9 +5,11 @@ use super::SceneError;
 use super::desc::{LightDesc, MaterialDesc, SceneDesc, SurfaceDesc};
 use super::world::{MAX_PLANES, Scene, Sides, SurfaceSpec};
 use crate::geometry::Plane;
+use crate::geometry::mesh::Mesh;
 use crate::geometry::shapes::{AaBox, Disc, Rect, Sphere};
 use crate::light::Light;
 use crate::material::Material;
+use glam::DMat3;
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::ops::Range;
@@ -21,6 +23,18 @@ pub struct SourceCtx<'a> {
 }
 
 impl SourceCtx<'_> {
+    /// A path written in the scene file, relative to the file's folder.
+    pub fn relative(&self, p: &str) -> std::path::PathBuf {
+        let p = Path::new(p);
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.file
+                .parent()
+                .map_or_else(|| p.to_path_buf(), |d| d.join(p))
+        }
+    }
+
     /// 1-based line and column of byte offset `at`.
     pub fn line_col(&self, at: usize) -> (usize, usize) {
         let at = at.min(self.src.len());
@@ -121,12 +135,13 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
 }
 
 /// The fields each surface type takes (besides `type`, `name`, `material`).
-const SURFACE_FIELDS: [(&str, &[&str]); 5] = [
+const SURFACE_FIELDS: [(&str, &[&str]); 6] = [
     ("plane", &["point", "normal"]),
     ("rectangle", &["corner", "edge1", "edge2", "sides"]),
     ("disc", &["center", "normal", "radius", "sides"]),
     ("sphere", &["center", "radius", "sides"]),
     ("box", &["min", "max", "normals", "faces"]),
+    ("mesh", &["file", "translate", "rotate", "scale", "sides"]),
 ];
 
 /// Reject a field that the surface's type does not take.
@@ -211,6 +226,29 @@ fn positive(v: &Spanned<f64>, field: &str, ctx: &SourceCtx) -> Result<f64, Scene
     } else {
         Err(ctx.invalid(v.span(), field, format!("must be finite and > 0, got {x}")))
     }
+}
+
+/// `translate` [m], `rotate` (degrees about x, then y, then z) and `scale`
+/// of a mesh or SH object: `x -> translate + scale R x`.
+fn placement(d: &SurfaceDesc, ctx: &SourceCtx) -> Result<(DVec3, DMat3, f64), SceneError> {
+    let t = match &d.translate {
+        Some(v) => ctx.finite_vec(v, "translate")?,
+        None => DVec3::ZERO,
+    };
+    let r = match &d.rotate {
+        Some(v) => {
+            let a = ctx.finite_vec(v, "rotate")?;
+            DMat3::from_rotation_z(a.z.to_radians())
+                * DMat3::from_rotation_y(a.y.to_radians())
+                * DMat3::from_rotation_x(a.x.to_radians())
+        }
+        None => DMat3::IDENTITY,
+    };
+    let s = match &d.scale {
+        Some(v) => positive(v, "scale", ctx)?,
+        None => 1.0,
+    };
+    Ok((t, r, s))
 }
 
 const FLAT_SIDES: [&str; 3] = ["front", "back", "both"];
@@ -299,11 +337,21 @@ fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<Surfac
             let ms: [Material; 6] = ms.try_into().expect("six faces");
             Ok(SurfaceSpec::Box(name, AaBox { lo, hi }, sd, ms))
         }
+        "mesh" => {
+            let fs = ctx.required(&d.file, s.span(), "file")?;
+            let path = ctx.relative(fs.get_ref());
+            let (translate, rotation, scale) = placement(d, ctx)?;
+            let mesh = Mesh::load_obj(&path)
+                .and_then(|m| m.try_transformed(translate, rotation, scale))
+                .map_err(|e| ctx.invalid(fs.span(), "file", e.to_string()))?;
+            let sd = sides(&d.sides, ["both", "front", "back"], [Sides::Both, Sides::Front, Sides::Back], ctx)?;
+            Ok(SurfaceSpec::Mesh(name, mesh, sd, mat()?))
+        }
         other => Err(ctx.invalid(
             d.kind.span(),
             "type",
             format!(
-                "unknown surface type `{other}` (this version knows: plane, rectangle, disc, sphere, box)"
+                "unknown surface type `{other}` (this version knows: plane, rectangle, disc, sphere, box, mesh)"
             ),
         )),
     }

@@ -13,6 +13,7 @@
 //! winding normal of mesh triangles). A surface reflects on the side(s) its
 //! [`Sides`] names; the other side is black. Every surface is opaque.
 
+use crate::geometry::mesh::Mesh;
 use crate::geometry::shapes::{AaBox, Disc, Inside, Rect, Sphere};
 use crate::geometry::{Hit, Plane, Ray, SideMask};
 use crate::light::Light;
@@ -63,6 +64,8 @@ pub enum ShapeRef {
     Sphere(u32),
     /// Face `f` of box `boxes[i]` (face order [`crate::geometry::shapes::BOX_FACES`]).
     BoxFace(u32, u8),
+    /// Triangle mesh `meshes[i]` (its BVH built on compile).
+    Mesh(u32),
 }
 
 /// A reflecting surface of the compiled scene.
@@ -91,6 +94,8 @@ pub enum SurfaceSpec {
     Sphere(String, Sphere, Sides, Material),
     /// Axis-aligned box, one material per face (geometric normals outward).
     Box(String, AaBox, Sides, [Material; 6]),
+    /// Triangle mesh (geometric normals by counter-clockwise winding).
+    Mesh(String, Mesh, Sides, Material),
 }
 
 /// Kinds and counts of what a compiled scene holds (only these are built).
@@ -160,6 +165,12 @@ impl std::fmt::Display for SceneSummary {
     }
 }
 
+/// Relative length of the ends of a segment (or of the start of an
+/// observer's ray) in which a mesh triangle does not count as a blocker:
+/// end points lying on a triangle (a collision, a receiver on a mesh) are
+/// not shadowed by it, at any scale.
+const MESH_REL: f64 = 1e-9;
+
 /// Largest number of infinite planes the bit-mask visibility supports.
 pub const MAX_PLANES: usize = 64;
 
@@ -177,6 +188,8 @@ pub struct Scene {
     spheres: Vec<(Sphere, u32)>,
     /// Boxes with the surface index of their `x_min` face (faces follow in order).
     boxes: Vec<(AaBox, u32)>,
+    /// Meshes with their BVH.
+    meshes: Vec<(Mesh, u32)>,
     /// Light sources.
     pub lights: Vec<Light>,
     /// Cumulative power fractions for picking a light (last entry 1).
@@ -220,6 +233,7 @@ impl Scene {
             discs: Vec::new(),
             spheres: Vec::new(),
             boxes: Vec::new(),
+            meshes: Vec::new(),
             lights: Vec::new(),
             light_cdf: Vec::new(),
             total_power: 0.0,
@@ -269,6 +283,10 @@ impl Scene {
                         );
                     }
                     scene.boxes.push((b, k));
+                }
+                SurfaceSpec::Mesh(name, m, sides, mat) => {
+                    push(name, mat, ShapeRef::Mesh(scene.meshes.len() as u32), sides);
+                    scene.meshes.push((m, k));
                 }
             }
         }
@@ -323,11 +341,11 @@ impl Scene {
             discs: self.discs.len(),
             spheres: self.spheres.len(),
             boxes: self.boxes.len(),
-            meshes: 0,
+            meshes: self.meshes.len(),
             sh_objects: 0,
             point_lights: count(|l| matches!(l, Light::Point { .. })),
             sphere_lights: count(|l| matches!(l, Light::Sphere { .. })),
-            bvh: false,
+            bvh: !self.meshes.is_empty(),
             sh: false,
         }
     }
@@ -352,7 +370,7 @@ impl Scene {
             ShapeRef::Rect(i) => self.rects[i as usize].0.plane,
             ShapeRef::Disc(i) => self.discs[i as usize].0.plane,
             ShapeRef::BoxFace(i, f) => self.boxes[i as usize].0.face_plane(f as usize),
-            ShapeRef::Sphere(_) => return None,
+            ShapeRef::Sphere(_) | ShapeRef::Mesh(_) => return None,
         };
         match surf.sides {
             Sides::Front => Some((pl, false)),
@@ -426,6 +444,16 @@ impl Scene {
                 (best_t, best) = (t, Some((s0 + f as u32, 0)));
             }
         }
+        for (m, s) in &self.meshes {
+            let (t_min, skip) = match start {
+                Start::On(x, p) if x == *s => (0.0, Some(p)),
+                Start::Observer => (MESH_REL * (m.bounds().1 - m.bounds().0).length(), None),
+                _ => (0.0, None),
+            };
+            if let Some((t, _, tri)) = m.first_hit(ray.o, ray.d, t_min, best_t, skip) {
+                (best_t, best) = (t, Some((*s, tri)));
+            }
+        }
         let (s, prim) = best?;
         let surf = &self.surfaces[s as usize];
         let q = ray.o + ray.d * best_t;
@@ -449,6 +477,12 @@ impl Scene {
                     b.face_point(q, f as usize),
                     AaBox::outward_normal(f as usize),
                 )
+            }
+            ShapeRef::Mesh(i) => {
+                let m = &self.meshes[i as usize].0;
+                let ng = m.normal(prim);
+                let c0 = m.corners(prim)[0];
+                (q - ng * ng.dot(q - c0), ng)
             }
         };
         Some(Hit {
@@ -490,6 +524,7 @@ impl Scene {
         let n = self.spheres.len() + self.boxes.len();
         self.rects.is_empty()
             && self.discs.is_empty()
+            && self.meshes.is_empty()
             && n <= 64
             && inside_both.count_ones() as usize == n
     }
@@ -502,7 +537,7 @@ impl Scene {
     pub fn blocked_by_shapes(
         &self,
         a: DVec3,
-        _from: Option<(u32, u32)>,
+        from: Option<(u32, u32)>,
         b: DVec3,
         inside_both: u64,
     ) -> bool {
@@ -520,6 +555,25 @@ impl Scene {
                 .iter()
                 .enumerate()
                 .any(|(k, (x, _))| !skip(ns + k) && x.crosses(a, b))
+            || self.meshes_block(a, from, b)
+    }
+
+    /// Whether a mesh blocks the open segment `a b`: a shadow ray over
+    /// `(MESH_REL, 1 - MESH_REL)` of its length, skipping the triangle `a` is on.
+    fn meshes_block(&self, a: DVec3, from: Option<(u32, u32)>, b: DVec3) -> bool {
+        if self.meshes.is_empty() {
+            return false;
+        }
+        let ab = b - a;
+        let len = ab.length();
+        if len == 0.0 {
+            return false;
+        }
+        let d = ab / len;
+        self.meshes.iter().any(|(m, s)| {
+            let skip = from.filter(|f| f.0 == *s).map(|f| f.1);
+            m.occluded(a, d, MESH_REL * len, (1.0 - MESH_REL) * len, skip)
+        })
     }
 
     /// Whether `a` (on surface/primitive `from`, if any) and `b` see each other.
