@@ -5,6 +5,8 @@
 //! material; the back side is black (a perfect absorber). Every surface is
 //! opaque from both sides.
 
+pub mod sh;
+
 use glam::DVec3;
 
 /// A ray `o + t d`, `t > 0`, with unit direction `d`.
