@@ -7,6 +7,7 @@
 
 pub mod bvh;
 pub mod mesh;
+pub mod sh;
 pub mod shapes;
 
 use glam::DVec3;
