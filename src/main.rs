@@ -1,7 +1,7 @@
 //! The `lumest` command line: arguments in, library calls, exit code out.
 
 use clap::{Parser, Subcommand};
-use lumest::commands::{bench, illuminance, render, sobolev, validate};
+use lumest::commands::{bench, illuminance, render, shfit, sobolev, validate};
 use std::process::ExitCode;
 
 /// Monte Carlo illumination by local estimation, with exact references.
@@ -27,6 +27,9 @@ enum Command {
     Validate(validate::ValidateCase),
     /// Throughput and figure of merit on the Sobolev scene.
     Bench(bench::BenchArgs),
+    /// Fit a star-shaped OBJ mesh by spherical harmonics (least squares); compare them.
+    #[command(name = "sh-fit")]
+    ShFit(shfit::ShFitArgs),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +41,7 @@ fn main() -> ExitCode {
         Command::Sobolev(a) => sobolev::sobolev(a),
         Command::Validate(c) => validate::validate(c),
         Command::Bench(a) => bench::bench(a),
+        Command::ShFit(a) => shfit::sh_fit(a),
     };
     match res {
         Ok(()) => ExitCode::SUCCESS,

@@ -315,7 +315,7 @@ impl BatchWork for LocalWork<'_> {
     /// batches, so a batch stays about 2^20 scores.
     fn default_batch_size(&self, chains: Option<u64>) -> u64 {
         const PILOT: u64 = 256;
-        const PILOT_KEY: u64 = 0x5049_4c4f_54; // "PILOT"
+        const PILOT_KEY: u64 = 0x0050_494c_4f54; // "PILOT"
         let n = self.receivers.len() as u64;
         let mut cost = 0u64;
         if self.scene.total_power() > 0.0 {

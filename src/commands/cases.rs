@@ -6,6 +6,7 @@
 use super::validate::{convergence, loglog_slope, print_table, write_report};
 use crate::chain::{ChainEnd, ChainParams, trace_ex};
 use crate::estimator::{Receiver, Receivers};
+use crate::geometry::sh::{ShCoeff, ShSurface};
 use crate::geometry::shapes::{AaBox, Rect, Sphere};
 use crate::io::csvio::to_csv;
 use crate::io::{format_number, write_atomic};
@@ -122,8 +123,17 @@ pub fn sphere_case(rho: f64, radius: f64, source: DVec3, n_points: usize, as_sh:
     }
 }
 
-fn sh_sphere_spec(_c: DVec3, _r: f64, _m: Material) -> SurfaceSpec {
-    unimplemented!("SH objects")
+/// The sphere of radius `r` about `c` as a degree-0 SH object, reflecting inside.
+fn sh_sphere_spec(c: DVec3, r: f64, m: Material) -> SurfaceSpec {
+    let coeff = ShCoeff {
+        k: 0,
+        m: 0,
+        a: r,
+        b: 0.0,
+    };
+    let o =
+        ShSurface::new(&[coeff], c, glam::DMat3::IDENTITY, 1.0).expect("a sphere is star-shaped");
+    SurfaceSpec::Sh("sphere (SH)".into(), o, Sides::Back, m)
 }
 
 /// Arguments of `lumest validate plate`.
@@ -260,14 +270,8 @@ pub fn run_case(name: &str, title: &str, case: &Case, a: &CaseArgs) -> anyhow::R
         "internal: receivers with exact value 0 must come last"
     );
     let zeros = n - nz;
-    let (result, tables) = convergence(
-        &case.scene,
-        &receivers,
-        &case.exact,
-        &[0..nz],
-        &cfg,
-        a.quiet,
-    );
+    let groups = std::slice::from_ref(&(0..nz));
+    let (result, tables) = convergence(&case.scene, &receivers, &case.exact, groups, &cfg, a.quiet);
     let rows = &tables[0];
     println!("{title}:");
     print_table(rows);

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod cases;
 pub mod illuminance;
 pub mod render;
+pub mod shfit;
 pub mod sobolev;
 pub mod validate;
 

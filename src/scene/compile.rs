@@ -6,6 +6,7 @@ use super::desc::{LightDesc, MaterialDesc, SceneDesc, SurfaceDesc};
 use super::world::{MAX_PLANES, Scene, Sides, SurfaceSpec};
 use crate::geometry::Plane;
 use crate::geometry::mesh::Mesh;
+use crate::geometry::sh::{ShCoeff, ShSurface, read_coefficients};
 use crate::geometry::shapes::{AaBox, Disc, Rect, Sphere};
 use crate::light::Light;
 use crate::material::Material;
@@ -135,13 +136,17 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
 }
 
 /// The fields each surface type takes (besides `type`, `name`, `material`).
-const SURFACE_FIELDS: [(&str, &[&str]); 6] = [
+const SURFACE_FIELDS: [(&str, &[&str]); 7] = [
     ("plane", &["point", "normal"]),
     ("rectangle", &["corner", "edge1", "edge2", "sides"]),
     ("disc", &["center", "normal", "radius", "sides"]),
     ("sphere", &["center", "radius", "sides"]),
     ("box", &["min", "max", "normals", "faces"]),
     ("mesh", &["file", "translate", "rotate", "scale", "sides"]),
+    (
+        "sh",
+        &["file", "coefficients", "center", "rotate", "scale", "sides"],
+    ),
 ];
 
 /// Reject a field that the surface's type does not take.
@@ -337,6 +342,45 @@ fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<Surfac
             let ms: [Material; 6] = ms.try_into().expect("six faces");
             Ok(SurfaceSpec::Box(name, AaBox { lo, hi }, sd, ms))
         }
+        "sh" => {
+            let coeffs = match (&d.file, &d.coefficients) {
+                (Some(f), None) => read_coefficients(&ctx.relative(f.get_ref()))
+                    .map_err(|e| ctx.invalid(f.span(), "file", e.to_string()))?,
+                (None, Some(c)) => {
+                    let mut v = Vec::with_capacity(c.get_ref().len());
+                    for row in c.get_ref() {
+                        let [k, m, a, b] = *row;
+                        let int = |x: f64| x >= 0.0 && x.fract() == 0.0 && x <= 1e6;
+                        if !(int(k) && int(m)) {
+                            return Err(ctx.invalid(
+                                c.span(),
+                                "coefficients",
+                                format!("degree k and order m must be whole numbers >= 0, got {row:?}"),
+                            ));
+                        }
+                        v.push(ShCoeff { k: k as usize, m: m as usize, a, b });
+                    }
+                    v
+                }
+                (Some(f), Some(_)) => {
+                    return Err(ctx.invalid(f.span(), "file", "give either `file` or `coefficients`, not both"));
+                }
+                (None, None) => {
+                    return Err(ctx.invalid(
+                        s.span(),
+                        "coefficients",
+                        "missing field (give `file` = a CSV of k,m,a,b or `coefficients` = [[k, m, a, b], ...])",
+                    ));
+                }
+            };
+            let c = vec(&d.center, "center")?;
+            let (_, rotation, scale) = placement(d, ctx)?;
+            let field_span = d.coefficients.as_ref().map(Spanned::span).or(d.file.as_ref().map(Spanned::span)).unwrap_or(s.span());
+            let o = ShSurface::new(&coeffs, c, rotation, scale)
+                .map_err(|e| ctx.invalid(field_span, "coefficients", e.to_string()))?;
+            let sd = sides(&d.sides, ROUND_SIDES, FLAT_VALUES, ctx)?;
+            Ok(SurfaceSpec::Sh(name, o, sd, mat()?))
+        }
         "mesh" => {
             let fs = ctx.required(&d.file, s.span(), "file")?;
             let path = ctx.relative(fs.get_ref());
@@ -351,7 +395,7 @@ fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<Surfac
             d.kind.span(),
             "type",
             format!(
-                "unknown surface type `{other}` (this version knows: plane, rectangle, disc, sphere, box, mesh)"
+                "unknown surface type `{other}` (this version knows: plane, rectangle, disc, sphere, box, mesh, sh)"
             ),
         )),
     }

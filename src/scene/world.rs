@@ -14,6 +14,7 @@
 //! [`Sides`] names; the other side is black. Every surface is opaque.
 
 use crate::geometry::mesh::Mesh;
+use crate::geometry::sh::ShSurface;
 use crate::geometry::shapes::{AaBox, Disc, Inside, Rect, Sphere};
 use crate::geometry::{Hit, Plane, Ray, SideMask};
 use crate::light::Light;
@@ -66,6 +67,8 @@ pub enum ShapeRef {
     BoxFace(u32, u8),
     /// Triangle mesh `meshes[i]` (its BVH built on compile).
     Mesh(u32),
+    /// Spherical-harmonic object `shs[i]`.
+    Sh(u32),
 }
 
 /// A reflecting surface of the compiled scene.
@@ -96,6 +99,8 @@ pub enum SurfaceSpec {
     Box(String, AaBox, Sides, [Material; 6]),
     /// Triangle mesh (geometric normals by counter-clockwise winding).
     Mesh(String, Mesh, Sides, Material),
+    /// Star-shaped spherical-harmonic object (geometric normal outward).
+    Sh(String, ShSurface, Sides, Material),
 }
 
 /// Kinds and counts of what a compiled scene holds (only these are built).
@@ -190,6 +195,8 @@ pub struct Scene {
     boxes: Vec<(AaBox, u32)>,
     /// Meshes with their BVH.
     meshes: Vec<(Mesh, u32)>,
+    /// Spherical-harmonic objects.
+    shs: Vec<(ShSurface, u32)>,
     /// Light sources.
     pub lights: Vec<Light>,
     /// Cumulative power fractions for picking a light (last entry 1).
@@ -234,6 +241,7 @@ impl Scene {
             spheres: Vec::new(),
             boxes: Vec::new(),
             meshes: Vec::new(),
+            shs: Vec::new(),
             lights: Vec::new(),
             light_cdf: Vec::new(),
             total_power: 0.0,
@@ -287,6 +295,10 @@ impl Scene {
                 SurfaceSpec::Mesh(name, m, sides, mat) => {
                     push(name, mat, ShapeRef::Mesh(scene.meshes.len() as u32), sides);
                     scene.meshes.push((m, k));
+                }
+                SurfaceSpec::Sh(name, o, sides, mat) => {
+                    push(name, mat, ShapeRef::Sh(scene.shs.len() as u32), sides);
+                    scene.shs.push((o, k));
                 }
             }
         }
@@ -342,11 +354,11 @@ impl Scene {
             spheres: self.spheres.len(),
             boxes: self.boxes.len(),
             meshes: self.meshes.len(),
-            sh_objects: 0,
+            sh_objects: self.shs.len(),
             point_lights: count(|l| matches!(l, Light::Point { .. })),
             sphere_lights: count(|l| matches!(l, Light::Sphere { .. })),
             bvh: !self.meshes.is_empty(),
-            sh: false,
+            sh: !self.shs.is_empty(),
         }
     }
 
@@ -370,7 +382,7 @@ impl Scene {
             ShapeRef::Rect(i) => self.rects[i as usize].0.plane,
             ShapeRef::Disc(i) => self.discs[i as usize].0.plane,
             ShapeRef::BoxFace(i, f) => self.boxes[i as usize].0.face_plane(f as usize),
-            ShapeRef::Sphere(_) | ShapeRef::Mesh(_) => return None,
+            ShapeRef::Sphere(_) | ShapeRef::Mesh(_) | ShapeRef::Sh(_) => return None,
         };
         match surf.sides {
             Sides::Front => Some((pl, false)),
@@ -454,6 +466,13 @@ impl Scene {
                 (best_t, best) = (t, Some((*s, tri)));
             }
         }
+        // A ray starting on an SH surface (a collision, an observer on it)
+        // leaves it on the side its direction points to: no self-hit at t = 0.
+        for (o, s) in &self.shs {
+            if let Some((t, _)) = o.first_hit(ray.o, ray.d, 0.0, best_t) {
+                (best_t, best) = (t, Some((*s, 0)));
+            }
+        }
         let (s, prim) = best?;
         let surf = &self.surfaces[s as usize];
         let q = ray.o + ray.d * best_t;
@@ -478,6 +497,7 @@ impl Scene {
                     AaBox::outward_normal(f as usize),
                 )
             }
+            ShapeRef::Sh(i) => (q, self.shs[i as usize].0.normal(q)),
             ShapeRef::Mesh(i) => {
                 let m = &self.meshes[i as usize].0;
                 let ng = m.normal(prim);
@@ -525,6 +545,7 @@ impl Scene {
         self.rects.is_empty()
             && self.discs.is_empty()
             && self.meshes.is_empty()
+            && self.shs.is_empty()
             && n <= 64
             && inside_both.count_ones() as usize == n
     }
@@ -556,6 +577,22 @@ impl Scene {
                 .enumerate()
                 .any(|(k, (x, _))| !skip(ns + k) && x.crosses(a, b))
             || self.meshes_block(a, from, b)
+            || self.shs_block(a, b)
+    }
+
+    /// Whether an SH object blocks the open segment `a b` (end points on its
+    /// surface are not shadowed by it).
+    fn shs_block(&self, a: DVec3, b: DVec3) -> bool {
+        if self.shs.is_empty() {
+            return false;
+        }
+        let ab = b - a;
+        let len = ab.length();
+        if len == 0.0 {
+            return false;
+        }
+        let d = ab / len;
+        self.shs.iter().any(|(o, _)| o.crosses(a, d, 0.0, len))
     }
 
     /// Whether a mesh blocks the open segment `a b`: a shadow ray over

@@ -1,0 +1,268 @@
+//! Scene files with every shape: what the compiled scene holds (and leaves
+//! out), clear errors naming the line and field, the office example, the
+//! SH sphere written inline, and `lumest sh-fit`.
+
+use assert_cmd::Command;
+use glam::DVec3;
+use lumest::estimator::{Receiver, Receivers};
+use lumest::geometry::mesh::star_blob;
+use lumest::run::{RunConfig, Stop, run};
+use lumest::scene;
+use std::path::Path;
+
+fn lumest() -> Command {
+    Command::cargo_bin("lumest").unwrap()
+}
+
+fn parse(text: &str) -> Result<lumest::scene::Scene, String> {
+    scene::parse(text, Path::new("test.toml")).map_err(|e| e.to_string())
+}
+
+const LIGHT: &str = "[[light]]\ntype = \"point\"\nposition = [0.5, 0.5, 0.5]\nintensity = 10\n";
+
+#[test]
+fn compiled_scene_holds_only_the_kinds_it_uses() {
+    let planes = scene::load(Path::new("data/sobolev.toml"))
+        .unwrap()
+        .summary();
+    assert!(!planes.bvh && !planes.sh && planes.planes == 2);
+    assert_eq!(planes.meshes + planes.sh_objects + planes.boxes, 0);
+    let text = planes.to_string();
+    assert!(text.contains("BVH: none (not needed)") && text.contains("SH: none (not needed)"));
+
+    let office = scene::load(Path::new("data/office.toml"))
+        .unwrap()
+        .summary();
+    assert!(office.bvh && !office.sh, "{office}");
+    assert_eq!(
+        (office.boxes, office.rects, office.discs, office.meshes),
+        (4, 2, 1, 1)
+    );
+
+    let sh = parse(&format!(
+        "[[surface]]\ntype = \"sh\"\ncenter = [0.5, 0.5, 0.5]\ncoefficients = [[0, 0, 2.0, 0.0], [2, 1, 0.1, 0.05]]\n\
+         sides = \"inside\"\nmaterial = {{ type = \"lambertian\", reflectance = 0.5 }}\n{LIGHT}"
+    ))
+    .unwrap()
+    .summary();
+    assert!(sh.sh && !sh.bvh && sh.sh_objects == 1, "{sh}");
+}
+
+#[test]
+fn every_shape_parses_and_bad_values_name_line_and_field() {
+    let ok = format!(
+        r#"[[surface]]
+type = "rectangle"
+corner = [0, 0, 0]
+edge1 = [1, 0, 0]
+edge2 = [0, 1, 0]
+sides = "both"
+material = {{ type = "lambertian", reflectance = 0.5 }}
+
+[[surface]]
+type = "disc"
+center = [0, 0, 2]
+normal = [0, 0, -1]
+radius = 0.5
+material = {{ type = "lambertian", reflectance = 0.5 }}
+
+[[surface]]
+type = "sphere"
+center = [3, 3, 3]
+radius = 0.5
+sides = "outside"
+material = {{ type = "phong", diffuse = 0.3, specular = 0.2, exponent = 10 }}
+
+[[surface]]
+type = "box"
+min = [-5, -5, -5]
+max = [5, 5, 5]
+material = {{ type = "lambertian", reflectance = 0.5 }}
+faces = {{ z_min = {{ type = "lambertian", reflectance = 0.1 }} }}
+{LIGHT}"#
+    );
+    let s = parse(&ok).unwrap();
+    assert_eq!(s.surfaces.len(), 3 + 6);
+    assert_eq!(s.surfaces[7].name, "surface #4.z_min");
+
+    let cases: [(&str, &str, &str); 8] = [
+        (
+            "type = \"rectangle\"\ncorner = [0, 0, 0]\nedge1 = [1, 0, 0]\nedge2 = [2, 0, 0]\n",
+            "test.toml:5",
+            "edge2",
+        ),
+        (
+            "type = \"disc\"\ncenter = [0, 0, 0]\nnormal = [0, 0, 1]\nradius = -1\n",
+            "test.toml:5",
+            "radius",
+        ),
+        (
+            "type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nsides = \"around\"\n",
+            "test.toml:5",
+            "sides",
+        ),
+        (
+            "type = \"box\"\nmin = [0, 0, 0]\nmax = [1, -1, 1]\n",
+            "test.toml:4",
+            "max",
+        ),
+        (
+            "type = \"rectangle\"\ncorner = [0, 0, 0]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nradius = 2\n",
+            "test.toml:6",
+            "radius",
+        ),
+        (
+            "type = \"mesh\"\nfile = \"no_such_file.obj\"\n",
+            "test.toml:3",
+            "no_such_file.obj",
+        ),
+        (
+            "type = \"sh\"\ncenter = [0, 0, 0]\ncoefficients = [[0, 0, 1.0, 0.0], [1, 0, 2.0, 0.0]]\n",
+            "test.toml:4",
+            "star",
+        ),
+        ("type = \"cone\"\n", "test.toml:2", "this version knows"),
+    ];
+    for (body, at, what) in cases {
+        let text = format!(
+            "[[surface]]\n{body}material = {{ type = \"lambertian\", reflectance = 0.5 }}\n{LIGHT}"
+        );
+        let e = parse(&text).unwrap_err();
+        assert!(e.contains(at) && e.contains(what), "{body}: {e}");
+    }
+    // Sphere lights need the exact horizon cut of planes-only scenes.
+    let e = parse(
+        "[[surface]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 5\nsides = \"inside\"\n\
+         material = { type = \"lambertian\", reflectance = 0.5 }\n\
+         [[light]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 0.1\nintensity = 1\n",
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("test.toml:8") && e.contains("point light"),
+        "{e}"
+    );
+}
+
+#[test]
+fn inline_degree_zero_sh_sphere_gives_the_analytic_spheres_answers() {
+    let body = |shape: &str| {
+        format!(
+            "[[surface]]\n{shape}\nsides = \"inside\"\n\
+             material = {{ type = \"lambertian\", reflectance = 0.8 }}\n\
+             [[light]]\ntype = \"point\"\nposition = [0.3, 0.1, -0.2]\nintensity = 10\n"
+        )
+    };
+    let sphere = parse(&body("type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1.5")).unwrap();
+    let sh = parse(&body(
+        "type = \"sh\"\ncenter = [0, 0, 0]\ncoefficients = [[0, 0, 1.5, 0]]",
+    ))
+    .unwrap();
+    let pts: Vec<Receiver> = [DVec3::X, DVec3::new(0.0, 0.6, 0.8), -DVec3::Z]
+        .iter()
+        .map(|&u| Receiver::illuminance(u * 1.5, -u))
+        .collect();
+    let cfg = RunConfig {
+        stop: Stop {
+            chains: Some(4096),
+            ..Stop::default()
+        },
+        ..RunConfig::default()
+    };
+    let go = |s: &lumest::scene::Scene| {
+        let rec = Receivers::from_receivers(s, &pts).unwrap();
+        run(s, &rec, &cfg, &mut |_| true)
+    };
+    let (a, b) = (go(&sphere), go(&sh));
+    for j in 0..pts.len() {
+        assert_eq!(a.direct[j], b.direct[j]);
+        // Same chains through the same sphere: equal to rounding.
+        let (ea, eb) = (a.tallies.indirect[j].mean(), b.tallies.indirect[j].mean());
+        assert!((ea - eb).abs() <= 1e-9 * ea, "{ea} vs {eb}");
+    }
+}
+
+#[test]
+fn office_example_gives_a_grid_with_error_bars() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("office.csv");
+    let o = lumest()
+        .args([
+            "illuminance",
+            "--scene",
+            "data/office.toml",
+            "--points",
+            "data/office_grid.csv",
+            "--out",
+            out.to_str().unwrap(),
+            "--chains",
+            "20000",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("BVH: built") && err.contains("uniformity U0"),
+        "{err}"
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut rows = 0;
+    for line in text.lines().skip(1) {
+        let f: Vec<f64> = line
+            .split(',')
+            .take(10)
+            .map(|x| x.parse().unwrap())
+            .collect();
+        // E > 0 everywhere on the work plane, with a finite positive error bar.
+        assert!(
+            f[6] > 0.0 && f[7] > 0.0 && f[7].is_finite() && f[7] < 0.2 * f[6],
+            "{line}"
+        );
+        rows += 1;
+    }
+    assert_eq!(rows, 84);
+}
+
+#[test]
+fn sh_fit_writes_coefficients_and_reports_the_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("blob.obj");
+    // An exact degree-2 shape: the fit at degree 2 leaves only the mesh's
+    // flat-facet error; at degree 1 a visible residual.
+    let m = star_blob(40, 80, |t: f64, p: f64| {
+        1.0 + 0.2 * (3.0 * t.cos().powi(2) - 1.0) / 2.0 + 0.1 * t.sin() * p.cos()
+    })
+    .unwrap();
+    m.write_obj(&obj).unwrap();
+    let out = dir.path().join("coeffs.csv");
+    let o = lumest()
+        .args([
+            "sh-fit",
+            obj.to_str().unwrap(),
+            "--degree",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+            "--center",
+            "0,0,0",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("9 coefficients") && text.contains("storage"),
+        "{text}"
+    );
+    let c = lumest::geometry::sh::read_coefficients(&out).unwrap();
+    assert_eq!(c.len(), 6, "one row per (k, m), 0 <= m <= k <= 2");
+    let a = |k, mm| c.iter().find(|x| x.k == k && x.m == mm).unwrap().a;
+    // Facets lie inside the smooth surface by O(h^2): compare loosely.
+    assert!(
+        (a(0, 0) - 1.0).abs() < 2e-3
+            && (a(2, 0) - 0.2).abs() < 2e-3
+            && (a(1, 1) - 0.1).abs() < 2e-3,
+        "{c:?}"
+    );
+}
