@@ -270,7 +270,8 @@ pub fn run_case(name: &str, title: &str, case: &Case, a: &CaseArgs) -> anyhow::R
         "internal: receivers with exact value 0 must come last"
     );
     let zeros = n - nz;
-    let groups = std::slice::from_ref(&(0..nz));
+    let range = 0..nz;
+    let groups = std::slice::from_ref(&range);
     let (result, tables) = convergence(&case.scene, &receivers, &case.exact, groups, &cfg, a.quiet);
     let rows = &tables[0];
     println!("{title}:");
