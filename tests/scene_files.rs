@@ -221,7 +221,7 @@ fn office_example_gives_a_grid_with_error_bars() {
         );
         rows += 1;
     }
-    assert_eq!(rows, 84);
+    assert_eq!(rows, 66);
 }
 
 #[test]
