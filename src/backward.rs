@@ -102,6 +102,7 @@ impl BatchWork for BackwardWork<'_> {
                     &self.frames[j],
                     cfg,
                     &mut rng,
+                    f64::INFINITY,
                     |order, v| {
                         let k = if k_max == 0 {
                             0
@@ -125,12 +126,17 @@ impl BatchWork for BackwardWork<'_> {
 
 /// Trace one path from receiver `rec`; `add(order, value)` receives each
 /// next-event contribution. Returns the number of surface vertices.
-fn trace<F: FnMut(u32, f64)>(
+///
+/// `first_max` [m]: a path whose first surface lies at or beyond this
+/// distance from the receiver contributes nothing (the near-field part of
+/// the local estimator's near/far split); `f64::INFINITY` for a full path.
+pub(crate) fn trace<F: FnMut(u32, f64)>(
     scene: &Scene,
     rec: &Receiver,
     frame: &Frame,
     cfg: &RunConfig,
     rng: &mut Philox4x32,
+    first_max: f64,
     mut add: F,
 ) -> u64 {
     // First direction, from the receiver's response.
@@ -150,7 +156,7 @@ fn trace<F: FnMut(u32, f64)>(
     let beta0 = beta;
     let rr = cfg.chain.rr_weight * beta0;
     let mut d = frame.to_world(d_local);
-    let mut hit = scene.first_hit_from(rec.p, d);
+    let mut hit = scene.first_hit_from(rec.p, d).filter(|h| h.t < first_max);
     let mut order = 0u32;
     let mut vertices = 0;
     while let Some(h) = hit {

@@ -66,6 +66,9 @@ pub struct RunConfig {
     pub batch_size: Option<u64>,
     /// Stratify emitted directions over each batch (randomised Sobol' net).
     pub stratify: bool,
+    /// Near/far split: radius [m] (0: off) and backward paths per receiver
+    /// and batch for the near part (see [`Receivers::with_near_field`]).
+    pub near: (f64, u32),
 }
 
 impl Default for RunConfig {
@@ -81,6 +84,7 @@ impl Default for RunConfig {
             chain: ChainParams::default(),
             batch_size: None,
             stratify: true,
+            near: (0.0, 0),
         }
     }
 }
@@ -357,6 +361,17 @@ pub fn run(
     cfg: &RunConfig,
     observe: &mut dyn FnMut(&Progress) -> bool,
 ) -> RunResult {
+    if cfg.near.0 > 0.0 && cfg.near.1 > 0 && receivers.near_field() != cfg.near {
+        let near = receivers.clone().with_near_field(cfg.near.0, cfg.near.1);
+        return drive(
+            &LocalWork {
+                scene,
+                receivers: &near,
+            },
+            cfg,
+            observe,
+        );
+    }
     drive(&LocalWork { scene, receivers }, cfg, observe)
 }
 
@@ -560,6 +575,28 @@ fn run_batch(
     let mut sums = vec![0.0; buckets * n];
     for k in 0..buckets {
         receivers.reduce(&acc[k * len..(k + 1) * len], &mut sums[k * n..(k + 1) * n]);
+    }
+    // Near part of the near/far split: backward paths whose first surface
+    // lies within the radius, weighted to a per-chain sum over the batch.
+    let (radius, paths) = receivers.near_field();
+    if paths > 0 {
+        const NEAR_KEY: u64 = 0x6e65_6172_6669_656c; // "nearfiel"
+        let w = bs as f64 / paths as f64;
+        for (j, rec) in receivers.receivers().iter().enumerate() {
+            let frame = crate::sampling::warp::Frame::from_normal(rec.n);
+            for s in 0..u64::from(paths) {
+                let stream = (b * u64::from(paths) + s) * n as u64 + j as u64;
+                let mut rng = Philox4x32::new(cfg.seed ^ NEAR_KEY, stream);
+                crate::backward::trace(scene, rec, &frame, cfg, &mut rng, radius, |order, v| {
+                    let k = if k_max == 0 {
+                        0
+                    } else {
+                        (order.min(k_max + 1) - 1) as usize
+                    };
+                    sums[k * n + j] += v * w;
+                });
+            }
+        }
     }
     Batch {
         index: b,

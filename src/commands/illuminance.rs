@@ -197,7 +197,8 @@ pub fn summary(r: &RunResult) -> String {
     } else {
         let list: Vec<String> = counts.iter().map(|(k, v)| format!("{k}: {v}")).collect();
         format!(
-            "statistical checks FAILED for some receivers ({}); see the _flag column",
+            "statistical checks FAILED for some receivers ({}); see the _flag column \
+             (points close to a lit surface: try --near-radius)",
             list.join(", ")
         )
     };

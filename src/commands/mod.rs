@@ -44,6 +44,14 @@ pub struct RunArgs {
     /// Russian-roulette weight, relative to the starting weight, in (0, 1].
     #[arg(long = "rr-weight", default_value_t = ChainParams::default().rr_weight)]
     pub rr_weight: f64,
+    /// Near/far split against the singular kernel [m]: collisions closer than
+    /// this to a point leave their share to backward paths from the point
+    /// (unbiased; keeps the variance finite next to walls and in corners). 0: off.
+    #[arg(long = "near-radius", default_value_t = 0.0)]
+    pub near_radius: f64,
+    /// Backward paths per point and batch for the near part (with `--near-radius`).
+    #[arg(long = "near-paths", default_value_t = 16)]
+    pub near_paths: u32,
     /// Draw emitted directions independently instead of stratifying them over each batch.
     #[arg(long = "no-stratify")]
     pub no_stratify: bool,
@@ -84,6 +92,11 @@ impl RunArgs {
             self.rr_weight
         );
         anyhow::ensure!(
+            self.near_radius.is_finite() && self.near_radius >= 0.0,
+            "--near-radius must be a finite length >= 0 [m], got {}",
+            self.near_radius
+        );
+        anyhow::ensure!(
             self.batch_size.is_none_or(|b| b > 0 && b <= 1 << 32),
             "--batch-size must lie in [1, 2^32] (chains of a batch index one Sobol' net)"
         );
@@ -98,6 +111,7 @@ impl RunArgs {
             },
             batch_size: self.batch_size,
             stratify: !self.no_stratify,
+            near: (self.near_radius, self.near_paths),
         })
     }
 }

@@ -176,6 +176,9 @@ struct ReceiverList {
     nz: Vec<f64>,
     /// Constant response (1 or `rho/pi`); unused for general entries.
     w: Vec<f64>,
+    /// Squared near-field radius [m^2]: collisions closer than this score
+    /// nothing here (the near part is estimated separately; 0 when off).
+    eps2: Vec<f64>,
     masks: Vec<SideMask>,
     /// Spheres and boxes each entry lies inside or on ([`Scene::inside_mask`]).
     inside: Vec<u64>,
@@ -192,6 +195,9 @@ struct ReceiverList {
 /// Receivers compiled against a scene.
 #[derive(Clone, Debug)]
 pub struct Receivers {
+    /// Near-field radius [m] and backward paths per receiver and batch
+    /// (radius 0: off).
+    near: (f64, u32),
     all: Vec<Receiver>,
     frames: Vec<Frame>,
     lists: Vec<ReceiverList>,
@@ -295,6 +301,7 @@ impl Receivers {
                 list.ny.push(rec.n.y);
                 list.nz.push(rec.n.z);
                 list.masks.push(masks[j]);
+                list.eps2.push(0.0);
                 list.inside.push(inside[j]);
                 list.inside_all &= inside[j];
                 match rec.constant_weight() {
@@ -310,6 +317,7 @@ impl Receivers {
             lists.push(list);
         }
         Ok(Self {
+            near: (0.0, 0),
             all: receivers.to_vec(),
             frames,
             lists,
@@ -337,6 +345,26 @@ impl Receivers {
     /// sources, or the luminance [cd/m^2] of light reflected once at the sub-point.
     pub fn direct(&self) -> &[f64] {
         &self.direct
+    }
+
+    /// The near/far split (see [`crate::run`] docs): collisions closer than
+    /// `radius` [m] to a receiver no longer score into it, and each batch
+    /// adds, per receiver, `paths` backward paths whose first surface lies
+    /// within `radius`. Both parts are unbiased; the far kernel is bounded by
+    /// `1 / radius^2`, so the variance stays finite next to walls and in corners.
+    pub fn with_near_field(mut self, radius: f64, paths: u32) -> Self {
+        let on = radius > 0.0 && paths > 0;
+        self.near = if on { (radius, paths) } else { (0.0, 0) };
+        let e2 = if on { radius * radius } else { 0.0 };
+        for list in &mut self.lists {
+            list.eps2.iter_mut().for_each(|e| *e = e2);
+        }
+        self
+    }
+
+    /// Near-field radius [m] and paths per receiver and batch; `(0, 0)` when off.
+    pub fn near_field(&self) -> (f64, u32) {
+        self.near
     }
 
     /// Number of receivers a collision on surface `s` scores into.
@@ -412,6 +440,7 @@ impl Receivers {
             let np = DVec3::new(list.nx[k], list.ny[k], list.nz[k]);
             let g = local_kernel(c.p, c.n, p, np);
             if g == 0.0
+                || (p - c.p).length_squared() < list.eps2[k]
                 || (!planes_only
                     && scene.blocked_by_shapes(c.p, from, p, x_inside & list.inside[k]))
             {
@@ -448,12 +477,14 @@ fn score_open(list: &ReceiverList, x: DVec3, n: DVec3, qf: f64, acc: &mut [f64])
         .iter_mut()
         .zip(list.px.iter().zip(&list.py).zip(&list.pz))
         .zip(list.nx.iter().zip(&list.ny).zip(&list.nz))
-        .zip(&list.w);
-    for (((a, ((px, py), pz)), ((nx, ny), nz)), w) in it {
+        .zip(list.w.iter().zip(&list.eps2));
+    for (((a, ((px, py), pz)), ((nx, ny), nz)), (w, e2)) in it {
         let (dx, dy, dz) = (px - x.x, py - x.y, pz - x.z);
         let cx = (n.x * dx + n.y * dy + n.z * dz).max(0.0);
         let cp = (-(nx * dx + ny * dy + nz * dz)).max(0.0);
         let d2 = dx * dx + dy * dy + dz * dz;
-        *a += qf * w * cx * cp / (d2 * d2);
+        // Inside the near-field ball the score is left to the near part.
+        let far = if d2 >= *e2 { 1.0 } else { 0.0 };
+        *a += qf * w * far * cx * cp / (d2 * d2);
     }
 }
