@@ -50,3 +50,39 @@ fn no_truncation_bias_at_rho_099() {
         assert!(zz.abs() < bound, "point {j}: z = {zz}");
     }
 }
+
+#[test]
+fn integrating_sphere_analog_chains_have_length_one_over_one_minus_rho() {
+    // In a closed sphere every ray meets the wall: with the analog game the
+    // number of collisions is geometric with mean 1/(1 - rho); with the
+    // default roulette the estimate at rho = 0.99 stays exact (no truncation).
+    use lumest::commands::cases::sphere_case;
+    use lumest::estimator::Receivers;
+    use lumest::run::run;
+    let rhos = [0.5, 0.9, 0.99];
+    let bound = sidak_bound(1e-3, rhos.len(), None);
+    for (k, rho) in rhos.into_iter().enumerate() {
+        let case = sphere_case(rho, 1.0, glam::DVec3::new(0.2, -0.5, 0.1), 4, false);
+        let rec = Receivers::from_receivers(&case.scene, &case.receivers).unwrap();
+        let cfg = RunConfig {
+            chain: ChainParams {
+                rr_weight: 1.0,
+                max_order: None,
+            },
+            ..chains_cfg(100_000, 40 + k as u64, 0)
+        };
+        let r = run(&case.scene, &rec, &cfg, &mut |_| true);
+        let n = r.chains as f64;
+        let mean = r.collisions as f64 / n;
+        let se = (rho / (1.0 - rho).powi(2) / n).sqrt();
+        let zz = (mean - 1.0 / (1.0 - rho)) / se;
+        assert!(zz.abs() < bound, "rho {rho}: mean length {mean} (z = {zz})");
+        for j in 0..4 {
+            let zj = z(&r, j, case.exact[j]);
+            assert!(
+                zj.abs() < sidak_bound(1e-3, 12, Some(r.tallies.batches())),
+                "rho {rho}, point {j}: z = {zj}"
+            );
+        }
+    }
+}

@@ -266,3 +266,17 @@ fn sh_fit_writes_coefficients_and_reports_the_fit() {
         "{c:?}"
     );
 }
+
+#[test]
+fn overflowing_light_power_is_a_clear_error() {
+    let e = parse(
+        "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+         material = { type = \"lambertian\", reflectance = 0.5 }\n\
+         [[light]]\ntype = \"point\"\nposition = [0, 0, 1]\nintensity = 1e300\n",
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("test.toml:9") && e.contains("intensity") && e.contains("too large"),
+        "{e}"
+    );
+}

@@ -205,7 +205,7 @@ pub fn summary(r: &RunResult) -> String {
     let text = format!(
         "{} receivers, {} chains in {} batches of {}, {:.3} s on {} thread(s), stopped by {:?}\n\
          {:.4e} chains/s, {:.4e} scores/s, {:.3} collisions/chain\n\
-         relative standard error: RMS {:.3e}, max {:.3e}; FOM = 1/(R_rms^2 T) = {:.4e} 1/s",
+         relative standard error: RMS {:.3e}, max {:.3e}; FOM = 1/(R_rms^2 T) = {}",
         r.direct.len(),
         r.chains,
         r.tallies.batches(),
@@ -218,7 +218,11 @@ pub fn summary(r: &RunResult) -> String {
         r.collisions as f64 / r.chains.max(1) as f64,
         rms,
         max,
-        figure_of_merit(rms, r.wall),
+        if rms > 0.0 && r.wall > 0.0 {
+            format!("{:.4e} 1/s", figure_of_merit(rms, r.wall))
+        } else {
+            "undefined (zero error: every estimate is exact)".to_string()
+        },
     );
     format!("{text}\n{flags}")
 }

@@ -510,6 +510,23 @@ fn light(
             ));
         }
     };
+    // Flux and sums of fluxes must stay finite (1e300 cd would overflow them).
+    const MAX_INTENSITY: f64 = 1e250;
+    if i > MAX_INTENSITY {
+        let sp = d.intensity.as_ref().map_or_else(
+            || d.flux.as_ref().map_or(l.span(), Spanned::span),
+            Spanned::span,
+        );
+        return Err(ctx.invalid(
+            sp,
+            if d.intensity.is_some() {
+                "intensity"
+            } else {
+                "flux"
+            },
+            format!("too large: at most {MAX_INTENSITY:e} cd (or 4 pi times that in lm)"),
+        ));
+    }
     match d.kind.get_ref().as_str() {
         "point" => {
             not_for(
