@@ -18,7 +18,7 @@ use clap::{Args, Subcommand};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::ops::Range;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Validation cases.
 #[derive(Subcommand, Clone, Debug)]
@@ -60,24 +60,8 @@ pub struct ValidateSobolevArgs {
     /// Largest horizontal distance of the points [m].
     #[arg(long = "r-max", default_value_t = 3.0)]
     pub r_max: f64,
-    /// Wall-clock time of the run [s].
-    #[arg(long, default_value_t = 10.0)]
-    pub time: f64,
-    /// Seed.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Worker threads (0: all cores).
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
-    /// Folder for the table (CSV) and the plot (SVG).
-    #[arg(long, default_value = "validation_report")]
-    pub report: PathBuf,
-    /// Family-wise false-alarm rate of the z test over all points.
-    #[arg(long, default_value_t = 0.01)]
-    pub alpha: f64,
-    /// No progress bar.
-    #[arg(long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub case: super::cases::CaseArgs,
 }
 
 /// The Sobolev problem as a scene with points on both planes and exact values.
@@ -435,7 +419,7 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
         "--points plus --views must be at least 1"
     );
     anyhow::ensure!(
-        a.time > 0.0 && a.time.is_finite(),
+        a.case.time > 0.0 && a.case.time.is_finite(),
         "--time must be positive"
     );
     anyhow::ensure!(
@@ -446,7 +430,7 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
     let (case, all, exact) = sobolev_receivers(&problem, a.points, a.views, a.r_max);
     let receivers =
         Receivers::from_receivers(&case.scene, &all).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let cfg = RunConfig::timed(a.seed, a.threads, a.time);
+    let cfg = RunConfig::timed(a.case.seed, a.case.threads, a.case.time);
     println!(
         "Sobolev: h1={} h2={} rho1={} rho2={} I={} cd; {} points and {} views, r in [0, {}] m, {} s",
         problem.h1,
@@ -457,11 +441,12 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
         a.points,
         a.views,
         a.r_max,
-        a.time
+        a.case.time
     );
     let np = a.points;
     let groups = [0..np, np..np + a.views];
-    let (result, tables) = convergence(&case.scene, &receivers, &exact, &groups, &cfg, a.quiet);
+    let (result, tables) =
+        convergence(&case.scene, &receivers, &exact, &groups, &cfg, a.case.quiet);
     let names = [
         ("sobolev", "illuminance E [lx]"),
         ("sobolev_luminance", "luminance L [cd/m^2]"),
@@ -478,7 +463,7 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
             "log-log slope vs time: estimated R {slope:.3}, actual error {slope_err:.3} (ideal -0.5)"
         );
         write_report(
-            &a.report,
+            &a.case.report,
             name,
             rows,
             &format!("Sobolev problem: relative error of {what} against run time"),
@@ -515,18 +500,18 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
         })
         .collect();
     write_atomic(
-        &a.report.join("sobolev_points.csv").to_string_lossy(),
+        &a.case.report.join("sobolev_points.csv").to_string_lossy(),
         &to_csv(&headers, &cells),
     )?;
     let last = result.progress();
     let fin = checkpoint(&last, &exact, 0..exact.len());
-    let bound = sidak_bound(a.alpha, exact.len(), Some(fin.batches));
+    let bound = sidak_bound(a.case.alpha, exact.len(), Some(fin.batches));
     let pass = fin.max_z <= bound;
     println!(
         "max |z| = {:.3} against the Sidak bound {:.3} (alpha {}, {} receivers, {} batches): {}",
         fin.max_z,
         bound,
-        a.alpha,
+        a.case.alpha,
         exact.len(),
         fin.batches,
         if pass { "PASS" } else { "FAIL" }
