@@ -327,8 +327,9 @@ impl BatchWork for LocalWork<'_> {
             for c in 0..PILOT {
                 let mut rng = Philox4x32::new(PILOT_KEY, c);
                 let u = [rng.next_2d(), rng.next_2d()];
+                let per_score = self.scene.score_cost();
                 crate::chain::trace(self.scene, &mut rng, &params, u, |col| {
-                    cost += 16 + self.receivers.list_len(col.surface) as u64;
+                    cost += 16 + per_score * self.receivers.list_len(col.surface) as u64;
                 });
             }
         }
