@@ -306,7 +306,7 @@ fn forward_and_backward_agree_among_meshes_sh_objects_spheres_and_discs() {
 #[test]
 fn near_field_split_fixes_the_corner_point() {
     // The point 1 mm from the room's corner (flagged above): with the
-    // near/far split it agrees with the backward estimator and passes.
+    // near/far split it agrees with the backward estimator, with a finite variance.
     let (scene, recs) = all_shapes_room(1.0);
     let recs = vec![recs[6]];
     let rec = Receivers::from_receivers(&scene, &recs).unwrap();
