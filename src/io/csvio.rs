@@ -87,9 +87,30 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
         .collect();
     let mut rows = Vec::new();
     let mut lines = Vec::new();
+    // Line numbers from byte offsets. A record's position is where the
+    // reader started on it, before the comment lines it skipped, so those are
+    // stepped over here (the csv crate's own line count is off the same way).
+    let line_of = |byte: u64| -> u64 {
+        let mut at = (byte as usize).min(text.len());
+        let mut line = text.as_bytes()[..at]
+            .iter()
+            .filter(|&&c| c == b'\n')
+            .count() as u64
+            + 1;
+        while text[at..].starts_with('#') {
+            match text[at..].find('\n') {
+                Some(k) => {
+                    at += k + 1;
+                    line += 1;
+                }
+                None => break,
+            }
+        }
+        line
+    };
     for rec in rdr.records() {
         let rec = rec.map_err(|e| {
-            let line = e.position().map_or(0, |p| p.line());
+            let line = e.position().map_or(0, |p| line_of(p.byte()));
             InputError::Field {
                 file: file.clone(),
                 line,
@@ -97,7 +118,7 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
                 message: e.to_string(),
             }
         })?;
-        lines.push(rec.position().map_or(0, |p| p.line()));
+        lines.push(rec.position().map_or(0, |p| line_of(p.byte())));
         rows.push(rec.iter().map(str::to_string).collect());
     }
     Ok(RawTable {
@@ -270,4 +291,18 @@ pub fn to_csv(headers: &[String], rows: &[Vec<String>]) -> Vec<u8> {
         w.write_record(r).expect("write to memory");
     }
     w.into_inner().expect("flush to memory")
+}
+
+#[cfg(test)]
+mod line_tests {
+    use super::read_table;
+
+    #[test]
+    fn line_numbers_count_comment_lines() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        std::fs::write(&p, "# top\nx,y\n1,2\n# mid\n# mid2\n3,4\n5,6\n").unwrap();
+        let t = read_table(p.to_str().unwrap()).unwrap();
+        assert_eq!(t.lines, vec![3, 6, 7]);
+    }
 }
