@@ -7,6 +7,7 @@ pub mod illuminance;
 pub mod render;
 pub mod shfit;
 pub mod sobolev;
+pub mod stress;
 pub mod validate;
 
 use crate::chain::ChainParams;

@@ -34,6 +34,8 @@ pub enum ValidateCase {
     /// Flux balance in a closed box room: absorbed flux equals emitted flux, no leaks.
     #[command(name = "box")]
     BoxFlux(super::cases::BoxArgs),
+    /// Stress matrix: extreme reflectances, distances, scales; points touching walls and sources.
+    Stress(super::stress::StressArgs),
 }
 
 /// Run a validation case.
@@ -43,6 +45,7 @@ pub fn validate(case: &ValidateCase) -> anyhow::Result<()> {
         ValidateCase::IntegratingSphere(a) => super::cases::validate_sphere(a),
         ValidateCase::Plate(a) => super::cases::validate_plate(a),
         ValidateCase::BoxFlux(a) => super::cases::validate_box(a),
+        ValidateCase::Stress(a) => super::stress::validate_stress(a),
     }
 }
 
