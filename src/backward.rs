@@ -69,11 +69,34 @@ impl BatchWork for BackwardWork<'_> {
         0
     }
 
-    /// Paths per receiver per batch: about 2^16 paths per batch in all, at
-    /// least `MIN_BATCHES` batches for a `--chains` run (chains = paths per receiver).
+    /// Paths per receiver per batch: about 2^18 path vertices per batch in
+    /// all, the mean path length measured by a fixed pilot (16 paths per
+    /// receiver on their own streams, so the batch size never depends on
+    /// timing, seed or thread count); at least `MIN_BATCHES` batches for a
+    /// `--chains` run (chains = paths per receiver). Long paths (reflectances
+    /// near 1) thus get small batches and `--time` is kept.
     fn default_batch_size(&self, chains: Option<u64>) -> u64 {
+        const PILOT: u64 = 16;
+        const PILOT_KEY: u64 = 0x0070_696c_6f74; // "pilot"
         let n = self.receivers.len().max(1) as u64;
-        let mut bs = ((1u64 << 16) / n).clamp(1, 1 << 14);
+        let mut vertices = 0u64;
+        let cfg = RunConfig::default();
+        for (j, rec) in self.receivers.receivers().iter().enumerate() {
+            for s in 0..PILOT {
+                let mut rng = Philox4x32::new(PILOT_KEY, s * n + j as u64);
+                vertices += trace(
+                    self.scene,
+                    rec,
+                    &self.frames[j],
+                    &cfg,
+                    &mut rng,
+                    f64::INFINITY,
+                    |_, _| {},
+                );
+            }
+        }
+        let per_path = 1 + vertices / (PILOT * n) * (1 + self.scene.lights.len() as u64);
+        let mut bs = ((1u64 << 18) / (n * per_path)).clamp(1, 1 << 14);
         if let Some(c) = chains {
             bs = bs.min(c.div_ceil(crate::run::MIN_BATCHES)).max(1);
         }
