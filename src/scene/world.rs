@@ -600,15 +600,9 @@ impl Scene {
     /// Whether an SH object blocks the open segment `a b` (end points on its
     /// surface are not shadowed by it).
     fn shs_block(&self, a: DVec3, b: DVec3) -> bool {
-        if self.shs.is_empty() {
+        let Some((d, len)) = segment(a, b).filter(|_| !self.shs.is_empty()) else {
             return false;
-        }
-        let ab = b - a;
-        let len = ab.length();
-        if len == 0.0 {
-            return false;
-        }
-        let d = ab / len;
+        };
         self.shs.iter().any(|(o, _)| {
             // A segment within the inner bounding ball (end points on or
             // inside it; the ball is convex) meets the surface, which lies
@@ -626,15 +620,9 @@ impl Scene {
     /// Whether a mesh blocks the open segment `a b`: a shadow ray over
     /// `(MESH_REL, 1 - MESH_REL)` of its length, skipping the triangle `a` is on.
     fn meshes_block(&self, a: DVec3, from: Option<(u32, u32)>, b: DVec3) -> bool {
-        if self.meshes.is_empty() {
+        let Some((d, len)) = segment(a, b).filter(|_| !self.meshes.is_empty()) else {
             return false;
-        }
-        let ab = b - a;
-        let len = ab.length();
-        if len == 0.0 {
-            return false;
-        }
-        let d = ab / len;
+        };
         self.meshes.iter().any(|(m, s)| {
             let skip = from.filter(|f| f.0 == *s).map(|f| f.1);
             m.occluded(a, d, MESH_REL * len, (1.0 - MESH_REL) * len, skip)
@@ -646,4 +634,13 @@ impl Scene {
     pub fn visible(&self, a: DVec3, from: Option<(u32, u32)>, b: DVec3) -> bool {
         self.side_mask(a).sees(self.side_mask(b)) && !self.blocked_by_shapes(a, from, b, 0)
     }
+}
+
+/// Unit direction and length of the segment from `a` to `b`; `None` when
+/// the two points coincide (nothing lies between them).
+#[inline]
+fn segment(a: DVec3, b: DVec3) -> Option<(DVec3, f64)> {
+    let ab = b - a;
+    let len = ab.length();
+    (len > 0.0).then(|| (ab / len, len))
 }
