@@ -192,7 +192,7 @@ pub fn summary(r: &RunResult) -> String {
         }
     }
     let flags = if counts.is_empty() {
-        "statistical checks: all receivers pass (R <= 0.1, VOV <= 0.1, stable FOM, no heavy tail)"
+        "statistical checks: all receivers pass (R <= 0.1, VOV <= max(0.1, 6/B), stable FOM, no heavy tail)"
             .to_string()
     } else {
         let list: Vec<String> = counts.iter().map(|(k, v)| format!("{k}: {v}")).collect();
