@@ -69,6 +69,9 @@ pub struct RunConfig {
     /// Near/far split: radius [m] (0: off) and backward paths per receiver
     /// and batch for the near part (see [`Receivers::with_near_field`]).
     pub near: (f64, u32),
+    /// With `near.0 == 0`: choose the split per receiver where it is needed
+    /// ([`Receivers::with_auto_near_field`]), with `near.1` paths.
+    pub near_auto: bool,
 }
 
 impl Default for RunConfig {
@@ -85,6 +88,7 @@ impl Default for RunConfig {
             batch_size: None,
             stratify: true,
             near: (0.0, 0),
+            near_auto: false,
         }
     }
 }
@@ -334,8 +338,11 @@ impl BatchWork for LocalWork<'_> {
             }
         }
         let per_chain = (cost / PILOT).max(n + 16);
+        // At least 256 chains a batch: batch means of fewer chains are too
+        // skewed for the checks that assume near-normal batch means (the
+        // `tail` check fired on most points of the office with 32).
         let mut bs = ((1u64 << 20) / per_chain)
-            .clamp(16, 1 << 16)
+            .clamp(256, 1 << 16)
             .next_power_of_two();
         if let Some(c) = chains {
             bs = bs.min(c.div_ceil(MIN_BATCHES)).max(1);
@@ -362,8 +369,13 @@ pub fn run(
     cfg: &RunConfig,
     observe: &mut dyn FnMut(&Progress) -> bool,
 ) -> RunResult {
-    if cfg.near.0 > 0.0 && cfg.near.1 > 0 && receivers.near_field() != cfg.near {
-        let near = receivers.clone().with_near_field(cfg.near.0, cfg.near.1);
+    let wanted = cfg.near.1 > 0 && (cfg.near.0 > 0.0 || cfg.near_auto);
+    if wanted && receivers.near_field().0 == 0 {
+        let near = if cfg.near.0 > 0.0 {
+            receivers.clone().with_near_field(cfg.near.0, cfg.near.1)
+        } else {
+            receivers.clone().with_auto_near_field(scene, cfg.near.1)
+        };
         return drive(
             &LocalWork {
                 scene,
@@ -579,11 +591,15 @@ fn run_batch(
     }
     // Near part of the near/far split: backward paths whose first surface
     // lies within the radius, weighted to a per-chain sum over the batch.
-    let (radius, paths) = receivers.near_field();
+    let (paths, radii) = receivers.near_field();
     if paths > 0 {
         const NEAR_KEY: u64 = 0x6e65_6172_6669_656c; // "nearfiel"
         let w = bs as f64 / paths as f64;
         for (j, rec) in receivers.receivers().iter().enumerate() {
+            let radius = radii[j];
+            if radius <= 0.0 {
+                continue;
+            }
             let frame = crate::sampling::warp::Frame::from_normal(rec.n);
             for s in 0..u64::from(paths) {
                 let stream = (b * u64::from(paths) + s) * n as u64 + j as u64;

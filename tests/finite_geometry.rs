@@ -312,6 +312,8 @@ fn near_field_split_fixes_the_corner_point() {
     let rec = Receivers::from_receivers(&scene, &recs).unwrap();
     let cfg = lumest::run::RunConfig {
         near: (0.05, 64),
+        // ~200 batches: enough for the VOV to measure the tail.
+        batch_size: Some(1024),
         ..chains_cfg(200_000, 31, 0)
     };
     let fwd = run(&scene, &rec, &cfg, &mut |_| true);

@@ -104,3 +104,34 @@ fn near_field_split_is_reproducible_for_any_thread_count() {
     };
     assert_eq!(go(1).to_bits(), go(2).to_bits());
 }
+
+#[test]
+fn automatic_near_field_splits_only_where_a_surface_is_close() {
+    // Auto radius: a tenth of the distance to the light. The point 1 mm
+    // above the floor gets the split (and the exact answer); the point in
+    // the middle of the room gets exactly the plain estimate.
+    let s = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).unwrap();
+    let case = sobolev_case(&s, 2, 1.0);
+    let pts = [
+        (DVec3::new(0.0, 0.0, 1e-3), -DVec3::Z),
+        (DVec3::new(0.3, 0.0, 0.5), DVec3::Z),
+    ];
+    let rec = Receivers::new(&case.scene, &pts).unwrap();
+    let auto = rec.clone().with_auto_near_field(&case.scene, 16);
+    let (paths, radii) = auto.near_field();
+    assert_eq!(paths, 16);
+    assert!(
+        (radii[0] - 0.1 * 0.499).abs() < 1e-12 && radii[1] == 0.0,
+        "{radii:?}"
+    );
+    let cfg = chains_cfg(100_000, 8, 0);
+    let plain = run(&case.scene, &rec, &cfg, &mut |_| true);
+    let split = run(&case.scene, &auto, &cfg, &mut |_| true);
+    let exact = from_floor(0.5, 1e-3, |x| s.illuminance(1, x).e);
+    let w = &split.tallies.indirect[0];
+    assert!(((w.mean() - exact) / w.std_error()).abs() < sidak_bound(1e-3, 1, None));
+    assert_eq!(
+        plain.tallies.indirect[1].mean().to_bits(),
+        split.tallies.indirect[1].mean().to_bits()
+    );
+}

@@ -45,11 +45,13 @@ pub struct RunArgs {
     /// Russian-roulette weight, relative to the starting weight, in (0, 1].
     #[arg(long = "rr-weight", default_value_t = ChainParams::default().rr_weight)]
     pub rr_weight: f64,
-    /// Near/far split against the singular kernel [m]: collisions closer than
-    /// this to a point leave their share to backward paths from the point
-    /// (unbiased; keeps the variance finite next to walls and in corners). 0: off.
-    #[arg(long = "near-radius", default_value_t = 0.0)]
-    pub near_radius: f64,
+    /// Near/far split against the singular kernel: a radius [m], `0` (off,
+    /// the default) or `auto` (where a point has a surface closer than a
+    /// tenth of its distance to the nearest light, with that radius). Collisions
+    /// closer than the radius leave their share to backward paths from the
+    /// point (unbiased; keeps the variance finite next to walls and in corners).
+    #[arg(long = "near-radius", default_value = "0")]
+    pub near_radius: String,
     /// Backward paths per point and batch for the near part (with `--near-radius`).
     #[arg(long = "near-paths", default_value_t = 16)]
     pub near_paths: u32,
@@ -92,11 +94,19 @@ impl RunArgs {
             "--rr-weight must lie in (0, 1], got {}",
             self.rr_weight
         );
-        anyhow::ensure!(
-            self.near_radius.is_finite() && self.near_radius >= 0.0,
-            "--near-radius must be a finite length >= 0 [m], got {}",
-            self.near_radius
-        );
+        let (near_radius, near_auto) = match self.near_radius.trim() {
+            "auto" => (0.0, true),
+            s => {
+                let r: f64 = s.parse().map_err(|_| {
+                    anyhow::anyhow!("--near-radius must be `auto` or a length >= 0 [m], got `{s}`")
+                })?;
+                anyhow::ensure!(
+                    r.is_finite() && r >= 0.0,
+                    "--near-radius must be `auto` or a finite length >= 0 [m], got {r}"
+                );
+                (r, false)
+            }
+        };
         anyhow::ensure!(
             self.batch_size.is_none_or(|b| b > 0 && b <= 1 << 32),
             "--batch-size must lie in [1, 2^32] (chains of a batch index one Sobol' net)"
@@ -112,7 +122,8 @@ impl RunArgs {
             },
             batch_size: self.batch_size,
             stratify: !self.no_stratify,
-            near: (self.near_radius, self.near_paths),
+            near: (near_radius, self.near_paths),
+            near_auto,
         })
     }
 }

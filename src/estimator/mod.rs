@@ -197,7 +197,10 @@ struct ReceiverList {
 pub struct Receivers {
     /// Near-field radius [m] and backward paths per receiver and batch
     /// (radius 0: off).
-    near: (f64, u32),
+    /// Backward paths per receiver and batch for the near part (0: off) and
+    /// each receiver's near-field radius [m] (0: plain local estimate).
+    near_paths: u32,
+    near_r: Vec<f64>,
     all: Vec<Receiver>,
     frames: Vec<Frame>,
     lists: Vec<ReceiverList>,
@@ -317,7 +320,8 @@ impl Receivers {
             lists.push(list);
         }
         Ok(Self {
-            near: (0.0, 0),
+            near_paths: 0,
+            near_r: vec![0.0; receivers.len()],
             all: receivers.to_vec(),
             frames,
             lists,
@@ -352,19 +356,67 @@ impl Receivers {
     /// adds, per receiver, `paths` backward paths whose first surface lies
     /// within `radius`. Both parts are unbiased; the far kernel is bounded by
     /// `1 / radius^2`, so the variance stays finite next to walls and in corners.
-    pub fn with_near_field(mut self, radius: f64, paths: u32) -> Self {
-        let on = radius > 0.0 && paths > 0;
-        self.near = if on { (radius, paths) } else { (0.0, 0) };
-        let e2 = if on { radius * radius } else { 0.0 };
+    pub fn with_near_field(self, radius: f64, paths: u32) -> Self {
+        let r = vec![radius; self.all.len()];
+        self.with_near_radii(r, paths)
+    }
+
+    /// The split with radius `radii[j]` [m] at receiver `j` (0: plain).
+    fn with_near_radii(mut self, radii: Vec<f64>, paths: u32) -> Self {
+        let on = paths > 0 && radii.iter().any(|&r| r > 0.0);
+        self.near_paths = if on { paths } else { 0 };
+        self.near_r = if on { radii } else { vec![0.0; self.all.len()] };
         for list in &mut self.lists {
-            list.eps2.iter_mut().for_each(|e| *e = e2);
+            for (e, &j) in list.eps2.iter_mut().zip(&list.idx) {
+                *e = self.near_r[j as usize].powi(2);
+            }
         }
         self
     }
 
-    /// Near-field radius [m] and paths per receiver and batch; `(0, 0)` when off.
-    pub fn near_field(&self) -> (f64, u32) {
-        self.near
+    /// The split where it is needed, with a radius per receiver: a tenth of
+    /// the distance to the nearest light, `R_j = 0.1 min_l |p_j - x_l|` [m],
+    /// used only where 64 probe rays over the receiver's hemisphere (a
+    /// Fibonacci spiral, cosine-distributed) meet a surface closer than
+    /// `R_j`; elsewhere the plain local estimate. Either way every estimate
+    /// is unbiased (a probe that misses a small nearby object only leaves
+    /// that receiver on the plain estimate); a receiver with no surface
+    /// within `R_j` gets exactly the plain estimate.
+    pub fn with_auto_near_field(self, scene: &Scene, paths: u32) -> Self {
+        const PROBES: usize = 64;
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        let radii = self
+            .all
+            .iter()
+            .zip(&self.frames)
+            .map(|(rec, frame)| {
+                let r = 0.1
+                    * scene
+                        .lights
+                        .iter()
+                        .map(|l| (l.position() - rec.p).length())
+                        .fold(f64::INFINITY, f64::min);
+                if !r.is_finite() || r <= 0.0 {
+                    return 0.0;
+                }
+                let near = (0..PROBES).any(|k| {
+                    // Cosine-distributed: sin^2(theta) uniform in (0, 1).
+                    let s2 = (k as f64 + 0.5) / PROBES as f64;
+                    let (st, ct) = (s2.sqrt(), (1.0 - s2).sqrt());
+                    let (sp, cp) = (golden * k as f64).sin_cos();
+                    let d = frame.to_world(DVec3::new(st * cp, st * sp, ct));
+                    scene.first_hit_from(rec.p, d).is_some_and(|h| h.t < r)
+                });
+                if near { r } else { 0.0 }
+            })
+            .collect();
+        self.with_near_radii(radii, paths)
+    }
+
+    /// Paths per receiver and batch of the near part (0: off) and each
+    /// receiver's near-field radius [m] (0: plain local estimate there).
+    pub fn near_field(&self) -> (u32, &[f64]) {
+        (self.near_paths, &self.near_r)
     }
 
     /// Number of receivers a collision on surface `s` scores into.
