@@ -198,7 +198,7 @@ pub fn summary(r: &RunResult) -> String {
         let list: Vec<String> = counts.iter().map(|(k, v)| format!("{k}: {v}")).collect();
         format!(
             "statistical checks FAILED for some receivers ({}); see the _flag column \
-             (points close to a lit surface: try --near-radius)",
+             (points close to a lit surface: try --near-radius auto)",
             list.join(", ")
         )
     };
