@@ -30,7 +30,6 @@ const BACKWARD_KEY: u64 = 0x6261_636b_7761_7264; // "backward"
 struct BackwardWork<'a> {
     scene: &'a Scene,
     receivers: &'a Receivers,
-    frames: Vec<Frame>,
 }
 
 /// Run the backward estimator on `receivers` (same statistics, stopping
@@ -41,20 +40,7 @@ pub fn run(
     cfg: &RunConfig,
     observe: &mut dyn FnMut(&Progress) -> bool,
 ) -> RunResult {
-    let frames = receivers
-        .receivers()
-        .iter()
-        .map(|r| Frame::from_normal(r.n))
-        .collect();
-    drive(
-        &BackwardWork {
-            scene,
-            receivers,
-            frames,
-        },
-        cfg,
-        observe,
-    )
+    drive(&BackwardWork { scene, receivers }, cfg, observe)
 }
 
 impl BatchWork for BackwardWork<'_> {
@@ -87,7 +73,7 @@ impl BatchWork for BackwardWork<'_> {
                 vertices += trace(
                     self.scene,
                     rec,
-                    &self.frames[j],
+                    &self.receivers.frames()[j],
                     &cfg,
                     &mut rng,
                     f64::INFINITY,
@@ -122,7 +108,7 @@ impl BatchWork for BackwardWork<'_> {
                 vertices += trace(
                     self.scene,
                     rec,
-                    &self.frames[j],
+                    &self.receivers.frames()[j],
                     cfg,
                     &mut rng,
                     f64::INFINITY,

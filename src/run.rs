@@ -240,18 +240,6 @@ impl RunResult {
     }
 }
 
-/// Chains per batch when not given: about a million point scores per batch,
-/// a power of two between 16 and 65536, and at least `MIN_BATCHES` batches for
-/// a `--chains` run. Depends only on the inputs, never on the machine.
-pub fn default_batch_size(n_points: usize, chains: Option<u64>) -> u64 {
-    let target = (1u64 << 20) / (n_points as u64 + 16);
-    let mut bs = target.clamp(16, 1 << 16).next_power_of_two();
-    if let Some(n) = chains {
-        bs = bs.min(n.div_ceil(MIN_BATCHES)).max(1);
-    }
-    bs
-}
-
 /// The sums of one batch, produced by a [`BatchWork`].
 pub struct Batch {
     /// Batch index.
@@ -316,11 +304,13 @@ impl BatchWork for LocalWork<'_> {
     fn scratch_len(&self, buckets: usize) -> usize {
         buckets * self.receivers.accumulator_len()
     }
-    /// As [`default_batch_size`], but with the cost of a chain measured by a
-    /// fixed pilot of 256 chains (its own streams, so the batch size still
-    /// depends only on the scene and the receivers, never on the thread
-    /// count or the seed): long chains (reflectances near 1) get smaller
-    /// batches, so a batch stays about 2^20 scores.
+    /// Chains per batch when not given: about 2^20 receiver scores per
+    /// batch (weighted by [`Scene::score_cost`]), a power of two between 256
+    /// and 65536, and at least `MIN_BATCHES` batches for a `--chains` run.
+    /// The cost of a chain is measured by a fixed pilot of 256 chains (its
+    /// own streams, so the batch size depends only on the scene and the
+    /// receivers, never on the machine, the thread count or the seed): long
+    /// chains (reflectances near 1) get smaller batches.
     fn default_batch_size(&self, chains: Option<u64>) -> u64 {
         const PILOT: u64 = 256;
         const PILOT_KEY: u64 = 0x0050_494c_4f54; // "PILOT"
@@ -328,10 +318,10 @@ impl BatchWork for LocalWork<'_> {
         let mut cost = 0u64;
         if self.scene.total_power() > 0.0 {
             let params = crate::chain::ChainParams::default();
+            let per_score = self.scene.score_cost();
             for c in 0..PILOT {
                 let mut rng = Philox4x32::new(PILOT_KEY, c);
                 let u = [rng.next_2d(), rng.next_2d()];
-                let per_score = self.scene.score_cost();
                 crate::chain::trace(self.scene, &mut rng, &params, u, |col| {
                     cost += 16 + per_score * self.receivers.list_len(col.surface) as u64;
                 });
@@ -600,11 +590,11 @@ fn run_batch(
             if radius <= 0.0 {
                 continue;
             }
-            let frame = crate::sampling::warp::Frame::from_normal(rec.n);
+            let frame = &receivers.frames()[j];
             for s in 0..u64::from(paths) {
                 let stream = (b * u64::from(paths) + s) * n as u64 + j as u64;
                 let mut rng = Philox4x32::new(cfg.seed ^ NEAR_KEY, stream);
-                crate::backward::trace(scene, rec, &frame, cfg, &mut rng, radius, |order, v| {
+                crate::backward::trace(scene, rec, frame, cfg, &mut rng, radius, |order, v| {
                     let k = if k_max == 0 {
                         0
                     } else {

@@ -3,7 +3,7 @@
 //! scene, receivers and exact values from [`crate::reference::closed_form`];
 //! `lumest validate <case>` runs it with error against run time.
 
-use super::validate::{convergence, loglog_slope, print_table, write_report};
+use super::validate::{convergence, print_table, report_convergence, write_report};
 use crate::chain::{ChainEnd, ChainParams, trace_ex};
 use crate::estimator::{Receiver, Receivers};
 use crate::geometry::sh::{ShCoeff, ShSurface};
@@ -273,18 +273,11 @@ pub fn run_case(name: &str, title: &str, case: &Case, a: &CaseArgs) -> anyhow::R
     let range = 0..nz;
     let groups = std::slice::from_ref(&range);
     let (result, tables) = convergence(&case.scene, &receivers, &case.exact, groups, &cfg, a.quiet);
-    let rows = &tables[0];
-    println!("{title}:");
-    print_table(rows);
-    let slope = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_r)).collect::<Vec<_>>());
-    let slope_err = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_err)).collect::<Vec<_>>());
-    println!(
-        "log-log slope vs time: estimated R {slope:.3}, actual error {slope_err:.3} (ideal -0.5)"
-    );
-    write_report(
+    report_convergence(
         &a.report,
         name,
-        rows,
+        &tables[0],
+        title,
         &format!("{title}: relative error against run time"),
     )?;
     let headers: Vec<String> = [

@@ -339,6 +339,26 @@ pub(crate) fn write_report(
     Ok(())
 }
 
+/// Print a checkpoint table under `heading` with the log-log slopes of the
+/// estimated and actual errors against time, and write it with its plot
+/// to `dir` (see [`write_report`]).
+pub(crate) fn report_convergence(
+    dir: &Path,
+    name: &str,
+    rows: &[Checkpoint],
+    heading: &str,
+    plot_title: &str,
+) -> anyhow::Result<()> {
+    println!("{heading}:");
+    print_table(rows);
+    let slope = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_r)).collect::<Vec<_>>());
+    let slope_err = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_err)).collect::<Vec<_>>());
+    println!(
+        "log-log slope vs time: estimated R {slope:.3}, actual error {slope_err:.3} (ideal -0.5)"
+    );
+    write_report(dir, name, rows, plot_title)
+}
+
 /// Print a checkpoint table.
 pub fn print_table(rows: &[Checkpoint]) {
     println!(
@@ -458,17 +478,11 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
         if range.is_empty() {
             continue;
         }
-        println!("{what}:");
-        print_table(rows);
-        let slope = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_r)).collect::<Vec<_>>());
-        let slope_err = loglog_slope(&rows.iter().map(|r| (r.time, r.rms_err)).collect::<Vec<_>>());
-        println!(
-            "log-log slope vs time: estimated R {slope:.3}, actual error {slope_err:.3} (ideal -0.5)"
-        );
-        write_report(
+        report_convergence(
             &a.case.report,
             name,
             rows,
+            what,
             &format!("Sobolev problem: relative error of {what} against run time"),
         )?;
     }

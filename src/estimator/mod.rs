@@ -340,6 +340,11 @@ impl Receivers {
         self.all.is_empty()
     }
 
+    /// Local frames of the receivers' normals, in input order.
+    pub fn frames(&self) -> &[Frame] {
+        &self.frames
+    }
+
     /// The receivers, in input order.
     pub fn receivers(&self) -> &[Receiver] {
         &self.all

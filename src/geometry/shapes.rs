@@ -69,26 +69,19 @@ impl Rect {
     pub fn area(&self) -> f64 {
         self.e1.cross(self.e2).length()
     }
+}
 
-    /// Whether a point of the supporting plane lies in the (slightly extended) parallelogram.
+impl Flat for Rect {
+    fn plane(&self) -> &Plane {
+        &self.plane
+    }
+
+    /// `u, v` in `[0, 1]`, extended by [`EDGE_REL`].
     #[inline]
-    pub fn contains_planar(&self, p: DVec3) -> bool {
+    fn contains_planar(&self, p: DVec3) -> bool {
         let q = p - self.o;
         let (u, v) = (self.b1.dot(q), self.b2.dot(q));
         (-EDGE_REL..=1.0 + EDGE_REL).contains(&u) && (-EDGE_REL..=1.0 + EDGE_REL).contains(&v)
-    }
-
-    /// Ray parameter of the hit in `(0, t_max)`.
-    #[inline]
-    pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<f64> {
-        let t = self.plane.intersect(ray, t_max)?;
-        self.contains_planar(ray.o + ray.d * t).then_some(t)
-    }
-
-    /// Whether the open segment `a b` crosses the parallelogram.
-    #[inline]
-    pub fn crosses(&self, a: DVec3, b: DVec3) -> bool {
-        flat_crosses(&self.plane, a, b, |p| self.contains_planar(p))
     }
 }
 
@@ -109,38 +102,48 @@ impl Disc {
             r,
         }
     }
+}
 
-    /// Whether a point of the supporting plane lies in the (slightly extended) disc.
+impl Flat for Disc {
+    fn plane(&self) -> &Plane {
+        &self.plane
+    }
+
+    /// Within the radius, extended by [`EDGE_REL`].
     #[inline]
-    pub fn contains_planar(&self, p: DVec3) -> bool {
+    fn contains_planar(&self, p: DVec3) -> bool {
         (p - self.plane.p).length_squared() <= self.r * self.r * (1.0 + 2.0 * EDGE_REL)
-    }
-
-    /// Ray parameter of the hit in `(0, t_max)`.
-    #[inline]
-    pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<f64> {
-        let t = self.plane.intersect(ray, t_max)?;
-        self.contains_planar(ray.o + ray.d * t).then_some(t)
-    }
-
-    /// Whether the open segment `a b` crosses the disc.
-    #[inline]
-    pub fn crosses(&self, a: DVec3, b: DVec3) -> bool {
-        flat_crosses(&self.plane, a, b, |p| self.contains_planar(p))
     }
 }
 
-/// Segment crossing for a flat shape: the end points lie strictly on opposite
-/// sides of its plane and the crossing point is inside the shape.
-#[inline]
-fn flat_crosses(plane: &Plane, a: DVec3, b: DVec3, inside: impl Fn(DVec3) -> bool) -> bool {
-    let (sa, sb) = (plane.side(a), plane.side(b));
-    if sa * sb >= 0 {
-        return false;
+/// A flat shape: a region of its supporting plane. Intersection and segment
+/// crossing follow from the plane and the region test.
+pub trait Flat {
+    /// The supporting plane (normal: the shape's front).
+    fn plane(&self) -> &Plane;
+
+    /// Whether a point of the supporting plane lies in the shape.
+    fn contains_planar(&self, p: DVec3) -> bool;
+
+    /// Ray parameter of the hit in `(0, t_max)`.
+    #[inline]
+    fn intersect(&self, ray: &Ray, t_max: f64) -> Option<f64> {
+        let t = self.plane().intersect(ray, t_max)?;
+        self.contains_planar(ray.o + ray.d * t).then_some(t)
     }
-    let (da, db) = (plane.signed_distance(a), plane.signed_distance(b));
-    let t = da / (da - db);
-    inside(a + (b - a) * t)
+
+    /// Whether the open segment `a b` crosses the shape: the end points lie
+    /// strictly on opposite sides of its plane and the crossing point is
+    /// inside the shape.
+    #[inline]
+    fn crosses(&self, a: DVec3, b: DVec3) -> bool {
+        let plane = self.plane();
+        if plane.side(a) * plane.side(b) >= 0 {
+            return false;
+        }
+        let (da, db) = (plane.signed_distance(a), plane.signed_distance(b));
+        self.contains_planar(a + (b - a) * (da / (da - db)))
+    }
 }
 
 /// Where a point lies relative to a closed convex surface.

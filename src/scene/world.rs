@@ -15,7 +15,7 @@
 
 use crate::geometry::mesh::Mesh;
 use crate::geometry::sh::ShSurface;
-use crate::geometry::shapes::{AaBox, Disc, Inside, Rect, Sphere};
+use crate::geometry::shapes::{AaBox, Disc, Flat, Inside, Rect, Sphere};
 use crate::geometry::{Hit, Plane, Ray, SideMask};
 use crate::light::Light;
 use crate::material::Material;
