@@ -48,6 +48,12 @@ pub struct ChainParams {
     pub rr_weight: f64,
     /// Stop after this many collisions (biased truncation, for studies only).
     pub max_order: Option<u32>,
+    /// Backward paths (the backward estimator and the near part of the
+    /// near/far split) add, at each vertex, a light-guided connection
+    /// combined with the BRDF-sampled next vertex by multiple importance
+    /// sampling ([`crate::backward`]); `false` leaves plain next-event
+    /// estimation. Light-tracing chains do not use it.
+    pub guide: bool,
 }
 
 impl Default for ChainParams {
@@ -55,6 +61,7 @@ impl Default for ChainParams {
         Self {
             rr_weight: 0.1,
             max_order: None,
+            guide: true,
         }
     }
 }

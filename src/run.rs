@@ -117,6 +117,11 @@ pub struct Tallies {
     pub orders: Vec<Vec<Welford>>,
     /// `R^2 B` of each point's total at batch counts 32, 64, 128, ... (for the FOM check).
     pub snapshots: Vec<(u64, Vec<f64>)>,
+    /// Per point: collisions that scored into it from its watched
+    /// neighbourhood, over the run (the `sparse` check).
+    pub near_hits: Vec<u64>,
+    /// Per point: whether the `sparse` check applies ([`Receivers::watched`]).
+    pub watched: Vec<bool>,
 }
 
 impl Tallies {
@@ -126,6 +131,8 @@ impl Tallies {
             indirect: vec![Welford::new(); n],
             orders: vec![vec![Welford::new(); n]; buckets],
             snapshots: Vec::new(),
+            near_hits: vec![0; n],
+            watched: vec![false; n],
         }
     }
 
@@ -150,7 +157,15 @@ impl Tallies {
             .rev()
             .find(|(n, _)| 2 * n <= b)
             .map(|(_, v)| v[j]);
-        Diagnostics::of(&self.indirect[j], direct, half)
+        let mut d = Diagnostics::of(&self.indirect[j], direct, half);
+        d.near_hits = self
+            .watched
+            .get(j)
+            .copied()
+            .unwrap_or(false)
+            .then(|| self.near_hits[j]);
+        d.indirect_zero = self.indirect[j].mean() == 0.0;
+        d
     }
 
     /// Number of batches folded in.
@@ -252,6 +267,9 @@ pub struct Batch {
     pub collisions: u64,
     /// Receiver scores evaluated in the batch.
     pub scores: u64,
+    /// Per point: collisions that scored into it from within its watched
+    /// neighbourhood ([`Receivers::view_radius`]); empty for the backward estimator.
+    pub near_hits: Vec<u64>,
 }
 
 /// A source of independent batches: the local estimator (chains from the
@@ -275,6 +293,10 @@ pub trait BatchWork: Sync {
     }
     /// Length of the per-thread scratch buffer for `buckets` buckets.
     fn scratch_len(&self, buckets: usize) -> usize;
+    /// Per point: whether the `sparse` check applies (local estimates only).
+    fn watched(&self) -> Vec<bool> {
+        vec![false; self.receivers().len()]
+    }
     /// Default batch size for `n` receivers and an optional chain count.
     fn default_batch_size(&self, chains: Option<u64>) -> u64;
     /// Run batch `b` of `bs` chains; `sums[k * n + j]` over the batch for bucket `k`, receiver `j`.
@@ -302,7 +324,13 @@ impl BatchWork for LocalWork<'_> {
         self.receivers
     }
     fn scratch_len(&self, buckets: usize) -> usize {
-        buckets * self.receivers.accumulator_len()
+        // One accumulator per bucket and one for the watched-neighbourhood counts.
+        (buckets + 1) * self.receivers.accumulator_len()
+    }
+    fn watched(&self) -> Vec<bool> {
+        (0..self.receivers.len())
+            .map(|j| self.receivers.watched(j))
+            .collect()
     }
     /// Chains per batch when not given: about 2^20 receiver scores per
     /// batch (weighted by [`Scene::score_cost`]), a power of two between 256
@@ -432,6 +460,7 @@ pub fn drive(
         cfg.threads
     };
     let mut tallies = Tallies::new(n, cfg.orders);
+    tallies.watched = work.watched();
     let direct = work.direct().to_vec();
     let mut result = RunResult {
         direct: Vec::new(),
@@ -536,6 +565,11 @@ pub fn drive(
     result
 }
 
+/// The chains whose index is a multiple of this count, for the `sparse`
+/// check, also count the collisions they score from each point's watched
+/// neighbourhood (counting in every chain cost a quarter of the scoring speed).
+pub const SPARSE_STRIDE: u64 = 8;
+
 fn run_batch(
     scene: &Scene,
     receivers: &Receivers,
@@ -571,7 +605,10 @@ fn run_batch(
             } else {
                 (col.order.min(k_max + 1) - 1) as usize
             };
-            scores += receivers.score(scene, col, &mut acc[k * len..(k + 1) * len]) as u64;
+            let (acc, near) = acc.split_at_mut(buckets * len);
+            // Every `SPARSE_STRIDE`-th chain also counts where it scores from.
+            let near = (c % SPARSE_STRIDE == 0).then_some(near);
+            scores += receivers.score(scene, col, &mut acc[k * len..(k + 1) * len], near) as u64;
         }));
     }
     let n = receivers.len();
@@ -579,6 +616,8 @@ fn run_batch(
     for k in 0..buckets {
         receivers.reduce(&acc[k * len..(k + 1) * len], &mut sums[k * n..(k + 1) * n]);
     }
+    let mut near_hits = vec![0.0; n];
+    receivers.reduce(&acc[buckets * len..], &mut near_hits);
     // Near part of the near/far split: backward paths whose first surface
     // lies within the radius, weighted to a per-chain sum over the batch.
     let (paths, radii) = receivers.near_field();
@@ -611,6 +650,7 @@ fn run_batch(
         sums,
         collisions,
         scores,
+        near_hits: near_hits.into_iter().map(|c| c as u64).collect(),
     }
 }
 
@@ -622,6 +662,9 @@ fn fold(tallies: &mut Tallies, b: &Batch, bs: u64, buckets: usize, n: usize, mea
     for j in 0..n {
         let total: f64 = (0..buckets).map(|k| means[k * n + j]).sum();
         tallies.indirect[j].push(total);
+    }
+    for (t, h) in tallies.near_hits.iter_mut().zip(&b.near_hits) {
+        *t += h;
     }
     for (k, bucket) in tallies.orders.iter_mut().enumerate() {
         for (j, w) in bucket.iter_mut().enumerate() {

@@ -19,6 +19,7 @@ fn analog_chain_length_is_geometric() {
         let cfg = RunConfig {
             chain: ChainParams {
                 rr_weight: 1.0,
+                guide: true,
                 max_order: None,
             },
             ..chains_cfg(200_000, 90 + k as u64, 0)
@@ -67,6 +68,7 @@ fn integrating_sphere_analog_chains_have_length_one_over_one_minus_rho() {
         let cfg = RunConfig {
             chain: ChainParams {
                 rr_weight: 1.0,
+                guide: true,
                 max_order: None,
             },
             ..chains_cfg(100_000, 40 + k as u64, 0)

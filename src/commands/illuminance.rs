@@ -192,13 +192,20 @@ pub fn summary(r: &RunResult) -> String {
         }
     }
     let flags = if counts.is_empty() {
-        "statistical checks: all receivers pass (R <= 0.1, VOV <= max(0.1, 6/B), stable FOM, no heavy tail)"
+        "statistical checks: all receivers pass (R <= 0.1, VOV <= max(0.1, 6/B), stable FOM, no heavy tail, not sparse)"
             .to_string()
     } else {
         let list: Vec<String> = counts.iter().map(|(k, v)| format!("{k}: {v}")).collect();
+        let sparse = if counts.contains_key("sparse") {
+            "; `sparse`: almost no light-tracing collisions land near those points, so \
+             their local estimate misses most of their light (far from the sources: try \
+             --near-radius with a few times the distance to the surfaces they see)"
+        } else {
+            ""
+        };
         format!(
             "statistical checks FAILED for some receivers ({}); see the _flag column \
-             (points close to a lit surface: try --near-radius auto)",
+             (points close to a lit surface: try --near-radius auto){sparse}",
             list.join(", ")
         )
     };

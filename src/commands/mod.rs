@@ -55,6 +55,11 @@ pub struct RunArgs {
     /// Backward paths per point and batch for the near part (with `--near-radius`).
     #[arg(long = "near-paths", default_value_t = 16)]
     pub near_paths: u32,
+    /// Backward paths (`--estimator backward`, the near part of the split):
+    /// plain next-event estimation only, without the light-guided connection
+    /// and its multiple importance sampling.
+    #[arg(long = "no-guide")]
+    pub no_guide: bool,
     /// Draw emitted directions independently instead of stratifying them over each batch.
     #[arg(long = "no-stratify")]
     pub no_stratify: bool,
@@ -119,6 +124,7 @@ impl RunArgs {
             chain: ChainParams {
                 rr_weight: self.rr_weight,
                 max_order: self.max_order,
+                guide: !self.no_guide,
             },
             batch_size: self.batch_size,
             stratify: !self.no_stratify,

@@ -179,6 +179,10 @@ struct ReceiverList {
     /// Squared near-field radius [m^2]: collisions closer than this score
     /// nothing here (the near part is estimated separately; 0 when off).
     eps2: Vec<f64>,
+    /// Squared radius [m^2] of the entry's watched neighbourhood (see
+    /// [`Receivers::view_radius`]): collisions that score from closer than
+    /// this are counted; 0 when not watched.
+    watch2: Vec<f64>,
     masks: Vec<SideMask>,
     /// Spheres and boxes each entry lies inside or on ([`Scene::inside_mask`]).
     inside: Vec<u64>,
@@ -201,6 +205,9 @@ pub struct Receivers {
     /// each receiver's near-field radius [m] (0: plain local estimate).
     near_paths: u32,
     near_r: Vec<f64>,
+    /// Radius [m] of each receiver's neighbourhood that holds almost all of
+    /// its view (0: none, or not an illuminance point).
+    view_r: Vec<f64>,
     all: Vec<Receiver>,
     frames: Vec<Frame>,
     lists: Vec<ReceiverList>,
@@ -305,6 +312,7 @@ impl Receivers {
                 list.nz.push(rec.n.z);
                 list.masks.push(masks[j]);
                 list.eps2.push(0.0);
+                list.watch2.push(0.0);
                 list.inside.push(inside[j]);
                 list.inside_all &= inside[j];
                 match rec.constant_weight() {
@@ -319,15 +327,50 @@ impl Receivers {
             offset += list.idx.len();
             lists.push(list);
         }
-        Ok(Self {
+        let view_r = receivers
+            .iter()
+            .zip(&frames)
+            .map(|(rec, frame)| match rec.response {
+                Response::Illuminance => view_radius(scene, rec.p, frame),
+                Response::Luminance { .. } => 0.0,
+            })
+            .collect();
+        let mut r = Self {
             near_paths: 0,
             near_r: vec![0.0; receivers.len()],
+            view_r,
             all: receivers.to_vec(),
             frames,
             lists,
             total_len: offset,
             direct,
-        })
+        };
+        r.refresh_watch();
+        Ok(r)
+    }
+
+    /// Set each entry's watched radius: the view radius where it exceeds
+    /// the near-field radius (collisions inside the near ball do not score
+    /// here, so the check covers the shell between the two), else none.
+    fn refresh_watch(&mut self) {
+        for list in &mut self.lists {
+            for (w, &j) in list.watch2.iter_mut().zip(&list.idx) {
+                let (v, r) = (self.view_r[j as usize], self.near_r[j as usize]);
+                *w = if v > r { v * v } else { 0.0 };
+            }
+        }
+    }
+
+    /// Whether receiver `j` has a watched neighbourhood (the `sparse` check
+    /// of [`crate::tally::Diagnostics`] applies to it).
+    pub fn watched(&self, j: usize) -> bool {
+        self.view_r[j] > self.near_r[j]
+    }
+
+    /// Radius [m] of receiver `j`'s watched neighbourhood (0: none); see
+    /// [`view_radius`].
+    pub fn view_radius(&self, j: usize) -> f64 {
+        self.view_r[j]
     }
 
     /// Number of receivers.
@@ -376,6 +419,7 @@ impl Receivers {
                 *e = self.near_r[j as usize].powi(2);
             }
         }
+        self.refresh_watch();
         self
     }
 
@@ -436,9 +480,18 @@ impl Receivers {
 
     /// Add the scores of collision `c` (local estimate [lx] or double local
     /// estimate [cd/m^2]) into `acc` (one bucket of length
-    /// [`Self::accumulator_len`]); returns the number of receiver scores evaluated.
+    /// [`Self::accumulator_len`]), and, when `near` (same layout) is given,
+    /// one into it for each receiver it scores into from within that
+    /// receiver's watched neighbourhood; returns the number of receiver
+    /// scores evaluated.
     #[inline]
-    pub fn score(&self, scene: &Scene, c: &Collision, acc: &mut [f64]) -> usize {
+    pub fn score(
+        &self,
+        scene: &Scene,
+        c: &Collision,
+        acc: &mut [f64],
+        near: Option<&mut [f64]>,
+    ) -> usize {
         let list = &self.lists[c.surface as usize];
         let len = list.idx.len();
         if len == 0 {
@@ -446,6 +499,11 @@ impl Receivers {
         }
         let material = &scene.surfaces[c.surface as usize].material;
         let acc = &mut acc[list.offset..list.offset + len];
+        let mut none = [];
+        let (near, counting) = match near {
+            Some(v) => (&mut v[list.offset..list.offset + len], true),
+            None => (&mut none[..], false),
+        };
         let (x, n) = (c.p, c.n);
         let xm = if list.blockers != 0 {
             scene.side_mask(x)
@@ -462,11 +520,16 @@ impl Receivers {
         let shapes_open = scene.planes_only() || scene.nothing_blocks(x_inside & list.inside_all);
         let nc = list.n_const;
         match material.constant_brdf() {
-            Some(f) if open && shapes_open => score_open(list, x, n, c.q * f, &mut acc[..nc]),
-            _ => self.score_general(scene, list, x_inside, 0..nc, material, c, xm, acc),
+            Some(f) if open && shapes_open && counting => {
+                score_open::<true>(list, x, n, c.q * f, &mut acc[..nc], &mut near[..nc])
+            }
+            Some(f) if open && shapes_open => {
+                score_open::<false>(list, x, n, c.q * f, &mut acc[..nc], &mut [])
+            }
+            _ => self.score_general(scene, list, x_inside, 0..nc, material, c, xm, acc, near),
         }
         if nc < len {
-            self.score_general(scene, list, x_inside, nc..len, material, c, xm, acc);
+            self.score_general(scene, list, x_inside, nc..len, material, c, xm, acc, near);
         }
         len
     }
@@ -484,6 +547,7 @@ impl Receivers {
         c: &Collision,
         xm: SideMask,
         acc: &mut [f64],
+        near: &mut [f64],
     ) {
         let frame = Frame::from_normal(c.n);
         let wi = frame.to_local(c.wi);
@@ -496,8 +560,9 @@ impl Receivers {
             let p = DVec3::new(list.px[k], list.py[k], list.pz[k]);
             let np = DVec3::new(list.nx[k], list.ny[k], list.nz[k]);
             let g = local_kernel(c.p, c.n, p, np);
+            let d2 = (p - c.p).length_squared();
             if g == 0.0
-                || (p - c.p).length_squared() < list.eps2[k]
+                || d2 < list.eps2[k]
                 || (!planes_only
                     && scene.blocked_by_shapes(c.p, from, p, x_inside & list.inside[k]))
             {
@@ -512,6 +577,9 @@ impl Receivers {
                 self.all[j].weight(&self.frames[j], -wo)
             };
             acc[k] += c.q * f * g * w;
+            if !near.is_empty() && d2 < list.watch2[k] {
+                near[k] += 1.0;
+            }
         }
     }
 
@@ -526,22 +594,79 @@ impl Receivers {
 }
 
 /// Score a collision at `x` (front normal `n`, weight times BRDF `qf`) into
-/// the constant-response entries of `list`, no plane in the way. Written over
+/// the constant-response entries of `list`, no plane in the way, and count
+/// it in `near` where it scores from within the watched radius. Written over
 /// zipped slices so the compiler drops bounds checks and vectorises.
 #[inline]
-fn score_open(list: &ReceiverList, x: DVec3, n: DVec3, qf: f64, acc: &mut [f64]) {
+fn score_open<const COUNT: bool>(
+    list: &ReceiverList,
+    x: DVec3,
+    n: DVec3,
+    qf: f64,
+    acc: &mut [f64],
+    near: &mut [f64],
+) {
+    if !COUNT {
+        let it = acc
+            .iter_mut()
+            .zip(list.px.iter().zip(&list.py).zip(&list.pz))
+            .zip(list.nx.iter().zip(&list.ny).zip(&list.nz))
+            .zip(list.w.iter().zip(&list.eps2));
+        for (((a, ((px, py), pz)), ((nx, ny), nz)), (w, e2)) in it {
+            let (dx, dy, dz) = (px - x.x, py - x.y, pz - x.z);
+            let cx = (n.x * dx + n.y * dy + n.z * dz).max(0.0);
+            let cp = (-(nx * dx + ny * dy + nz * dz)).max(0.0);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            // Inside the near-field ball the score is left to the near part.
+            let far = if d2 >= *e2 { 1.0 } else { 0.0 };
+            *a += qf * w * far * cx * cp / (d2 * d2);
+        }
+        return;
+    }
     let it = acc
         .iter_mut()
+        .zip(near.iter_mut())
         .zip(list.px.iter().zip(&list.py).zip(&list.pz))
         .zip(list.nx.iter().zip(&list.ny).zip(&list.nz))
-        .zip(list.w.iter().zip(&list.eps2));
-    for (((a, ((px, py), pz)), ((nx, ny), nz)), (w, e2)) in it {
+        .zip(list.w.iter().zip(list.eps2.iter().zip(&list.watch2)));
+    for ((((a, c), ((px, py), pz)), ((nx, ny), nz)), (w, (e2, w2))) in it {
         let (dx, dy, dz) = (px - x.x, py - x.y, pz - x.z);
         let cx = (n.x * dx + n.y * dy + n.z * dz).max(0.0);
         let cp = (-(nx * dx + ny * dy + nz * dz)).max(0.0);
         let d2 = dx * dx + dy * dy + dz * dz;
         // Inside the near-field ball the score is left to the near part.
         let far = if d2 >= *e2 { 1.0 } else { 0.0 };
-        *a += qf * w * far * cx * cp / (d2 * d2);
+        let k = far * cx * cp;
+        *a += qf * w * k / (d2 * d2);
+        *c += if d2 < *w2 && k > 0.0 { 1.0 } else { 0.0 };
+    }
+}
+
+/// Radius [m] of the neighbourhood holding almost all of what an
+/// illuminance point at `p` (normal frame `frame`) sees: ten times the
+/// median distance along 16 cosine-distributed probe rays (a Fibonacci
+/// spiral over its hemisphere), 0 when half of them or more escape. Facing
+/// a plane at distance `h` the median is `sqrt(2) h` and the disc of
+/// radius `14 h` holds 99.5 % of the cosine-weighted view
+/// (`a^2 / (a^2 + h^2)`). The local estimate of the light from there rests
+/// on the collisions that land there, which [`Receivers::score`] counts.
+pub fn view_radius(scene: &Scene, p: DVec3, frame: &Frame) -> f64 {
+    const PROBES: usize = 16;
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let mut t: Vec<f64> = (0..PROBES)
+        .map(|k| {
+            let s2 = (k as f64 + 0.5) / PROBES as f64;
+            let (st, ct) = (s2.sqrt(), (1.0 - s2).sqrt());
+            let (sp, cp) = (golden * k as f64).sin_cos();
+            let d = frame.to_world(DVec3::new(st * cp, st * sp, ct));
+            scene.first_hit_from(p, d).map_or(f64::INFINITY, |h| h.t)
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    let median = 0.5 * (t[PROBES / 2 - 1] + t[PROBES / 2]);
+    if median.is_finite() {
+        10.0 * median
+    } else {
+        0.0
     }
 }

@@ -30,6 +30,19 @@
 //! - `R > 0.1` is flagged: the estimate is not yet trustworthy.
 //! - fewer than 32 batches is flagged: too few for the error bar or the
 //!   checks to be trusted (a `--chains` run below 32 chains).
+//! - `sparse` (local estimates at illuminance points): fewer than
+//!   [`SPARSE_HITS`] = 10 collisions scored into the point from its *watched
+//!   neighbourhood*, the ball of radius `10 x` the median distance to the
+//!   surfaces it sees (16 probe rays; see
+//!   [`crate::estimator::view_radius`]; the shell outside the near-field
+//!   ball with `--near-radius`), while the reflected part is not 0. That
+//!   neighbourhood holds almost all of the point's view (99.5 % facing a
+//!   plane), so its light rests on fewer than 10 samples, and the batch
+//!   statistics above cannot see what never happened: in the far field of
+//!   two highly reflecting planes the plain estimate is 95-100 % low with a
+//!   small, steady error bar, which only this check catches. Like MCNP's
+//!   point-detector table of contributions by distance, it looks at where
+//!   the scores came from rather than at their spread.
 //!
 //! Higher moments are accumulated with the one-pass updates and merges of
 //! Pébay (2008), never raw power sums.
@@ -241,6 +254,12 @@ pub struct Diagnostics {
     pub deviation_bound: f64,
     /// Number of batches behind the estimate.
     pub batches: u64,
+    /// Collisions that scored from the point's watched neighbourhood over
+    /// the run, when the `sparse` check applies (local estimates at
+    /// illuminance points with a surface in view).
+    pub near_hits: Option<u64>,
+    /// Whether the reflected part is exactly 0 (nothing scored at all).
+    pub indirect_zero: bool,
 }
 
 impl Diagnostics {
@@ -257,11 +276,13 @@ impl Diagnostics {
             max_deviation: w.max_deviation(),
             deviation_bound: sidak_bound(1e-3, w.count().max(1) as usize, None),
             batches: w.count(),
+            near_hits: None,
+            indirect_zero: w.mean() == 0.0,
         }
     }
 
     /// The failed checks, as `R`, `VOV`, `FOM`, `tail`, `batches` (fewer than
-    /// 32, too few for the checks themselves), joined by `;`, or `ok`.
+    /// 32, too few for the checks themselves), `sparse`, joined by `;`, or `ok`.
     pub fn flag(&self) -> String {
         let mut f = Vec::new();
         if self.batches < 32 {
@@ -279,6 +300,9 @@ impl Diagnostics {
         if self.max_deviation > self.deviation_bound {
             f.push("tail");
         }
+        if !self.indirect_zero && self.near_hits.is_some_and(|h| h < SPARSE_HITS) {
+            f.push("sparse");
+        }
         if f.is_empty() {
             "ok".to_string()
         } else {
@@ -286,6 +310,10 @@ impl Diagnostics {
         }
     }
 }
+
+/// Fewest collisions that must score from a point's watched neighbourhood
+/// before its local estimate is trusted (the `sparse` check).
+pub const SPARSE_HITS: u64 = 10;
 
 /// Largest trusted variance of the variance for `batches` batch means:
 /// `max(0.1, 6 / batches)` (see the module docs).
