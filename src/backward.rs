@@ -16,6 +16,7 @@
 //! `(seed ^ BACKWARD_KEY, (b bs + s) n + j)`, so results do not depend on the
 //! thread count.
 
+use crate::chain::Collision;
 use crate::estimator::{Receiver, Receivers, Response};
 use crate::geometry::{Hit, Ray};
 use crate::light::Light;
@@ -80,6 +81,7 @@ impl BatchWork for BackwardWork<'_> {
                     &cfg,
                     &mut rng,
                     f64::INFINITY,
+                    None,
                     |_, _| {},
                 );
             }
@@ -115,6 +117,7 @@ impl BatchWork for BackwardWork<'_> {
                     cfg,
                     &mut rng,
                     f64::INFINITY,
+                    None,
                     |order, v| {
                         let k = if k_max == 0 {
                             0
@@ -137,12 +140,60 @@ impl BatchWork for BackwardWork<'_> {
     }
 }
 
+/// The light-tracing collisions of a batch, for the recursive near/far
+/// split of the near part (see [`trace`]): a uniform random subset of at
+/// most [`Pool::CAP`] of the batch's collisions (reservoir sampling on its
+/// own stream), the number it was drawn from, and the batch's chains.
+pub(crate) struct Pool {
+    items: Vec<Collision>,
+    seen: u64,
+    chains: u64,
+    rng: Philox4x32,
+}
+
+impl Pool {
+    /// Most collisions kept per batch.
+    pub(crate) const CAP: usize = 1 << 16;
+    /// Pool collisions joined to each path vertex.
+    pub(crate) const PICKS: u32 = 4;
+
+    /// An empty pool for a batch of `chains` chains, drawing its reservoir
+    /// choices from `rng`.
+    pub(crate) fn new(chains: u64, rng: Philox4x32) -> Self {
+        Self {
+            items: Vec::new(),
+            seen: 0,
+            chains,
+            rng,
+        }
+    }
+
+    /// Offer a collision (Vitter's algorithm R: every collision of the batch
+    /// ends up in the pool with the same probability).
+    pub(crate) fn offer(&mut self, c: &Collision) {
+        self.seen += 1;
+        if self.items.len() < Self::CAP {
+            self.items.push(*c);
+        } else {
+            let j = (self.rng.next_f64() * self.seen as f64) as u64;
+            if (j as usize) < Self::CAP {
+                self.items[j as usize] = *c;
+            }
+        }
+    }
+}
+
 /// Trace one path from receiver `rec`; `add(order, value)` receives each
 /// contribution. Returns the number of surface vertices.
 ///
 /// `first_max` [m]: a path whose first surface lies at or beyond this
 /// distance from the receiver contributes nothing (the near-field part of
 /// the local estimator's near/far split); `f64::INFINITY` for a full path.
+/// With `pool` (the batch's light-tracing collisions) the split recurses:
+/// at each vertex `x` light from surfaces within [`split_radius`] comes by
+/// the next segment (a longer one ends the path), and light from farther
+/// surfaces by [`Pool::PICKS`] pool collisions scored into `x` (see
+/// [`crate::estimator::Receivers::with_near_field`]).
 ///
 /// # Light-guided connections (`cfg.chain.guide`)
 ///
@@ -175,6 +226,7 @@ impl BatchWork for BackwardWork<'_> {
 /// reflecting planes, to the far field). Photon first hits are spread like
 /// the direct illuminance, much tighter than the halo, so the branches'
 /// weights were heavy-tailed: no gain at `r = 1e4` and half the speed.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn trace<F: FnMut(u32, f64)>(
     scene: &Scene,
     rec: &Receiver,
@@ -182,9 +234,16 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     cfg: &RunConfig,
     rng: &mut Philox4x32,
     first_max: f64,
+    pool: Option<&Pool>,
     mut add: F,
 ) -> u64 {
     let guide = cfg.chain.guide && !scene.lights.is_empty() && scene.total_power() > 0.0;
+    // With a pool, every segment is held within `first_max` (the recursive split).
+    let seg_max = if pool.is_some() {
+        first_max
+    } else {
+        f64::INFINITY
+    };
     if guide {
         // The receiver's transfer towards world direction `w`: its response
         // times `cos` (the integrand of `E = int L cos dw`, or of the
@@ -241,13 +300,25 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
             let w_a = if p_b > 0.0 { p_a / (p_a + p_b) } else { 1.0 };
             add(order, beta * nee * w_a);
         }
+        // The split radius at this vertex: light from closer surfaces comes
+        // by the path, from farther ones by the pool.
+        let seg_max = if pool.is_some() {
+            split_radius(scene, h.p, seg_max)
+        } else {
+            f64::INFINITY
+        };
+        if let Some(pool) = pool {
+            join_pool(
+                scene, pool, &h, m, &f_frame, wo, beta, order, seg_max, rng, &mut add,
+            );
+        }
         if cfg.chain.max_order.is_some_and(|k| order >= k) {
             break;
         }
         let from = Some((h.surface, h.prim));
         if guide {
             let b = beta;
-            let v = connect(scene, h.p, from, f64::INFINITY, rng, |w: DVec3| {
+            let v = connect(scene, h.p, from, seg_max, rng, |w: DVec3| {
                 let wl = f_frame.to_local(w);
                 if wl.z <= 0.0 {
                     (0.0, 0.0)
@@ -272,9 +343,81 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
             beta = rr;
         }
         d = f_frame.to_world(s.w);
-        hit = scene.intersect(&Ray { o: h.p, d }, from);
+        hit = scene
+            .intersect(&Ray { o: h.p, d }, from)
+            .filter(|h| h.t < seg_max);
     }
     vertices
+}
+
+/// Split radius [m] at a path vertex `x` of the near part:
+/// `max(r, d / 2)` with `r` the receiver's radius and `d` the distance from
+/// `x` to the nearest light. Light from surfaces within it comes by the
+/// path, from farther ones by the pool: every surface nearer the light than
+/// `d / 2` lies beyond it, so the light piled up around the sources (which
+/// the path would have to wander to) always comes from the pool, and the
+/// path carries what lies around itself. Measured in the far field of two
+/// planes (`rho1 rho2 = 0.999`, `r = 1e4`, `--near-radius auto`, 5 s):
+/// `d / 2` gives `E` within 0.4 % (z = 0.4); `d / 10` within 2 %; `d`
+/// leaves half of that halo to the path and reads 23 % low, `2 d` 44 %.
+fn split_radius(scene: &Scene, x: DVec3, r: f64) -> f64 {
+    let d = scene
+        .lights
+        .iter()
+        .map(|l| (l.position() - x).length())
+        .fold(f64::INFINITY, f64::min);
+    r.max(0.5 * d)
+}
+
+/// The far part at a path vertex `h` (material `m`, frame `f_frame`,
+/// direction `wo` to the previous vertex, path weight `beta`, `k`-th
+/// vertex): light-tracing collisions `y` at `|y - x| >= radius` score into
+/// it as into a receiver, `beta Q_y f_y cos_y cos_x / d^2 f_x`, through
+/// [`Pool::PICKS`] collisions drawn uniformly from the pool, each weighted by
+/// `seen / (PICKS chains)`; light reflected `o_y + k` times.
+#[allow(clippy::too_many_arguments)]
+fn join_pool<F: FnMut(u32, f64)>(
+    scene: &Scene,
+    pool: &Pool,
+    h: &Hit,
+    m: &Material,
+    f_frame: &Frame,
+    wo: DVec3,
+    beta: f64,
+    k: u32,
+    radius: f64,
+    rng: &mut Philox4x32,
+    add: &mut F,
+) {
+    let n = pool.items.len();
+    if n == 0 || beta <= 0.0 {
+        return;
+    }
+    let scale = pool.seen as f64 / (f64::from(Pool::PICKS) * pool.chains as f64);
+    let from = Some((h.surface, h.prim));
+    for _ in 0..Pool::PICKS {
+        let i = ((rng.next_f64() * n as f64) as usize).min(n - 1);
+        let y = &pool.items[i];
+        let v = h.p - y.p;
+        let d2 = v.length_squared();
+        if d2 < radius * radius {
+            continue;
+        }
+        let d = d2.sqrt();
+        let w = v / d; // from y towards x
+        let (cos_y, cos_x) = (y.n.dot(w), -h.n.dot(w));
+        if cos_y <= 0.0 || cos_x <= 0.0 || !scene.visible(h.p, from, y.p) {
+            continue;
+        }
+        let fy_frame = Frame::from_normal(y.n);
+        let my = &scene.surfaces[y.surface as usize].material;
+        let f_y = my.eval(fy_frame.to_local(y.wi), fy_frame.to_local(w));
+        let f_x = m.eval(f_frame.to_local(-w), wo);
+        let value = beta * scale * y.q * f_y * cos_y * cos_x / d2 * f_x;
+        if value > 0.0 {
+            add(y.order + k, value);
+        }
+    }
 }
 
 /// Next-event estimation at the surface vertex `h` (material `m`, frame

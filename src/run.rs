@@ -588,6 +588,12 @@ fn run_batch(
     let mut srng = Philox4x32::new(cfg.seed, (1 << 63) | b);
     let shift12 = DigitalShift([srng.next_u32(), srng.next_u32()]);
     let shift34 = DigitalShift([srng.next_u32(), srng.next_u32()]);
+    // The recursive near/far split joins the near part's path vertices to
+    // the batch's collisions (its own stream for the reservoir choices).
+    const POOL_KEY: u64 = 0x706f_6f6c; // "pool"
+    let (paths, radii) = receivers.near_field();
+    let mut pool = (paths > 0)
+        .then(|| crate::backward::Pool::new(bs, Philox4x32::new(cfg.seed ^ POOL_KEY, b)));
     for c in b * bs..(b + 1) * bs {
         let mut rng = Philox4x32::new(cfg.seed, c);
         let u_first = if cfg.stratify {
@@ -605,6 +611,9 @@ fn run_batch(
             } else {
                 (col.order.min(k_max + 1) - 1) as usize
             };
+            if let Some(p) = pool.as_mut() {
+                p.offer(col);
+            }
             let (acc, near) = acc.split_at_mut(buckets * len);
             // Every `SPARSE_STRIDE`-th chain also counts where it scores from.
             let near = (c % SPARSE_STRIDE == 0).then_some(near);
@@ -620,7 +629,6 @@ fn run_batch(
     receivers.reduce(&acc[buckets * len..], &mut near_hits);
     // Near part of the near/far split: backward paths whose first surface
     // lies within the radius, weighted to a per-chain sum over the batch.
-    let (paths, radii) = receivers.near_field();
     if paths > 0 {
         const NEAR_KEY: u64 = 0x6e65_6172_6669_656c; // "nearfiel"
         let w = bs as f64 / paths as f64;
@@ -633,14 +641,24 @@ fn run_batch(
             for s in 0..u64::from(paths) {
                 let stream = (b * u64::from(paths) + s) * n as u64 + j as u64;
                 let mut rng = Philox4x32::new(cfg.seed ^ NEAR_KEY, stream);
-                crate::backward::trace(scene, rec, frame, cfg, &mut rng, radius, |order, v| {
-                    let k = if k_max == 0 {
-                        0
-                    } else {
-                        (order.min(k_max + 1) - 1) as usize
-                    };
-                    sums[k * n + j] += v * w;
-                });
+                let pool = pool.as_ref();
+                crate::backward::trace(
+                    scene,
+                    rec,
+                    frame,
+                    cfg,
+                    &mut rng,
+                    radius,
+                    pool,
+                    |order, v| {
+                        let k = if k_max == 0 {
+                            0
+                        } else {
+                            (order.min(k_max + 1) - 1) as usize
+                        };
+                        sums[k * n + j] += v * w;
+                    },
+                );
             }
         }
     }

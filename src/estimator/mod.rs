@@ -399,11 +399,21 @@ impl Receivers {
         &self.direct
     }
 
-    /// The near/far split (see [`crate::run`] docs): collisions closer than
-    /// `radius` [m] to a receiver no longer score into it, and each batch
-    /// adds, per receiver, `paths` backward paths whose first surface lies
-    /// within `radius`. Both parts are unbiased; the far kernel is bounded by
-    /// `1 / radius^2`, so the variance stays finite next to walls and in corners.
+    /// The near/far split: collisions closer than `radius` [m] to a
+    /// receiver no longer score into it, and each batch adds, per receiver,
+    /// `paths` backward paths whose first surface lies within `radius`. Both
+    /// parts are unbiased; the far kernel is bounded by `1 / radius^2`, so
+    /// the variance stays finite next to walls and in corners.
+    ///
+    /// The split is recursive: at each vertex `x` of such a path the light
+    /// from surfaces within `max(radius, d_x / 2)` (`d_x`: distance from `x`
+    /// to the nearest light) comes by the path's next segment, and the light
+    /// from farther surfaces by the batch's light-tracing collisions, a few
+    /// drawn at random from the batch, scored into `x` as into a receiver
+    /// ([`crate::backward`]). A far point between highly reflecting
+    /// surfaces thus receives the light piled up around the sources, which
+    /// neither the chains (they never come near the point) nor the paths
+    /// (they never come near the sources) reach alone.
     pub fn with_near_field(self, radius: f64, paths: u32) -> Self {
         let r = vec![radius; self.all.len()];
         self.with_near_radii(r, paths)
