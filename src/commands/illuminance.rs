@@ -198,14 +198,16 @@ pub fn summary(r: &RunResult) -> String {
         let list: Vec<String> = counts.iter().map(|(k, v)| format!("{k}: {v}")).collect();
         let sparse = if counts.contains_key("sparse") {
             "; `sparse`: almost no light-tracing collisions land near those points, so \
-             their local estimate misses most of their light (far from the sources: try \
-             --near-radius with a few times the distance to the surfaces they see)"
+             their local estimate misses most of their light (far from the sources: use \
+             --near-radius auto, the default, or a radius of a few times the distance to the \
+             surfaces they see)"
         } else {
             ""
         };
         format!(
             "statistical checks FAILED for some receivers ({}); see the _flag column \
-             (points close to a lit surface: try --near-radius auto){sparse}",
+             (points close to a lit surface: --near-radius auto, the default, or a larger \
+             radius){sparse}",
             list.join(", ")
         )
     };

@@ -45,12 +45,14 @@ pub struct RunArgs {
     /// Russian-roulette weight, relative to the starting weight, in (0, 1].
     #[arg(long = "rr-weight", default_value_t = ChainParams::default().rr_weight)]
     pub rr_weight: f64,
-    /// Near/far split against the singular kernel: a radius [m], `0` (off,
-    /// the default) or `auto` (where a point has a surface closer than a
-    /// tenth of its distance to the nearest light, with that radius). Collisions
-    /// closer than the radius leave their share to backward paths from the
-    /// point (unbiased; keeps the variance finite next to walls and in corners).
-    #[arg(long = "near-radius", default_value = "0")]
+    /// Near/far split against the singular kernel and for far points: `auto`
+    /// (the default: where a point has a surface closer than a tenth of its
+    /// distance to the nearest light, with that radius), a radius [m] for
+    /// every point, or `0` (off: the plain local estimate). Collisions closer
+    /// than the radius leave their share to backward paths from the point
+    /// (unbiased; keeps the variance finite next to walls and in corners, and
+    /// brings the light piled up around the sources to far points).
+    #[arg(long = "near-radius", default_value = "auto")]
     pub near_radius: String,
     /// Backward paths per point and batch for the near part (with `--near-radius`).
     #[arg(long = "near-paths", default_value_t = 16)]
