@@ -308,8 +308,22 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
             f64::INFINITY
         };
         if let Some(pool) = pool {
+            let at = Vertex {
+                h: &h,
+                m,
+                frame: &f_frame,
+                wo,
+                beta,
+                k: order,
+            };
             join_pool(
-                scene, pool, &h, m, &f_frame, wo, beta, order, seg_max, rng, &mut add,
+                scene,
+                pool,
+                &at,
+                seg_max,
+                cfg.chain.max_order,
+                rng,
+                &mut add,
             );
         }
         if cfg.chain.max_order.is_some_and(|k| order >= k) {
@@ -370,26 +384,39 @@ fn split_radius(scene: &Scene, x: DVec3, r: f64) -> f64 {
     r.max(0.5 * d)
 }
 
-/// The far part at a path vertex `h` (material `m`, frame `f_frame`,
-/// direction `wo` to the previous vertex, path weight `beta`, `k`-th
-/// vertex): light-tracing collisions `y` at `|y - x| >= radius` score into
-/// it as into a receiver, `beta Q_y f_y cos_y cos_x / d^2 f_x`, through
-/// [`Pool::PICKS`] collisions drawn uniformly from the pool, each weighted by
-/// `seen / (PICKS chains)`; light reflected `o_y + k` times.
-#[allow(clippy::too_many_arguments)]
-fn join_pool<F: FnMut(u32, f64)>(
-    scene: &Scene,
-    pool: &Pool,
-    h: &Hit,
-    m: &Material,
-    f_frame: &Frame,
+/// A path vertex: the hit, its material and normal frame, the direction to
+/// the previous vertex (local), the path weight and its order `k`.
+struct Vertex<'a> {
+    h: &'a Hit,
+    m: &'a Material,
+    frame: &'a Frame,
     wo: DVec3,
     beta: f64,
     k: u32,
+}
+
+/// The far part at path vertex `v`: light-tracing collisions `y` at
+/// `|y - x| >= radius` score into it as into a receiver,
+/// `beta Q_y f_y cos_y cos_x / d^2 f_x`, through [`Pool::PICKS`] collisions
+/// drawn uniformly from the pool, each weighted by `seen / (PICKS chains)`;
+/// light reflected `o_y + k` times (dropped beyond `max_order`, if set).
+fn join_pool<F: FnMut(u32, f64)>(
+    scene: &Scene,
+    pool: &Pool,
+    v: &Vertex,
     radius: f64,
+    max_order: Option<u32>,
     rng: &mut Philox4x32,
     add: &mut F,
 ) {
+    let Vertex {
+        h,
+        m,
+        frame: f_frame,
+        wo,
+        beta,
+        k,
+    } = *v;
     let n = pool.items.len();
     if n == 0 || beta <= 0.0 {
         return;
@@ -399,6 +426,9 @@ fn join_pool<F: FnMut(u32, f64)>(
     for _ in 0..Pool::PICKS {
         let i = ((rng.next_f64() * n as f64) as usize).min(n - 1);
         let y = &pool.items[i];
+        if max_order.is_some_and(|m| y.order + k > m) {
+            continue;
+        }
         let v = h.p - y.p;
         let d2 = v.length_squared();
         if d2 < radius * radius {

@@ -137,3 +137,31 @@ fn recursive_near_part_recovers_the_far_field() {
         }
     }
 }
+
+#[test]
+fn recursive_near_part_keeps_reflection_orders_apart() {
+    // Every point split (R = 0.3 m): orders 1, 2, 3 and the rest come from
+    // the far part, the paths' NEE, their guided connections and their pool
+    // connections together; each order must still match its Neumann term.
+    let s = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).unwrap();
+    let case = sobolev_case(&s, 8, 2.0);
+    let rec = Receivers::new(&case.scene, &case.points).unwrap();
+    let cfg = RunConfig {
+        orders: 3,
+        near: (0.3, 8),
+        ..chains_cfg(65_536, 6, 0)
+    };
+    let r = run(&case.scene, &rec, &cfg, &mut |_| true);
+    assert!(rec.clone().with_near_field(0.3, 8).near_field().0 > 0);
+    let mut worst: f64 = 0.0;
+    for j in 0..case.points.len() {
+        for k in 0..3 {
+            let w = &r.tallies.orders[k][j];
+            let exact = s.order(case.plane[j], case.r[j], k as u32 + 1);
+            worst = worst.max(((w.mean() - exact) / w.std_error()).abs());
+        }
+    }
+    let bound = sidak_bound(1e-3, 3 * case.points.len(), Some(r.tallies.batches()));
+    eprintln!("orders with the recursive split: max |z| = {worst:.2} (bound {bound:.2})");
+    assert!(worst < bound, "max |z| = {worst} exceeds {bound}");
+}
