@@ -296,8 +296,14 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         let (nee, p_b) = next_event(scene, &h, m, &f_frame, wo, guide, rng);
         if nee > 0.0 {
             // Strategy A's share of the balance heuristic (1 without guiding).
-            let p_a = pdf * (-d.dot(h.n)) / (h.t * h.t);
-            let w_a = if p_b > 0.0 { p_a / (p_a + p_b) } else { 1.0 };
+            // p_A / (p_A + p_B) with p_A = pdf cos / t^2, written without the
+            // division by t^2 (no overflow for tiny t).
+            let pc = pdf * (-d.dot(h.n));
+            let w_a = if p_b > 0.0 {
+                pc / (pc + p_b * h.t * h.t)
+            } else {
+                1.0
+            };
             add(order, beta * nee * w_a);
         }
         // The split radius at this vertex: light from closer surfaces comes
@@ -556,6 +562,6 @@ fn connect(
     if nee <= 0.0 || p_b <= 0.0 {
         return 0.0;
     }
-    let g = cos_y / t2;
-    tr * g * nee / (pdf_a * g + p_b)
+    // T (cos_y / t^2) N / (pdf_a cos_y / t^2 + p_B), multiplied through by t^2.
+    tr * cos_y * nee / (pdf_a * cos_y + p_b * t2)
 }

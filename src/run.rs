@@ -67,7 +67,8 @@ pub struct RunConfig {
     /// Stratify emitted directions over each batch (randomised Sobol' net).
     pub stratify: bool,
     /// Near/far split: radius [m] (0: off) and backward paths per receiver
-    /// and batch for the near part (see [`Receivers::with_near_field`]).
+    /// for every 256 chains of a batch, for the near part (see
+    /// [`Receivers::with_near_field`]).
     pub near: (f64, u32),
     /// With `near.0 == 0`: choose the split per receiver where it is needed
     /// ([`Receivers::with_auto_near_field`]), with `near.1` paths.
@@ -631,6 +632,10 @@ fn run_batch(
     // lies within the radius, weighted to a per-chain sum over the batch.
     if paths > 0 {
         const NEAR_KEY: u64 = 0x6e65_6172_6669_656c; // "nearfiel"
+        // `paths` per point for every 256 chains of the batch, so that both
+        // parts shrink their error as the run grows (a `--chains` run has
+        // 32 batches of whatever size).
+        let paths = u64::from(paths) * bs.div_ceil(256);
         let w = bs as f64 / paths as f64;
         for (j, rec) in receivers.receivers().iter().enumerate() {
             let radius = radii[j];
@@ -638,8 +643,8 @@ fn run_batch(
                 continue;
             }
             let frame = &receivers.frames()[j];
-            for s in 0..u64::from(paths) {
-                let stream = (b * u64::from(paths) + s) * n as u64 + j as u64;
+            for s in 0..paths {
+                let stream = (b * paths + s) * n as u64 + j as u64;
                 let mut rng = Philox4x32::new(cfg.seed ^ NEAR_KEY, stream);
                 let pool = pool.as_ref();
                 crate::backward::trace(

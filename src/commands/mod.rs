@@ -54,7 +54,7 @@ pub struct RunArgs {
     /// brings the light piled up around the sources to far points).
     #[arg(long = "near-radius", default_value = "auto")]
     pub near_radius: String,
-    /// Backward paths per point and batch for the near part (with `--near-radius`).
+    /// Backward paths per point for every 256 chains, for the near part (with `--near-radius`).
     #[arg(long = "near-paths", default_value_t = 16)]
     pub near_paths: u32,
     /// Backward paths (`--estimator backward`, the near part of the split):

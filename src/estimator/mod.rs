@@ -646,9 +646,13 @@ fn score_open<const COUNT: bool>(
         let d2 = dx * dx + dy * dy + dz * dz;
         // Inside the near-field ball the score is left to the near part.
         let far = if d2 >= *e2 { 1.0 } else { 0.0 };
-        let k = far * cx * cp;
-        *a += qf * w * k / (d2 * d2);
-        *c += if d2 < *w2 && k > 0.0 { 1.0 } else { 0.0 };
+        // The same expression as the uncounted loop: counted chains round alike.
+        *a += qf * w * far * cx * cp / (d2 * d2);
+        *c += if d2 < *w2 && far * cx * cp > 0.0 {
+            1.0
+        } else {
+            0.0
+        };
     }
 }
 
