@@ -238,12 +238,6 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     mut add: F,
 ) -> u64 {
     let guide = cfg.chain.guide && !scene.lights.is_empty() && scene.total_power() > 0.0;
-    // With a pool, every segment is held within `first_max` (the recursive split).
-    let seg_max = if pool.is_some() {
-        first_max
-    } else {
-        f64::INFINITY
-    };
     if guide {
         // The receiver's transfer towards world direction `w`: its response
         // times `cos` (the integrand of `E = int L cos dw`, or of the
@@ -306,32 +300,24 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
             };
             add(order, beta * nee * w_a);
         }
-        // The split radius at this vertex: light from closer surfaces comes
-        // by the path, from farther ones by the pool.
-        let seg_max = if pool.is_some() {
-            split_radius(scene, h.p, seg_max)
-        } else {
-            f64::INFINITY
+        // With a pool, the split radius at this vertex: light from closer
+        // surfaces comes by the path, from farther ones by the pool.
+        let seg_max = match pool {
+            Some(pool) => {
+                let radius = split_radius(scene, h.p, first_max);
+                let at = Vertex {
+                    h: &h,
+                    m,
+                    frame: &f_frame,
+                    wo,
+                    beta,
+                    k: order,
+                };
+                join_pool(scene, pool, &at, radius, cfg.chain.max_order, rng, &mut add);
+                radius
+            }
+            None => f64::INFINITY,
         };
-        if let Some(pool) = pool {
-            let at = Vertex {
-                h: &h,
-                m,
-                frame: &f_frame,
-                wo,
-                beta,
-                k: order,
-            };
-            join_pool(
-                scene,
-                pool,
-                &at,
-                seg_max,
-                cfg.chain.max_order,
-                rng,
-                &mut add,
-            );
-        }
         if cfg.chain.max_order.is_some_and(|k| order >= k) {
             break;
         }

@@ -165,7 +165,6 @@ impl Tallies {
             .copied()
             .unwrap_or(false)
             .then(|| self.near_hits[j]);
-        d.indirect_zero = self.indirect[j].mean() == 0.0;
         d
     }
 

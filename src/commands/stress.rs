@@ -585,6 +585,24 @@ fn sobolev_points(
 /// 5 x 4 x 3 box with inward normals (walls 0.8, floor 0.4, ceiling 0.7), a
 /// solid desk (0.4) and one 300 cd point light; five points (floor, desk
 /// top, wall, ceiling, and the floor in the desk's shadow: reflected light only).
+/// Run [`plain_room`] scaled by `s` with `seed` (32768 chains in the quick subset).
+fn run_plain_room(
+    ctx: &Ctx,
+    s: f64,
+    seed: u64,
+) -> anyhow::Result<(RunResult, Vec<(String, Receiver)>)> {
+    let (scene, pts) = plain_room(s);
+    let rec: Vec<Receiver> = pts.iter().map(|p| p.1).collect();
+    let receivers = Receivers::from_receivers(&scene, &rec).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let res = run(
+        &scene,
+        &receivers,
+        &ctx.opts.config(seed, 32768),
+        &mut |_| true,
+    );
+    Ok((res, pts))
+}
+
 fn plain_room(s: f64) -> (Scene, Vec<(String, Receiver)>) {
     let wall = Material::Lambertian { rho: 0.8 };
     let faces = [
@@ -855,16 +873,7 @@ fn family_scaled(ctx: &mut Ctx) {
     let seed_ref = ctx.opts.seed.wrapping_add(1_000_003);
     let mut reference: Option<(RunResult, Vec<String>)> = None;
     ctx.guarded("scaled", "room s=1 (reference run)", |ctx| {
-        let (scene, pts) = plain_room(1.0);
-        let rec: Vec<Receiver> = pts.iter().map(|p| p.1).collect();
-        let receivers =
-            Receivers::from_receivers(&scene, &rec).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let res = run(
-            &scene,
-            &receivers,
-            &ctx.opts.config(seed_ref, 32768),
-            &mut |_| true,
-        );
+        let (res, pts) = run_plain_room(ctx, 1.0, seed_ref)?;
         reference = Some((res, pts.into_iter().map(|p| p.0).collect()));
         Ok(())
     });
@@ -874,16 +883,7 @@ fn family_scaled(ctx: &mut Ctx) {
     for sc in scales {
         let case = format!("room s={}", format_number(sc));
         ctx.guarded("scaled", &case, |ctx| {
-            let (scene, pts) = plain_room(sc);
-            let rec: Vec<Receiver> = pts.iter().map(|p| p.1).collect();
-            let receivers =
-                Receivers::from_receivers(&scene, &rec).map_err(|e| anyhow::anyhow!("{e}"))?;
-            let res = run(
-                &scene,
-                &receivers,
-                &ctx.opts.config(ctx.opts.seed, 32768),
-                &mut |_| true,
-            );
+            let (res, pts) = run_plain_room(ctx, sc, ctx.opts.seed)?;
             let k = 1.0 / (sc * sc);
             for (j, (label, _)) in pts.iter().enumerate() {
                 let w = &unscaled.tallies.indirect[j];

@@ -616,19 +616,16 @@ fn score_open<const COUNT: bool>(
     acc: &mut [f64],
     near: &mut [f64],
 ) {
+    // Both loops evaluate the same term, so counted chains round alike; the
+    // uncounted one stays free of the extra stream for vectorisation.
     if !COUNT {
         let it = acc
             .iter_mut()
             .zip(list.px.iter().zip(&list.py).zip(&list.pz))
             .zip(list.nx.iter().zip(&list.ny).zip(&list.nz))
             .zip(list.w.iter().zip(&list.eps2));
-        for (((a, ((px, py), pz)), ((nx, ny), nz)), (w, e2)) in it {
-            let (dx, dy, dz) = (px - x.x, py - x.y, pz - x.z);
-            let cx = (n.x * dx + n.y * dy + n.z * dz).max(0.0);
-            let cp = (-(nx * dx + ny * dy + nz * dz)).max(0.0);
-            let d2 = dx * dx + dy * dy + dz * dz;
-            // Inside the near-field ball the score is left to the near part.
-            let far = if d2 >= *e2 { 1.0 } else { 0.0 };
+        for (((a, p), nr), (w, e2)) in it {
+            let [far, cx, cp, d2] = open_term(x, n, p, nr, *e2);
             *a += qf * w * far * cx * cp / (d2 * d2);
         }
         return;
@@ -639,14 +636,8 @@ fn score_open<const COUNT: bool>(
         .zip(list.px.iter().zip(&list.py).zip(&list.pz))
         .zip(list.nx.iter().zip(&list.ny).zip(&list.nz))
         .zip(list.w.iter().zip(list.eps2.iter().zip(&list.watch2)));
-    for ((((a, c), ((px, py), pz)), ((nx, ny), nz)), (w, (e2, w2))) in it {
-        let (dx, dy, dz) = (px - x.x, py - x.y, pz - x.z);
-        let cx = (n.x * dx + n.y * dy + n.z * dz).max(0.0);
-        let cp = (-(nx * dx + ny * dy + nz * dz)).max(0.0);
-        let d2 = dx * dx + dy * dy + dz * dz;
-        // Inside the near-field ball the score is left to the near part.
-        let far = if d2 >= *e2 { 1.0 } else { 0.0 };
-        // The same expression as the uncounted loop: counted chains round alike.
+    for ((((a, c), p), nr), (w, (e2, w2))) in it {
+        let [far, cx, cp, d2] = open_term(x, n, p, nr, *e2);
         *a += qf * w * far * cx * cp / (d2 * d2);
         *c += if d2 < *w2 && far * cx * cp > 0.0 {
             1.0
@@ -654,6 +645,26 @@ fn score_open<const COUNT: bool>(
             0.0
         };
     }
+}
+
+/// The geometric factors of an open score, `[far, cos_x d, cos_p d, d^2]`
+/// (unnormalised cosines, clamped at 0; `far` is 0 inside the near-field
+/// ball of squared radius `e2`, where the score is left to the near part):
+/// the score is `qf w far cx cp / d^4`.
+#[inline(always)]
+fn open_term(
+    x: DVec3,
+    n: DVec3,
+    ((px, py), pz): ((&f64, &f64), &f64),
+    ((nx, ny), nz): ((&f64, &f64), &f64),
+    e2: f64,
+) -> [f64; 4] {
+    let (dx, dy, dz) = (px - x.x, py - x.y, pz - x.z);
+    let cx = (n.x * dx + n.y * dy + n.z * dz).max(0.0);
+    let cp = (-(nx * dx + ny * dy + nz * dz)).max(0.0);
+    let d2 = dx * dx + dy * dy + dz * dz;
+    let far = if d2 >= e2 { 1.0 } else { 0.0 };
+    [far, cx, cp, d2]
 }
 
 /// Radius [m] of the neighbourhood holding almost all of what an
