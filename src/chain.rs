@@ -151,13 +151,10 @@ pub fn trace_ex<F: FnMut(&Collision)>(
             break;
         }
         q *= m.eval(wi_local, s.w) * s.w.z / s.pdf;
-        if q < rr {
-            let survive = q / rr;
-            if rng.next_f64() >= survive {
-                break;
-            }
-            q = rr;
-        }
+        let Some(survivor) = roulette(q, rr, rng) else {
+            break;
+        };
+        q = survivor;
         ray = Ray {
             o: hit.p,
             d: frame.to_world(s.w),
@@ -165,4 +162,20 @@ pub fn trace_ex<F: FnMut(&Collision)>(
         skip = Some((hit.surface, hit.prim));
     }
     (order, end)
+}
+
+/// Russian roulette on a weight `w` against the threshold `t`: a weight at
+/// or above `t` is kept; one below survives with probability `w / t`
+/// (drawing one uniform from `rng`) and is raised to `t`, so the expected
+/// weight is unchanged. `None`: the walk ends. Light-tracing chains and
+/// backward paths both play it.
+#[inline]
+pub fn roulette(w: f64, t: f64, rng: &mut Philox4x32) -> Option<f64> {
+    if w >= t {
+        Some(w)
+    } else if rng.next_f64() >= w / t {
+        None
+    } else {
+        Some(t)
+    }
 }

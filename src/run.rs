@@ -1,4 +1,7 @@
-//! Threads, seeds, batches, stopping rules and timing.
+//! Threads, seeds, batches, stopping rules and timing. The runner knows
+//! batches, not physics: it drives any [`BatchWork`], a work item that turns
+//! a batch index into per-receiver sums (the local estimator in
+//! [`crate::estimator::local`], the backward one in [`crate::backward`]).
 //!
 //! Work is cut into batches of `batch_size` chains. Chain `c` draws from the
 //! Philox stream `(seed, c)` and batch `b` holds chains `b*batch_size ..
@@ -6,21 +9,46 @@
 //! threads take batch indices from a shared counter; the calling thread folds
 //! finished batches into the tallies strictly in index order. Hence results
 //! are bit-identical for any thread count whenever the set of batches is the
-//! same: always with `--chains`, and with `--rel-error` (the run keeps exactly
-//! the shortest prefix of batches that meets the target). Only a run stopped
-//! by `--time` depends on the machine's speed.
+//! same: always with `--chains` and with `--rel-error` (below). Only a run
+//! stopped by `--time` depends on the machine's speed.
+//!
+//! # The `--rel-error` rule: a pilot, then a fixed count
+//!
+//! Stopping at the first batch count whose *estimated* error meets the target
+//! biases both the mean and its interval when batch means are skewed: a run
+//! that happens to be low also tends to have a small spread and stops early
+//! (simulated with lognormal batch means, `sigma = 0.6`, target 8 %: mean
+//! 0.85 % low and 92.4 % coverage of the 95 % interval). So the rule is a
+//! two-stage one (in the spirit of Stein 1945): a pilot of [`PILOT_BATCHES`]
+//! batches on streams of their own (seed `seed ^ PILOT_KEY`) measures the
+//! largest relative error `R_p` over the receivers, and the run proper then
+//! traces a fixed number of fresh batches,
+//!
+//! `B = max(32, ceil(B_p (R_p / target)^2 q))`, with
+//! `q = (B_p - 1) / chi2_{B_p - 1}(0.1)` (1.33 for `B_p = 32`)
+//!
+//! the 90 % upper confidence factor of the pilot's variance (`R_p` rescaled
+//! to the run's batch size: the pilot's batches hold an eighth of the
+//! chains, at least 256, [`pilot_batch_size`]). The reported
+//! estimate uses the fresh batches only, whose number does not depend on
+//! their own values: the mean is unbiased and the interval is that of a
+//! fixed-count run; indeed the result is bit-identical to `--chains B *
+//! batch_size` with the same seed. The price is the pilot (four batches of
+//! the run proper, where they hold at least 2048 chains) and the margin `q`; the target is met in about
+//! 90 % of runs where one receiver dominates, and more often with many
+//! receivers (the largest of many noisy `R_p` is biased up). A missed target
+//! is never hidden: the result carries the achieved error and the plan
+//! ([`Pilot`]), and the commands say so. Measured by `tests/rel_error_rule.rs`.
 //!
 //! Why batches rather than per-chain tallies: a chain scores into every point
 //! at every collision, so per-chain squares would cost as much as the scores
 //! themselves; batch means are independent realisations and give the standard
 //! error with `B - 1` degrees of freedom.
 
-use crate::chain::{self, ChainParams};
-use crate::estimator::Receivers;
-use crate::sampling::Philox4x32;
-use crate::sampling::qmc::{DigitalShift, shifted_sobol_2d, shifted_sobol_34};
-use crate::scene::Scene;
-use crate::tally::{Diagnostics, Welford, relative_error};
+use crate::chain::ChainParams;
+pub use crate::estimator::local::run;
+pub use crate::tally::Tallies;
+use crate::tally::bucket_count;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc;
@@ -34,7 +62,9 @@ pub struct Stop {
     /// Wall-clock limit [s]. Soft: a run always completes at least
     /// [`MIN_BATCHES`] batches, so a very short limit may be exceeded.
     pub time: Option<f64>,
-    /// Target for the largest relative standard error of `E` over the points.
+    /// Target for the largest relative standard error of `E` over the
+    /// points, met by a pilot and a fixed count of fresh batches (see the
+    /// module docs).
     pub rel_error: Option<f64>,
 }
 
@@ -66,15 +96,19 @@ pub struct RunConfig {
     pub batch_size: Option<u64>,
     /// Stratify emitted directions over each batch (randomised Sobol' net).
     pub stratify: bool,
-    /// Near/far split: radius [m] (0: off) and backward paths per receiver
-    /// for every 256 chains of a batch, for the near part (see
-    /// [`Receivers::with_near_field`]).
+    /// Near/far split of the local estimator: radius [m] (0: off) and
+    /// backward paths per receiver for every 256 chains of a batch, for the
+    /// near part (see [`crate::estimator::Receivers::with_near_field`]).
     pub near: (f64, u32),
     /// With `near.0 == 0`: choose the split per receiver where it is needed
-    /// ([`Receivers::with_auto_near_field`]), with `near.1` paths.
+    /// ([`crate::estimator::Receivers::with_auto_near_field`]), with
+    /// `near.1` paths.
     pub near_auto: bool,
 }
 
+/// The command line's defaults: 100,000 chains, stratified, the near/far
+/// split where it is needed (`--near-radius auto`, 16 paths), light-guided
+/// backward paths, Russian roulette at 0.1 of the starting weight.
 impl Default for RunConfig {
     fn default() -> Self {
         Self {
@@ -88,8 +122,8 @@ impl Default for RunConfig {
             chain: ChainParams::default(),
             batch_size: None,
             stratify: true,
-            near: (0.0, 0),
-            near_auto: false,
+            near: (0.0, 16),
+            near_auto: true,
         }
     }
 }
@@ -109,98 +143,17 @@ impl RunConfig {
     }
 }
 
-/// Per-point tallies over batch means of the indirect illuminance [lx].
-#[derive(Clone, Debug)]
-pub struct Tallies {
-    /// Indirect illuminance (all orders >= 1) per point.
-    pub indirect: Vec<Welford>,
-    /// `orders[k][j]`: order `k+1` for `k < K`, and all orders above `K` for `k = K`.
-    pub orders: Vec<Vec<Welford>>,
-    /// `R^2 B` of each point's total at batch counts 32, 64, 128, ... (for the FOM check).
-    pub snapshots: Vec<(u64, Vec<f64>)>,
-    /// Per point: collisions that scored into it from its watched
-    /// neighbourhood, over the run (the `sparse` check).
-    pub near_hits: Vec<u64>,
-    /// Per point: whether the `sparse` check applies ([`Receivers::watched`]).
-    pub watched: Vec<bool>,
-}
-
-impl Tallies {
-    fn new(n: usize, orders: u32) -> Self {
-        let buckets = if orders == 0 { 0 } else { orders as usize + 1 };
-        Self {
-            indirect: vec![Welford::new(); n],
-            orders: vec![vec![Welford::new(); n]; buckets],
-            snapshots: Vec::new(),
-            near_hits: vec![0; n],
-            watched: vec![false; n],
-        }
-    }
-
-    /// Record `R^2 B` of every point (total = `direct` + indirect).
-    fn snapshot(&mut self, direct: &[f64]) {
-        let b = self.batches();
-        let v = self
-            .indirect
-            .iter()
-            .zip(direct)
-            .map(|(w, d)| relative_error(d + w.mean(), w.std_error()).powi(2) * b as f64)
-            .collect();
-        self.snapshots.push((b, v));
-    }
-
-    /// Statistical checks of point `j` whose exact part is `direct`.
-    pub fn diagnostics(&self, j: usize, direct: f64) -> Diagnostics {
-        let b = self.batches();
-        let half = self
-            .snapshots
-            .iter()
-            .rev()
-            .find(|(n, _)| 2 * n <= b)
-            .map(|(_, v)| v[j]);
-        let mut d = Diagnostics::of(&self.indirect[j], direct, half);
-        d.near_hits = self
-            .watched
-            .get(j)
-            .copied()
-            .unwrap_or(false)
-            .then(|| self.near_hits[j]);
-        d
-    }
-
-    /// Number of batches folded in.
-    pub fn batches(&self) -> u64 {
-        self.indirect.first().map_or(0, Welford::count)
-    }
-
-    /// Largest relative standard error of the total `E = direct + indirect` over the points.
-    pub fn max_rel_error(&self, direct: &[f64]) -> f64 {
-        self.indirect
-            .iter()
-            .zip(direct)
-            .map(|(w, d)| relative_error(d + w.mean(), w.std_error()))
-            .fold(0.0, f64::max)
-    }
-
-    /// Root mean square of the relative standard error of `E` over the points.
-    pub fn rms_rel_error(&self, direct: &[f64]) -> f64 {
-        let n = self.indirect.len().max(1) as f64;
-        let s: f64 = self
-            .indirect
-            .iter()
-            .zip(direct)
-            .map(|(w, d)| relative_error(d + w.mean(), w.std_error()).powi(2))
-            .sum();
-        (s / n).sqrt()
-    }
-}
-
 /// What stopped a run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StopReason {
+    /// The requested number of chains (or the `--rel-error` plan capped by it).
     Chains,
+    /// The wall-clock limit.
     Time,
+    /// The batches planned by the `--rel-error` pilot.
     RelError,
+    /// The observer asked to stop (an interrupt, a caller's own rule).
+    Observer,
     /// The scene emits no light: the answer is exactly zero.
     NoLight,
 }
@@ -234,12 +187,15 @@ pub struct RunResult {
     pub collisions: u64,
     /// Point scores evaluated in the kept batches.
     pub scores: u64,
-    /// Wall time [s].
+    /// Wall time of the whole run [s], the `--rel-error` pilot included.
     pub wall: f64,
     /// Threads used.
     pub threads: usize,
     /// What stopped the run.
     pub reason: StopReason,
+    /// The `--rel-error` pilot, if the run had one (its batches are not in
+    /// the tallies; its time is in `wall`).
+    pub pilot: Option<Pilot>,
 }
 
 impl RunResult {
@@ -261,43 +217,55 @@ pub struct Batch {
     pub index: u64,
     /// Chains (or paths) traced in the batch.
     pub chains: u64,
-    /// `sums[k * n + j]`: sum over the batch's chains of bucket `k`'s score at point `j`.
+    /// `sums[k * n + j]`: sum over the batch's chains of bucket `k`'s score at receiver `j`.
     pub sums: Vec<f64>,
     /// Surface collisions (or path vertices) in the batch.
     pub collisions: u64,
     /// Receiver scores evaluated in the batch.
     pub scores: u64,
-    /// Per point: collisions that scored into it from within its watched
-    /// neighbourhood ([`Receivers::view_radius`]); empty for the backward estimator.
+    /// Per receiver: events counted for the `sparse` check
+    /// ([`crate::tally::Diagnostics::near_hits`]); empty when it does not apply.
     pub near_hits: Vec<u64>,
 }
 
-/// A source of independent batches: the local estimator (chains from the
-/// lights) or the backward one (paths from the receivers).
+/// Per-receiver checks a work item knows before it runs (see
+/// [`crate::tally::Diagnostics`]).
+#[derive(Clone, Debug, Default)]
+pub struct Checks {
+    /// Whether the `sparse` check applies to the receiver.
+    pub watched: Vec<bool>,
+    /// Whether the `near` check flags the receiver.
+    pub near_plain: Vec<bool>,
+}
+
+/// A source of independent batches: a work item that turns a batch index
+/// into per-receiver sums. The local estimator (chains from the lights,
+/// [`crate::estimator::local`]) and the backward one (paths from the
+/// receivers, [`crate::backward`]) are such items; the runner knows nothing
+/// else of them.
 pub trait BatchWork: Sync {
-    /// The scene traced.
-    fn scene(&self) -> &Scene;
-    /// The receivers scored.
-    fn receivers(&self) -> &Receivers;
     /// Number of receivers.
-    fn len(&self) -> usize {
-        self.receivers().len()
-    }
+    fn len(&self) -> usize;
     /// True when there are no receivers.
     fn is_empty(&self) -> bool {
         self.len() == 0
     }
-    /// Exact first-order values per receiver.
-    fn direct(&self) -> &[f64] {
-        self.receivers().direct()
-    }
+    /// Exact part per receiver (the first order), added to every estimate.
+    fn direct(&self) -> &[f64];
+    /// False when the work can only ever score zero (no light is emitted):
+    /// the answer is then exact and no batch is run.
+    fn emits(&self) -> bool;
     /// Length of the per-thread scratch buffer for `buckets` buckets.
     fn scratch_len(&self, buckets: usize) -> usize;
-    /// Per point: whether the `sparse` check applies (local estimates only).
-    fn watched(&self) -> Vec<bool> {
-        vec![false; self.receivers().len()]
+    /// The per-receiver checks (none by default).
+    fn checks(&self) -> Checks {
+        Checks {
+            watched: vec![false; self.len()],
+            near_plain: vec![false; self.len()],
+        }
     }
-    /// Default batch size for `n` receivers and an optional chain count.
+    /// Default batch size for an optional chain count; must not depend on
+    /// the seed, the thread count or the machine.
     fn default_batch_size(&self, chains: Option<u64>) -> u64;
     /// Run batch `b` of `bs` chains; `sums[k * n + j]` over the batch for bucket `k`, receiver `j`.
     fn run_batch(
@@ -310,103 +278,60 @@ pub trait BatchWork: Sync {
     ) -> Batch;
 }
 
-/// The local estimator as batch work.
-struct LocalWork<'a> {
-    scene: &'a Scene,
-    receivers: &'a Receivers,
+/// Batches of the `--rel-error` pilot (see the module docs).
+pub const PILOT_BATCHES: u64 = 32;
+
+/// Seed offset of the pilot's streams.
+const PILOT_KEY: u64 = 0x7069_6c6f_7452_4552; // "pilotRER"
+
+/// What the `--rel-error` pilot measured and planned.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pilot {
+    /// The target for the largest relative error.
+    pub target: f64,
+    /// Batches in the pilot.
+    pub batches: u64,
+    /// Chains per pilot batch ([`pilot_batch_size`]).
+    pub batch_size: u64,
+    /// Wall time of the pilot [s].
+    pub wall: f64,
+    /// Largest relative error over the receivers after the pilot,
+    /// rescaled to batches of the run proper.
+    pub rel_error: f64,
+    /// Batches planned for the run proper.
+    pub planned: u64,
 }
 
-impl BatchWork for LocalWork<'_> {
-    fn scene(&self) -> &Scene {
-        self.scene
+/// Chains per pilot batch for runs of `bs` chains per batch: an eighth
+/// (at least 256, or `bs` if that is smaller), so that the pilot costs four
+/// batches of the run proper. Its batch means are noisier, which only makes
+/// the plan cautious: with stratified batches the variance per chain falls
+/// as batches grow, so a plan from smaller batches errs on the long side.
+pub fn pilot_batch_size(bs: u64) -> u64 {
+    (bs / 8).max(bs.min(256)).max(1)
+}
+
+/// Batches the run proper needs after a pilot of `pilot_batches` batches
+/// whose largest relative error is `r_p`, for the target `target` (module
+/// docs): `max(32, ceil(B_p (r_p / target)^2 q))` with `q` the 90 % upper
+/// confidence factor of the pilot's variance; `u64::MAX` when `r_p` is not
+/// finite (no plan can be made).
+pub fn planned_batches(pilot_batches: u64, r_p: f64, target: f64) -> u64 {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    if !r_p.is_finite() {
+        return u64::MAX;
     }
-    fn receivers(&self) -> &Receivers {
-        self.receivers
-    }
-    fn scratch_len(&self, buckets: usize) -> usize {
-        // One accumulator per bucket and one for the watched-neighbourhood counts.
-        (buckets + 1) * self.receivers.accumulator_len()
-    }
-    fn watched(&self) -> Vec<bool> {
-        (0..self.receivers.len())
-            .map(|j| self.receivers.watched(j))
-            .collect()
-    }
-    /// Chains per batch when not given: about 2^20 receiver scores per
-    /// batch (weighted by [`Scene::score_cost`]), a power of two between 256
-    /// and 65536, and at least `MIN_BATCHES` batches for a `--chains` run.
-    /// The cost of a chain is measured by a fixed pilot of 256 chains (its
-    /// own streams, so the batch size depends only on the scene and the
-    /// receivers, never on the machine, the thread count or the seed): long
-    /// chains (reflectances near 1) get smaller batches.
-    fn default_batch_size(&self, chains: Option<u64>) -> u64 {
-        const PILOT: u64 = 256;
-        const PILOT_KEY: u64 = 0x0050_494c_4f54; // "PILOT"
-        let n = self.receivers.len() as u64;
-        let mut cost = 0u64;
-        if self.scene.total_power() > 0.0 {
-            let params = crate::chain::ChainParams::default();
-            let per_score = self.scene.score_cost();
-            for c in 0..PILOT {
-                let mut rng = Philox4x32::new(PILOT_KEY, c);
-                let u = [rng.next_2d(), rng.next_2d()];
-                crate::chain::trace(self.scene, &mut rng, &params, u, |col| {
-                    cost += 16 + per_score * self.receivers.list_len(col.surface) as u64;
-                });
-            }
-        }
-        let per_chain = (cost / PILOT).max(n + 16);
-        // At least 256 chains a batch: batch means of fewer chains are too
-        // skewed for the checks that assume near-normal batch means (the
-        // `tail` check fired on most points of the office with 32).
-        let mut bs = ((1u64 << 20) / per_chain)
-            .clamp(256, 1 << 16)
-            .next_power_of_two();
-        if let Some(c) = chains {
-            bs = bs.min(c.div_ceil(MIN_BATCHES)).max(1);
-        }
-        bs
-    }
-    fn run_batch(
-        &self,
-        cfg: &RunConfig,
-        b: u64,
-        bs: u64,
-        buckets: usize,
-        scratch: &mut [f64],
-    ) -> Batch {
-        run_batch(self.scene, self.receivers, cfg, b, bs, buckets, scratch)
+    let dof = (pilot_batches.max(2) - 1) as f64;
+    let q = dof / ChiSquared::new(dof).expect("positive dof").inverse_cdf(0.1);
+    let b = (pilot_batches as f64 * (r_p / target).powi(2) * q).ceil();
+    if b >= u64::MAX as f64 {
+        u64::MAX
+    } else {
+        (b as u64).max(MIN_BATCHES)
     }
 }
 
-/// Run the chains and tally. `observe` is called after every folded batch and
-/// may return `false` to stop early (the batches folded so far are kept).
-pub fn run(
-    scene: &Scene,
-    receivers: &Receivers,
-    cfg: &RunConfig,
-    observe: &mut dyn FnMut(&Progress) -> bool,
-) -> RunResult {
-    let wanted = cfg.near.1 > 0 && (cfg.near.0 > 0.0 || cfg.near_auto);
-    if wanted && receivers.near_field().0 == 0 {
-        let near = if cfg.near.0 > 0.0 {
-            receivers.clone().with_near_field(cfg.near.0, cfg.near.1)
-        } else {
-            receivers.clone().with_auto_near_field(scene, cfg.near.1)
-        };
-        return drive(
-            &LocalWork {
-                scene,
-                receivers: &near,
-            },
-            cfg,
-            observe,
-        );
-    }
-    drive(&LocalWork { scene, receivers }, cfg, observe)
-}
-
-/// The exact answer of a scene that emits nothing: zero batches.
+/// The exact answer of work that emits nothing: zero batches.
 fn no_light(direct: &[f64], cfg: &RunConfig) -> RunResult {
     let mut tallies = Tallies::new(direct.len(), cfg.orders);
     for _ in 0..MIN_BATCHES {
@@ -428,6 +353,7 @@ fn no_light(direct: &[f64], cfg: &RunConfig) -> RunResult {
         wall: 0.0,
         threads: 0,
         reason: StopReason::NoLight,
+        pilot: None,
     }
 }
 
@@ -437,30 +363,70 @@ pub fn drive(
     cfg: &RunConfig,
     observe: &mut dyn FnMut(&Progress) -> bool,
 ) -> RunResult {
-    if work.scene().total_power() <= 0.0 {
+    if !work.emits() {
         return no_light(work.direct(), cfg);
     }
     let start = Instant::now();
-    let n = work.len();
-    let buckets = if cfg.orders == 0 {
-        1
-    } else {
-        cfg.orders as usize + 1
-    };
     let stop = cfg.stop;
     let bs = cfg
         .batch_size
         .unwrap_or_else(|| work.default_batch_size(stop.chains))
         .max(1);
     // At least two batches, so that every standard error exists.
-    let max_batches = stop.chains.map_or(u64::MAX, |c| c.div_ceil(bs).max(2));
+    let by_chains = stop.chains.map_or(u64::MAX, |c| c.div_ceil(bs).max(2));
+    let Some(target) = stop.rel_error else {
+        return drive_batches(work, cfg, bs, by_chains, start, observe);
+    };
+    let pilot_cfg = RunConfig {
+        seed: cfg.seed ^ PILOT_KEY,
+        ..cfg.clone()
+    };
+    let pilot_bs = pilot_batch_size(bs);
+    let pilot_batches = PILOT_BATCHES.min(by_chains.saturating_mul(bs) / pilot_bs);
+    let pilot = drive_batches(work, &pilot_cfg, pilot_bs, pilot_batches, start, observe);
+    if pilot.reason == StopReason::Observer {
+        return pilot;
+    }
+    let r_p = pilot.tallies.max_rel_error(&pilot.direct);
+    // R^2 falls like 1 / chains: rescale the pilot's error to batches of `bs`.
+    let r_p = r_p * (pilot_bs as f64 / bs as f64).sqrt();
+    let planned = planned_batches(pilot.tallies.batches(), r_p, target);
+    let mut result = drive_batches(work, cfg, bs, planned.min(by_chains), start, observe);
+    if result.reason == StopReason::Chains && planned <= by_chains {
+        result.reason = StopReason::RelError;
+    }
+    result.pilot = Some(Pilot {
+        target,
+        batches: pilot.tallies.batches(),
+        batch_size: pilot_bs,
+        wall: pilot.wall,
+        rel_error: r_p,
+        planned,
+    });
+    result
+}
+
+/// Fold batches `0 .. max_batches` of `bs` chains (fewer when the time
+/// limit or the observer stops the run first); `start` is when the run began.
+fn drive_batches(
+    work: &dyn BatchWork,
+    cfg: &RunConfig,
+    bs: u64,
+    max_batches: u64,
+    start: Instant,
+    observe: &mut dyn FnMut(&Progress) -> bool,
+) -> RunResult {
+    let n = work.len();
+    let buckets = bucket_count(cfg.orders);
     let threads = if cfg.threads == 0 {
         std::thread::available_parallelism().map_or(1, |p| p.get())
     } else {
         cfg.threads
     };
     let mut tallies = Tallies::new(n, cfg.orders);
-    tallies.watched = work.watched();
+    let checks = work.checks();
+    tallies.watched = checks.watched;
+    tallies.near_plain = checks.near_plain;
     let direct = work.direct().to_vec();
     let mut result = RunResult {
         direct: Vec::new(),
@@ -472,6 +438,7 @@ pub fn drive(
         wall: 0.0,
         threads,
         reason: StopReason::Chains,
+        pilot: None,
     };
     let next = AtomicU64::new(0);
     let halt = AtomicBool::new(false);
@@ -513,7 +480,8 @@ pub fn drive(
             }
             // The time limit is soft: at least MIN_BATCHES batches are always
             // folded, so that every standard error has enough degrees of freedom.
-            if stop
+            if cfg
+                .stop
                 .time
                 .is_some_and(|t| start.elapsed().as_secs_f64() >= t)
                 && folded >= MIN_BATCHES.min(max_batches)
@@ -527,7 +495,7 @@ pub fn drive(
                     folded += 1;
                     continue;
                 }
-                fold(&mut tallies, &b, bs, buckets, n, &mut batch_means);
+                tallies.fold(&b.sums, bs, &b.near_hits, &mut batch_means);
                 let folded_batches = tallies.batches();
                 if folded_batches >= 32 && folded_batches.is_power_of_two() {
                     tallies.snapshot(&direct);
@@ -543,16 +511,8 @@ pub fn drive(
                     scores: result.scores,
                     elapsed: start.elapsed().as_secs_f64(),
                 };
-                let mut done = !observe(&progress);
-                if let Some(target) = stop.rel_error
-                    && keep_until == u64::MAX
-                    && folded >= MIN_BATCHES
-                    && tallies.max_rel_error(&direct) <= target
-                {
-                    result.reason = StopReason::RelError;
-                    done = true;
-                }
-                if done && keep_until == u64::MAX {
+                if !observe(&progress) && keep_until == u64::MAX {
+                    result.reason = StopReason::Observer;
                     keep_until = folded;
                     halt.store(true, Ordering::Relaxed);
                 }
@@ -563,134 +523,4 @@ pub fn drive(
     result.tallies = tallies;
     result.wall = start.elapsed().as_secs_f64();
     result
-}
-
-/// The chains whose index is a multiple of this count, for the `sparse`
-/// check, also count the collisions they score from each point's watched
-/// neighbourhood (counting in every chain cost a quarter of the scoring speed).
-pub const SPARSE_STRIDE: u64 = 8;
-
-fn run_batch(
-    scene: &Scene,
-    receivers: &Receivers,
-    cfg: &RunConfig,
-    b: u64,
-    bs: u64,
-    buckets: usize,
-    acc: &mut [f64],
-) -> Batch {
-    acc.fill(0.0);
-    let len = receivers.accumulator_len();
-    let k_max = cfg.orders;
-    let mut collisions = 0u64;
-    let mut scores = 0u64;
-    // The net's shift comes from a stream no chain uses (chain indices < 2^63).
-    let mut srng = Philox4x32::new(cfg.seed, (1 << 63) | b);
-    let shift12 = DigitalShift([srng.next_u32(), srng.next_u32()]);
-    let shift34 = DigitalShift([srng.next_u32(), srng.next_u32()]);
-    // The recursive near/far split joins the near part's path vertices to
-    // the batch's collisions (its own stream for the reservoir choices).
-    const POOL_KEY: u64 = 0x706f_6f6c; // "pool"
-    let (paths, radii) = receivers.near_field();
-    let mut pool = (paths > 0)
-        .then(|| crate::backward::Pool::new(bs, Philox4x32::new(cfg.seed ^ POOL_KEY, b)));
-    for c in b * bs..(b + 1) * bs {
-        let mut rng = Philox4x32::new(cfg.seed, c);
-        let u_first = if cfg.stratify {
-            let i = (c - b * bs) as u32;
-            [
-                shifted_sobol_2d(i, shift12, rng.next_2d()),
-                shifted_sobol_34(i, shift34, rng.next_2d()),
-            ]
-        } else {
-            [rng.next_2d(), rng.next_2d()]
-        };
-        collisions += u64::from(chain::trace(scene, &mut rng, &cfg.chain, u_first, |col| {
-            let k = if k_max == 0 {
-                0
-            } else {
-                (col.order.min(k_max + 1) - 1) as usize
-            };
-            if let Some(p) = pool.as_mut() {
-                p.offer(col);
-            }
-            let (acc, near) = acc.split_at_mut(buckets * len);
-            // Every `SPARSE_STRIDE`-th chain also counts where it scores from.
-            let near = (c % SPARSE_STRIDE == 0).then_some(near);
-            scores += receivers.score(scene, col, &mut acc[k * len..(k + 1) * len], near) as u64;
-        }));
-    }
-    let n = receivers.len();
-    let mut sums = vec![0.0; buckets * n];
-    for k in 0..buckets {
-        receivers.reduce(&acc[k * len..(k + 1) * len], &mut sums[k * n..(k + 1) * n]);
-    }
-    let mut near_hits = vec![0.0; n];
-    receivers.reduce(&acc[buckets * len..], &mut near_hits);
-    // Near part of the near/far split: backward paths whose first surface
-    // lies within the radius, weighted to a per-chain sum over the batch.
-    if paths > 0 {
-        const NEAR_KEY: u64 = 0x6e65_6172_6669_656c; // "nearfiel"
-        // `paths` per point for every 256 chains of the batch, so that both
-        // parts shrink their error as the run grows (a `--chains` run has
-        // 32 batches of whatever size).
-        let paths = u64::from(paths) * bs.div_ceil(256);
-        let w = bs as f64 / paths as f64;
-        for (j, rec) in receivers.receivers().iter().enumerate() {
-            let radius = radii[j];
-            if radius <= 0.0 {
-                continue;
-            }
-            let frame = &receivers.frames()[j];
-            for s in 0..paths {
-                let stream = (b * paths + s) * n as u64 + j as u64;
-                let mut rng = Philox4x32::new(cfg.seed ^ NEAR_KEY, stream);
-                let pool = pool.as_ref();
-                crate::backward::trace(
-                    scene,
-                    rec,
-                    frame,
-                    cfg,
-                    &mut rng,
-                    radius,
-                    pool,
-                    |order, v| {
-                        let k = if k_max == 0 {
-                            0
-                        } else {
-                            (order.min(k_max + 1) - 1) as usize
-                        };
-                        sums[k * n + j] += v * w;
-                    },
-                );
-            }
-        }
-    }
-    Batch {
-        index: b,
-        chains: bs,
-        sums,
-        collisions,
-        scores,
-        near_hits: near_hits.into_iter().map(|c| c as u64).collect(),
-    }
-}
-
-fn fold(tallies: &mut Tallies, b: &Batch, bs: u64, buckets: usize, n: usize, means: &mut [f64]) {
-    let inv = 1.0 / bs as f64;
-    for (m, s) in means.iter_mut().zip(&b.sums) {
-        *m = s * inv;
-    }
-    for j in 0..n {
-        let total: f64 = (0..buckets).map(|k| means[k * n + j]).sum();
-        tallies.indirect[j].push(total);
-    }
-    for (t, h) in tallies.near_hits.iter_mut().zip(&b.near_hits) {
-        *t += h;
-    }
-    for (k, bucket) in tallies.orders.iter_mut().enumerate() {
-        for (j, w) in bucket.iter_mut().enumerate() {
-            w.push(means[k * n + j]);
-        }
-    }
 }

@@ -278,7 +278,12 @@ fn every_shape_gives_the_same_answers_from_millimetres_to_ten_kilometres() {
 fn forward_and_backward_agree_among_meshes_sh_objects_spheres_and_discs() {
     let (scene, recs) = all_shapes_room(1.0);
     let rec = Receivers::from_receivers(&scene, &recs).unwrap();
-    let fwd = run(&scene, &rec, &chains_cfg(200_000, 31, 0), &mut |_| true);
+    // The plain local estimate (no near/far split), against the backward estimator.
+    let plain = lumest::run::RunConfig {
+        near_auto: false,
+        ..chains_cfg(200_000, 31, 0)
+    };
+    let fwd = run(&scene, &rec, &plain, &mut |_| true);
     let bwd = lumest::backward::run(&scene, &rec, &chains_cfg(16_000, 32, 0), &mut |_| true);
     let bound = sidak_bound(1e-3, recs.len(), None);
     for j in 0..recs.len() {
@@ -291,16 +296,21 @@ fn forward_and_backward_agree_among_meshes_sh_objects_spheres_and_discs() {
             a.mean(),
             b.mean()
         );
-        // The point 1 mm from a corner is where the local estimate's kernel
-        // 1/d^2 has a heavy tail: the forward tally must then say so.
-        assert!(
-            zz.abs() < bound || flag.contains("tail") || flag.contains("VOV"),
-            "point {j}: forward {} backward {} z {zz}, unflagged",
-            a.mean(),
-            b.mean()
-        );
+        // The point 1 mm from a corner (6) is where the plain local
+        // estimate's kernel 1/d^2 is close to singular: the `near` check
+        // must flag it, the only row excused from the z test. Every other
+        // row agrees within the Sidak bound.
+        if j == 6 {
+            assert!(flag.contains("near"), "point 6: flag {flag}");
+        } else {
+            assert!(
+                zz.abs() < bound,
+                "point {j}: forward {} backward {} z {zz} (flags {flag} / {flag_b})",
+                a.mean(),
+                b.mean()
+            );
+        }
     }
-    assert_ne!(fwd.tallies.diagnostics(6, fwd.direct[6]).flag(), "ok");
 }
 
 #[test]

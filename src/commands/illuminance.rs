@@ -196,14 +196,20 @@ pub fn summary(r: &RunResult) -> String {
             .to_string()
     } else {
         let list: Vec<String> = counts.iter().map(|(k, v)| format!("{k}: {v}")).collect();
-        let sparse = if counts.contains_key("sparse") {
-            "; `sparse`: almost no light-tracing collisions land near those points, so \
-             their local estimate misses most of their light (far from the sources: use \
-             --near-radius auto, the default, or a radius of a few times the distance to the \
-             surfaces they see)"
-        } else {
-            ""
-        };
+        let mut sparse = String::new();
+        if counts.contains_key("sparse") {
+            sparse += "; `sparse`: almost none of the run's samples reach the region that \
+             carries those points' light (local estimate: collisions near the point; backward \
+             estimator: path vertices near a light), so their estimate misses most of it \
+             whatever the error bar says (local estimate far from the sources: use \
+             --near-radius auto, the default)";
+        }
+        if counts.contains_key("near") {
+            sparse += "; `near`: a surface lies closer to those points than a tenth of their \
+             distance to the nearest light while the near/far split is off there, so the \
+             plain local estimate can miss a large part of E with a small error bar (use \
+             --near-radius auto, the default)";
+        }
         format!(
             "statistical checks FAILED for some receivers ({}); see the _flag column \
              (points close to a lit surface: --near-radius auto, the default, or a larger \
@@ -233,7 +239,32 @@ pub fn summary(r: &RunResult) -> String {
             "undefined (zero error: every estimate is exact)".to_string()
         },
     );
-    format!("{text}\n{flags}")
+    let mut text = format!("{text}\n{flags}");
+    if let Some(p) = &r.pilot {
+        let target = p.target;
+        text += &format!(
+            "\n--rel-error {target:.3e}: a pilot of {} batches of {} chains ({:.3} s, own streams) \
+             gave max R {:.3e} per batch of {}, so {} fresh batches were planned; achieved max R \
+             {max:.3e}{}",
+            p.batches,
+            p.batch_size,
+            p.wall,
+            p.rel_error,
+            r.batch_size,
+            p.planned,
+            if max <= target {
+                " (target met)".to_string()
+            } else {
+                format!(
+                    " (target MISSED by {:.1} %; the estimate and its error bar are still unbiased: \
+                     run again with --chains {} for the target)",
+                    100.0 * (max / target - 1.0),
+                    (r.chains as f64 * (max / target).powi(2) * 1.1).ceil()
+                )
+            }
+        );
+    }
+    text
 }
 
 /// Points and views of one run, compiled into receivers.
@@ -447,6 +478,9 @@ pub(crate) fn measure_with(
     run_args: &RunArgs,
 ) -> anyhow::Result<(Job, RunResult)> {
     let cfg = run_args.config()?;
+    if estimator == EstimatorKind::Backward {
+        run_args.check_local_only("backward")?;
+    }
     let scene = scene::load(scene_path)?;
     let (views, table) = match views {
         Some((name, table, out)) => (Some((name, out)), table),

@@ -52,17 +52,20 @@ pub struct RunArgs {
     /// than the radius leave their share to backward paths from the point
     /// (unbiased; keeps the variance finite next to walls and in corners, and
     /// brings the light piled up around the sources to far points).
-    #[arg(long = "near-radius", default_value = "auto")]
-    pub near_radius: String,
-    /// Backward paths per point for every 256 chains, for the near part (with `--near-radius`).
-    #[arg(long = "near-paths", default_value_t = 16)]
-    pub near_paths: u32,
+    /// Local estimator only. [default: auto]
+    #[arg(long = "near-radius")]
+    pub near_radius: Option<String>,
+    /// Backward paths per point for every 256 chains, for the near part
+    /// (with `--near-radius`). Local estimator only. [default: 16]
+    #[arg(long = "near-paths")]
+    pub near_paths: Option<u32>,
     /// Backward paths (`--estimator backward`, the near part of the split):
     /// plain next-event estimation only, without the light-guided connection
     /// and its multiple importance sampling.
     #[arg(long = "no-guide")]
     pub no_guide: bool,
-    /// Draw emitted directions independently instead of stratifying them over each batch.
+    /// Draw emitted directions independently instead of stratifying them
+    /// over each batch. Local estimator only.
     #[arg(long = "no-stratify")]
     pub no_stratify: bool,
     /// No progress bar.
@@ -101,7 +104,7 @@ impl RunArgs {
             "--rr-weight must lie in (0, 1], got {}",
             self.rr_weight
         );
-        let (near_radius, near_auto) = match self.near_radius.trim() {
+        let (near_radius, near_auto) = match self.near_radius.as_deref().unwrap_or("auto").trim() {
             "auto" => (0.0, true),
             s => {
                 let r: f64 = s.parse().map_err(|_| {
@@ -130,9 +133,31 @@ impl RunArgs {
             },
             batch_size: self.batch_size,
             stratify: !self.no_stratify,
-            near: (near_radius, self.near_paths),
+            near: (near_radius, self.near_paths.unwrap_or(16)),
             near_auto,
         })
+    }
+}
+
+impl RunArgs {
+    /// Refuse the options that only the local estimator reads when another
+    /// one runs (they would be ignored without a word).
+    pub fn check_local_only(&self, estimator: &str) -> anyhow::Result<()> {
+        let given: Vec<&str> = [
+            ("--near-radius", self.near_radius.is_some()),
+            ("--near-paths", self.near_paths.is_some()),
+            ("--no-stratify", self.no_stratify),
+        ]
+        .into_iter()
+        .filter_map(|(name, set)| set.then_some(name))
+        .collect();
+        anyhow::ensure!(
+            given.is_empty(),
+            "{} appl{} to the local estimator only, not to --estimator {estimator}",
+            given.join(", "),
+            if given.len() == 1 { "ies" } else { "y" }
+        );
+        Ok(())
     }
 }
 

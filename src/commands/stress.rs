@@ -211,6 +211,8 @@ impl StressOptions {
             // 32): at 32 batches the VOV check flags about 4 % of perfectly
             // normal tallies, at 128 practically none.
             batch_size: chains.map(|c| (c / 128).clamp(1, 1 << 16)),
+            // The plain local estimate; the remedy rows turn the split on.
+            near_auto: false,
             ..RunConfig::default()
         }
     }

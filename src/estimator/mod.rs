@@ -26,6 +26,8 @@
 //! computed exactly and separately ([`Receivers::direct`]); point sources
 //! are never seen directly, so a view adds no emitted luminance.
 
+pub mod local;
+
 use crate::chain::Collision;
 use crate::geometry::SideMask;
 use crate::material::Material;
@@ -36,17 +38,33 @@ use glam::DVec3;
 /// The geometric kernel `cos(theta_x) cos(theta_p) / d^2` [1/m^2] between a
 /// surface point `x` with front normal `n_x` and a receiver `p` with normal
 /// `n_p`; zero when either cosine is not positive.
+///
+/// This is the one place the kernel is written: the vectorised open-score
+/// loop ([`open_term`]), the per-pair loop and the near part's pool
+/// connections ([`crate::backward`]) all evaluate it through
+/// [`kernel_parts`].
 #[inline]
 pub fn local_kernel(x: DVec3, n_x: DVec3, p: DVec3, n_p: DVec3) -> f64 {
-    let d = p - x;
-    let d2 = d.length_squared();
-    let cx = n_x.dot(d);
-    let cp = -n_p.dot(d);
-    if cx <= 0.0 || cp <= 0.0 {
-        0.0
-    } else {
+    let [cx, cp, d2] = kernel_parts(x, n_x, [p.x, p.y, p.z], [n_p.x, n_p.y, n_p.z]);
+    if cx > 0.0 && cp > 0.0 {
         cx * cp / (d2 * d2)
+    } else {
+        0.0
     }
+}
+
+/// The factors of the local kernel between a surface point `x` (front
+/// normal `n`) and a receiver at `p` (normal `np`), as
+/// `[cos_x d, cos_p d, d^2]` with `d = |p - x|` (unnormalised cosines,
+/// clamped at 0): the kernel is `cx cp / d^4`. Scalar components, so the
+/// structure-of-arrays loops vectorise.
+#[inline(always)]
+pub fn kernel_parts(x: DVec3, n: DVec3, p: [f64; 3], np: [f64; 3]) -> [f64; 3] {
+    let (dx, dy, dz) = (p[0] - x.x, p[1] - x.y, p[2] - x.z);
+    let cx = (n.x * dx + n.y * dy + n.z * dz).max(0.0);
+    let cp = (-(np[0] * dx + np[1] * dy + np[2] * dz)).max(0.0);
+    let d2 = dx * dx + dy * dy + dz * dz;
+    [cx, cp, d2]
 }
 
 /// What a receiver measures.
@@ -208,6 +226,10 @@ pub struct Receivers {
     /// Radius [m] of each receiver's neighbourhood that holds almost all of
     /// its view (0: none, or not an illuminance point).
     view_r: Vec<f64>,
+    /// Per receiver: the near/far radius [m] it needs, a tenth of its
+    /// distance to the nearest light where a surface lies closer than that
+    /// (0: none needed); see [`near_need`].
+    need_r: Vec<f64>,
     all: Vec<Receiver>,
     frames: Vec<Frame>,
     lists: Vec<ReceiverList>,
@@ -335,10 +357,16 @@ impl Receivers {
                 Response::Luminance { .. } => 0.0,
             })
             .collect();
+        let need_r = receivers
+            .iter()
+            .zip(&frames)
+            .map(|(rec, frame)| near_need(scene, rec.p, frame))
+            .collect();
         let mut r = Self {
             near_paths: 0,
             near_r: vec![0.0; receivers.len()],
             view_r,
+            need_r,
             all: receivers.to_vec(),
             frames,
             lists,
@@ -433,43 +461,22 @@ impl Receivers {
         self
     }
 
-    /// The split where it is needed, with a radius per receiver: a tenth of
-    /// the distance to the nearest light, `R_j = 0.1 min_l |p_j - x_l|` [m],
-    /// used only where 64 probe rays over the receiver's hemisphere (a
-    /// Fibonacci spiral, cosine-distributed) meet a surface closer than
-    /// `R_j`; elsewhere the plain local estimate. Either way every estimate
-    /// is unbiased (a probe that misses a small nearby object only leaves
-    /// that receiver on the plain estimate); a receiver with no surface
-    /// within `R_j` gets exactly the plain estimate.
-    pub fn with_auto_near_field(self, scene: &Scene, paths: u32) -> Self {
-        const PROBES: usize = 64;
-        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-        let radii = self
-            .all
-            .iter()
-            .zip(&self.frames)
-            .map(|(rec, frame)| {
-                let r = 0.1
-                    * scene
-                        .lights
-                        .iter()
-                        .map(|l| (l.position() - rec.p).length())
-                        .fold(f64::INFINITY, f64::min);
-                if !r.is_finite() || r <= 0.0 {
-                    return 0.0;
-                }
-                let near = (0..PROBES).any(|k| {
-                    // Cosine-distributed: sin^2(theta) uniform in (0, 1).
-                    let s2 = (k as f64 + 0.5) / PROBES as f64;
-                    let (st, ct) = (s2.sqrt(), (1.0 - s2).sqrt());
-                    let (sp, cp) = (golden * k as f64).sin_cos();
-                    let d = frame.to_world(DVec3::new(st * cp, st * sp, ct));
-                    scene.first_hit_from(rec.p, d).is_some_and(|h| h.t < r)
-                });
-                if near { r } else { 0.0 }
-            })
-            .collect();
+    /// The split where it is needed, with a radius per receiver
+    /// ([`near_need`]); elsewhere the plain local estimate. Either way every
+    /// estimate is unbiased (a probe that misses a small nearby object only
+    /// leaves that receiver on the plain estimate); a receiver with no
+    /// surface within a tenth of its distance to the nearest light gets
+    /// exactly the plain estimate.
+    pub fn with_auto_near_field(self, paths: u32) -> Self {
+        let radii = self.need_r.clone();
         self.with_near_radii(radii, paths)
+    }
+
+    /// Whether receiver `j` needs the near/far split ([`near_need`]) but is
+    /// on the plain local estimate: the `near` check of
+    /// [`crate::tally::Diagnostics`] flags it.
+    pub fn near_plain(&self, j: usize) -> bool {
+        self.need_r[j] > 0.0 && self.near_r[j] == 0.0
     }
 
     /// Paths per receiver and batch of the near part (0: off) and each
@@ -659,12 +666,33 @@ fn open_term(
     ((nx, ny), nz): ((&f64, &f64), &f64),
     e2: f64,
 ) -> [f64; 4] {
-    let (dx, dy, dz) = (px - x.x, py - x.y, pz - x.z);
-    let cx = (n.x * dx + n.y * dy + n.z * dz).max(0.0);
-    let cp = (-(nx * dx + ny * dy + nz * dz)).max(0.0);
-    let d2 = dx * dx + dy * dy + dz * dz;
+    let [cx, cp, d2] = kernel_parts(x, n, [*px, *py, *pz], [*nx, *ny, *nz]);
     let far = if d2 >= e2 { 1.0 } else { 0.0 };
     [far, cx, cp, d2]
+}
+
+/// The near/far radius [m] a receiver at `p` (normal frame `frame`) needs:
+/// a tenth of the distance to the nearest light, `R = 0.1 min_l |p - x_l|`,
+/// where one of 64 probe rays over the receiver's hemisphere (a Fibonacci
+/// spiral, cosine-distributed) meets a surface closer than `R`; 0 elsewhere
+/// (and in a scene without lights). Closer than that, the local
+/// estimate's `1/d^2` kernel dominates its variance (infinite in a corner).
+pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame) -> f64 {
+    const PROBES: usize = 64;
+    let r = 0.1
+        * scene
+            .lights
+            .iter()
+            .map(|l| (l.position() - p).length())
+            .fold(f64::INFINITY, f64::min);
+    if !r.is_finite() || r <= 0.0 {
+        return 0.0;
+    }
+    let near = (0..PROBES).any(|k| {
+        let d = probe_direction(k, PROBES, frame);
+        scene.first_hit_from(p, d).is_some_and(|h| h.t < r)
+    });
+    if near { r } else { 0.0 }
 }
 
 /// Radius [m] of the neighbourhood holding almost all of what an
@@ -677,13 +705,9 @@ fn open_term(
 /// on the collisions that land there, which [`Receivers::score`] counts.
 pub fn view_radius(scene: &Scene, p: DVec3, frame: &Frame) -> f64 {
     const PROBES: usize = 16;
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     let mut t: Vec<f64> = (0..PROBES)
         .map(|k| {
-            let s2 = (k as f64 + 0.5) / PROBES as f64;
-            let (st, ct) = (s2.sqrt(), (1.0 - s2).sqrt());
-            let (sp, cp) = (golden * k as f64).sin_cos();
-            let d = frame.to_world(DVec3::new(st * cp, st * sp, ct));
+            let d = probe_direction(k, PROBES, frame);
             scene.first_hit_from(p, d).map_or(f64::INFINITY, |h| h.t)
         })
         .collect();
@@ -694,4 +718,14 @@ pub fn view_radius(scene: &Scene, p: DVec3, frame: &Frame) -> f64 {
     } else {
         0.0
     }
+}
+
+/// Probe direction `k` of `count` over the hemisphere of `frame`'s normal:
+/// a Fibonacci spiral, cosine-distributed (`sin^2 theta` uniform in (0, 1)).
+fn probe_direction(k: usize, count: usize, frame: &Frame) -> DVec3 {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let s2 = (k as f64 + 0.5) / count as f64;
+    let (st, ct) = (s2.sqrt(), (1.0 - s2).sqrt());
+    let (sp, cp) = (golden * k as f64).sin_cos();
+    frame.to_world(DVec3::new(st * cp, st * sp, ct))
 }

@@ -1,0 +1,200 @@
+//! The local estimator as batch work: light-tracing chains score into every
+//! receiver at every collision ([`Receivers::score`]); with the near/far
+//! split, backward paths add the near part ([`crate::backward`]).
+
+use super::Receivers;
+use crate::backward::{self, PathSetup, Pool};
+use crate::chain;
+use crate::run::{Batch, BatchWork, Checks, MIN_BATCHES, Progress, RunConfig, RunResult, drive};
+use crate::sampling::Philox4x32;
+use crate::sampling::qmc::{DigitalShift, shifted_sobol_2d, shifted_sobol_34};
+use crate::scene::Scene;
+use crate::tally::bucket;
+
+/// The chains whose index is a multiple of this count, for the `sparse`
+/// check, also count the collisions they score from each point's watched
+/// neighbourhood (counting in every chain cost a quarter of the scoring speed).
+pub const SPARSE_STRIDE: u64 = 8;
+
+/// Run the local estimator on `receivers` and tally. `observe` is called
+/// after every folded batch and may return `false` to stop early (the
+/// batches folded so far are kept). The near/far split of `cfg.near` /
+/// `cfg.near_auto` is applied unless `receivers` already carry one.
+pub fn run(
+    scene: &Scene,
+    receivers: &Receivers,
+    cfg: &RunConfig,
+    observe: &mut dyn FnMut(&Progress) -> bool,
+) -> RunResult {
+    let wanted = cfg.near.1 > 0 && (cfg.near.0 > 0.0 || cfg.near_auto);
+    if wanted && receivers.near_field().0 == 0 {
+        let near = if cfg.near.0 > 0.0 {
+            receivers.clone().with_near_field(cfg.near.0, cfg.near.1)
+        } else {
+            receivers.clone().with_auto_near_field(cfg.near.1)
+        };
+        return drive(
+            &LocalWork {
+                scene,
+                receivers: &near,
+            },
+            cfg,
+            observe,
+        );
+    }
+    drive(&LocalWork { scene, receivers }, cfg, observe)
+}
+
+/// The local estimator as batch work.
+struct LocalWork<'a> {
+    scene: &'a Scene,
+    receivers: &'a Receivers,
+}
+
+impl BatchWork for LocalWork<'_> {
+    fn len(&self) -> usize {
+        self.receivers.len()
+    }
+    fn direct(&self) -> &[f64] {
+        self.receivers.direct()
+    }
+    fn emits(&self) -> bool {
+        self.scene.total_power() > 0.0
+    }
+    fn scratch_len(&self, buckets: usize) -> usize {
+        // One accumulator per bucket and one for the watched-neighbourhood counts.
+        (buckets + 1) * self.receivers.accumulator_len()
+    }
+    fn checks(&self) -> Checks {
+        let n = self.receivers.len();
+        Checks {
+            watched: (0..n).map(|j| self.receivers.watched(j)).collect(),
+            near_plain: (0..n).map(|j| self.receivers.near_plain(j)).collect(),
+        }
+    }
+    /// Chains per batch when not given: about 2^20 receiver scores per
+    /// batch (weighted by [`Scene::score_cost`]), a power of two between 256
+    /// and 65536, and at least `MIN_BATCHES` batches for a `--chains` run.
+    /// The cost of a chain is measured by a fixed pilot of 256 chains (its
+    /// own streams, so the batch size depends only on the scene and the
+    /// receivers, never on the machine, the thread count or the seed): long
+    /// chains (reflectances near 1) get smaller batches.
+    fn default_batch_size(&self, chains: Option<u64>) -> u64 {
+        const PILOT: u64 = 256;
+        const PILOT_KEY: u64 = 0x0050_494c_4f54; // "PILOT"
+        let n = self.receivers.len() as u64;
+        let mut cost = 0u64;
+        if self.scene.total_power() > 0.0 {
+            let params = chain::ChainParams::default();
+            let per_score = self.scene.score_cost();
+            for c in 0..PILOT {
+                let mut rng = Philox4x32::new(PILOT_KEY, c);
+                let u = [rng.next_2d(), rng.next_2d()];
+                chain::trace(self.scene, &mut rng, &params, u, |col| {
+                    cost += 16 + per_score * self.receivers.list_len(col.surface) as u64;
+                });
+            }
+        }
+        let per_chain = (cost / PILOT).max(n + 16);
+        // At least 256 chains a batch: batch means of fewer chains are too
+        // skewed for the checks that assume near-normal batch means (the
+        // `tail` check fired on most points of the office with 32).
+        let mut bs = ((1u64 << 20) / per_chain)
+            .clamp(256, 1 << 16)
+            .next_power_of_two();
+        if let Some(c) = chains {
+            bs = bs.min(c.div_ceil(MIN_BATCHES)).max(1);
+        }
+        bs
+    }
+    fn run_batch(
+        &self,
+        cfg: &RunConfig,
+        b: u64,
+        bs: u64,
+        buckets: usize,
+        acc: &mut [f64],
+    ) -> Batch {
+        let (scene, receivers) = (self.scene, self.receivers);
+        acc.fill(0.0);
+        let len = receivers.accumulator_len();
+        let mut collisions = 0u64;
+        let mut scores = 0u64;
+        // The net's shift comes from a stream no chain uses (chain indices < 2^63).
+        let mut srng = Philox4x32::new(cfg.seed, (1 << 63) | b);
+        let shift12 = DigitalShift([srng.next_u32(), srng.next_u32()]);
+        let shift34 = DigitalShift([srng.next_u32(), srng.next_u32()]);
+        // The recursive near/far split joins the near part's path vertices to
+        // the batch's collisions (its own stream for the reservoir choices).
+        const POOL_KEY: u64 = 0x706f_6f6c; // "pool"
+        let (paths, radii) = receivers.near_field();
+        let mut pool = (paths > 0).then(|| Pool::new(bs, Philox4x32::new(cfg.seed ^ POOL_KEY, b)));
+        for c in b * bs..(b + 1) * bs {
+            let mut rng = Philox4x32::new(cfg.seed, c);
+            let u_first = if cfg.stratify {
+                let i = (c - b * bs) as u32;
+                [
+                    shifted_sobol_2d(i, shift12, rng.next_2d()),
+                    shifted_sobol_34(i, shift34, rng.next_2d()),
+                ]
+            } else {
+                [rng.next_2d(), rng.next_2d()]
+            };
+            collisions += u64::from(chain::trace(scene, &mut rng, &cfg.chain, u_first, |col| {
+                let k = bucket(col.order, cfg.orders);
+                if let Some(p) = pool.as_mut() {
+                    p.offer(col);
+                }
+                let (acc, near) = acc.split_at_mut(buckets * len);
+                // Every `SPARSE_STRIDE`-th chain also counts where it scores from.
+                let near = (c % SPARSE_STRIDE == 0).then_some(near);
+                scores +=
+                    receivers.score(scene, col, &mut acc[k * len..(k + 1) * len], near) as u64;
+            }));
+        }
+        let n = receivers.len();
+        let mut sums = vec![0.0; buckets * n];
+        for k in 0..buckets {
+            receivers.reduce(&acc[k * len..(k + 1) * len], &mut sums[k * n..(k + 1) * n]);
+        }
+        let mut near_hits = vec![0.0; n];
+        receivers.reduce(&acc[buckets * len..], &mut near_hits);
+        // Near part of the near/far split: backward paths whose first surface
+        // lies within the radius, weighted to a per-chain sum over the batch.
+        if paths > 0 {
+            const NEAR_KEY: u64 = 0x6e65_6172_6669_656c; // "nearfiel"
+            // `paths` per point for every 256 chains of the batch, so that both
+            // parts shrink their error as the run grows (a `--chains` run has
+            // 32 batches of whatever size).
+            let paths = u64::from(paths) * bs.div_ceil(256);
+            let w = bs as f64 / paths as f64;
+            for (j, rec) in receivers.receivers().iter().enumerate() {
+                let radius = radii[j];
+                if radius <= 0.0 {
+                    continue;
+                }
+                let frame = &receivers.frames()[j];
+                for s in 0..paths {
+                    let stream = (b * paths + s) * n as u64 + j as u64;
+                    let mut rng = Philox4x32::new(cfg.seed ^ NEAR_KEY, stream);
+                    let path = PathSetup {
+                        first_max: radius,
+                        pool: pool.as_ref(),
+                        reach: &[],
+                    };
+                    backward::trace(scene, rec, frame, cfg, &mut rng, &path, |order, v| {
+                        sums[bucket(order, cfg.orders) * n + j] += v * w;
+                    });
+                }
+            }
+        }
+        Batch {
+            index: b,
+            chains: bs,
+            sums,
+            collisions,
+            scores,
+            near_hits: near_hits.into_iter().map(|c| c as u64).collect(),
+        }
+    }
+}

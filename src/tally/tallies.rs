@@ -1,0 +1,140 @@
+//! Per-receiver tallies over batch means: what the runner folds each batch
+//! into, in batch order.
+
+use super::{Diagnostics, Welford, relative_error};
+
+/// Per-receiver tallies over batch means of the estimated quantity (the
+/// indirect illuminance [lx], or luminance [cd/m^2], per receiver).
+#[derive(Clone, Debug)]
+pub struct Tallies {
+    /// The estimated part (all reflection orders >= 1) per receiver.
+    pub indirect: Vec<Welford>,
+    /// `orders[k][j]`: order `k+1` for `k < K`, and all orders above `K` for `k = K`.
+    pub orders: Vec<Vec<Welford>>,
+    /// `R^2 B` of each receiver's total at batch counts 32, 64, 128, ... (for the FOM check).
+    pub snapshots: Vec<(u64, Vec<f64>)>,
+    /// Per receiver: events that the `sparse` check counts over the run
+    /// (see [`crate::tally::Diagnostics::near_hits`]).
+    pub near_hits: Vec<u64>,
+    /// Per receiver: whether the `sparse` check applies.
+    pub watched: Vec<bool>,
+    /// Per receiver: whether the `near` check flags it (a surface much
+    /// closer than the nearest light, on the plain local estimate).
+    pub near_plain: Vec<bool>,
+}
+
+/// The order bucket of light reflected `order >= 1` times when `orders`
+/// orders are resolved: `order - 1` up to `orders`, then the last bucket
+/// (`orders`) for all higher orders; always 0 when `orders == 0`.
+#[inline]
+pub fn bucket(order: u32, orders: u32) -> usize {
+    if orders == 0 {
+        0
+    } else {
+        (order.clamp(1, orders + 1) - 1) as usize
+    }
+}
+
+/// Number of order buckets for `orders` resolved orders (1 when none are).
+pub fn bucket_count(orders: u32) -> usize {
+    if orders == 0 { 1 } else { orders as usize + 1 }
+}
+
+impl Tallies {
+    /// Empty tallies for `n` receivers with `orders` resolved orders.
+    pub fn new(n: usize, orders: u32) -> Self {
+        let buckets = if orders == 0 { 0 } else { orders as usize + 1 };
+        Self {
+            indirect: vec![Welford::new(); n],
+            orders: vec![vec![Welford::new(); n]; buckets],
+            snapshots: Vec::new(),
+            near_hits: vec![0; n],
+            watched: vec![false; n],
+            near_plain: vec![false; n],
+        }
+    }
+
+    /// Fold one batch: `sums[k * n + j]` is the batch's sum over its `chains`
+    /// chains of bucket `k` at receiver `j`; `near_hits` the batch's counts
+    /// for the `sparse` check (may be empty). `means` is scratch of the
+    /// length of `sums`.
+    pub fn fold(&mut self, sums: &[f64], chains: u64, near_hits: &[u64], means: &mut [f64]) {
+        let n = self.indirect.len();
+        let buckets = sums.len() / n.max(1);
+        let inv = 1.0 / chains as f64;
+        for (m, s) in means.iter_mut().zip(sums) {
+            *m = s * inv;
+        }
+        for j in 0..n {
+            let total: f64 = (0..buckets).map(|k| means[k * n + j]).sum();
+            self.indirect[j].push(total);
+        }
+        for (t, h) in self.near_hits.iter_mut().zip(near_hits) {
+            *t += h;
+        }
+        for (k, bucket) in self.orders.iter_mut().enumerate() {
+            for (j, w) in bucket.iter_mut().enumerate() {
+                w.push(means[k * n + j]);
+            }
+        }
+    }
+
+    /// Record `R^2 B` of every receiver (total = `direct` + estimated part).
+    pub fn snapshot(&mut self, direct: &[f64]) {
+        let b = self.batches();
+        let v = self
+            .indirect
+            .iter()
+            .zip(direct)
+            .map(|(w, d)| relative_error(d + w.mean(), w.std_error()).powi(2) * b as f64)
+            .collect();
+        self.snapshots.push((b, v));
+    }
+
+    /// Statistical checks of receiver `j` whose exact part is `direct`.
+    pub fn diagnostics(&self, j: usize, direct: f64) -> Diagnostics {
+        let b = self.batches();
+        let half = self
+            .snapshots
+            .iter()
+            .rev()
+            .find(|(n, _)| 2 * n <= b)
+            .map(|(_, v)| v[j]);
+        let mut d = Diagnostics::of(&self.indirect[j], direct, half);
+        d.near_hits = self
+            .watched
+            .get(j)
+            .copied()
+            .unwrap_or(false)
+            .then(|| self.near_hits[j]);
+        d.near = self.near_plain.get(j).copied().unwrap_or(false);
+        d
+    }
+
+    /// Number of batches folded in.
+    pub fn batches(&self) -> u64 {
+        self.indirect.first().map_or(0, Welford::count)
+    }
+
+    /// Relative standard error of the total `E = direct + estimated part` per receiver.
+    pub fn rel_errors<'a>(&'a self, direct: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
+        self.indirect
+            .iter()
+            .zip(direct)
+            .map(|(w, d)| relative_error(d + w.mean(), w.std_error()))
+    }
+
+    /// Largest relative standard error of the total over the receivers
+    /// (NaN propagates: a receiver without a defined error is never hidden).
+    pub fn max_rel_error(&self, direct: &[f64]) -> f64 {
+        self.rel_errors(direct)
+            .fold(0.0, |m, r| if r.is_nan() || r > m { r } else { m })
+    }
+
+    /// Root mean square of the relative standard error of the total over the receivers.
+    pub fn rms_rel_error(&self, direct: &[f64]) -> f64 {
+        let n = self.indirect.len().max(1) as f64;
+        let s: f64 = self.rel_errors(direct).map(|r| r * r).sum();
+        (s / n).sqrt()
+    }
+}

@@ -1,0 +1,162 @@
+//! The `--rel-error` stopping rule (a pilot, then a fixed count of fresh
+//! batches; see `lumest::run`) keeps the mean unbiased and the 95 % interval
+//! calibrated when batch means are skewed, where stopping at the first
+//! batch prefix that meets the target does not.
+//!
+//! The work is synthetic, so that thousands of independent runs take
+//! seconds and the exact mean is known: one receiver whose batch means are
+//! lognormal (`sigma = 0.6`, mean exactly 1, skewness 2.3), drawn from the
+//! Philox stream of the batch, driven by the real runner. The target 8 %
+//! needs about 60 batches. Simulated beforehand (3,000 runs each): the
+//! first-prefix rule gives a mean 0.85 % low and 92.4 % coverage; the
+//! pilot rule 0.2 % (within noise) and 94.9 %.
+
+use lumest::run::{Batch, BatchWork, RunConfig, Stop, StopReason, drive};
+use lumest::sampling::Philox4x32;
+use lumest::tally::{Welford, t_factor};
+
+const SIGMA: f64 = 0.6;
+const TARGET: f64 = 0.08;
+const RUNS: u64 = 4000;
+
+/// Lognormal batch mean of batch `b` on the stream of `seed`: mean 1.
+fn lognormal(seed: u64, b: u64) -> f64 {
+    let mut rng = Philox4x32::new(seed, b);
+    let [u1, u2] = rng.next_2d();
+    // Box-Muller; 1 - u1 lies in (0, 1].
+    let z = (-2.0 * (1.0 - u1).ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+    (SIGMA * z - 0.5 * SIGMA * SIGMA).exp()
+}
+
+/// One receiver with lognormal batch means and no exact part.
+struct Skewed;
+
+impl BatchWork for Skewed {
+    fn len(&self) -> usize {
+        1
+    }
+    fn direct(&self) -> &[f64] {
+        &[0.0]
+    }
+    fn emits(&self) -> bool {
+        true
+    }
+    fn scratch_len(&self, _buckets: usize) -> usize {
+        0
+    }
+    fn default_batch_size(&self, _chains: Option<u64>) -> u64 {
+        1
+    }
+    fn run_batch(&self, cfg: &RunConfig, b: u64, bs: u64, _k: usize, _s: &mut [f64]) -> Batch {
+        Batch {
+            index: b,
+            chains: bs,
+            sums: vec![bs as f64 * lognormal(cfg.seed, b)],
+            collisions: 0,
+            scores: 0,
+            near_hits: Vec::new(),
+        }
+    }
+}
+
+/// Mean error, its standard error over the runs, and the coverage of the 95 % interval.
+struct Outcome {
+    bias: f64,
+    bias_se: f64,
+    coverage: f64,
+}
+
+fn judge(runs: &[(f64, f64, u64)]) -> Outcome {
+    let mut err = Welford::new();
+    let mut covered = 0;
+    for &(mean, se, b) in runs {
+        err.push(mean - 1.0);
+        if (mean - 1.0).abs() <= t_factor(0.95, b) * se {
+            covered += 1;
+        }
+    }
+    Outcome {
+        bias: err.mean(),
+        bias_se: err.std_error(),
+        coverage: covered as f64 / runs.len() as f64,
+    }
+}
+
+/// The rule's outcome passes: unbiased within 3.5 standard errors, and the
+/// 95 % interval covers 95 +- 2.5 % of the runs.
+fn passes(o: &Outcome) -> bool {
+    o.bias.abs() <= 3.5 * o.bias_se && (0.925..=0.975).contains(&o.coverage)
+}
+
+#[test]
+fn pilot_rule_is_unbiased_and_calibrated_on_skewed_batch_means() {
+    let runs: Vec<(f64, f64, u64)> = (0..RUNS)
+        .map(|r| {
+            let cfg = RunConfig {
+                seed: 1000 + r,
+                threads: 1,
+                stop: Stop {
+                    rel_error: Some(TARGET),
+                    ..Stop::default()
+                },
+                ..RunConfig::default()
+            };
+            let res = drive(&Skewed, &cfg, &mut |_| true);
+            assert_eq!(res.reason, StopReason::RelError);
+            let pilot = res.pilot.expect("a --rel-error run has a pilot");
+            assert_eq!(pilot.batches, 32);
+            assert_eq!(res.tallies.batches(), pilot.planned);
+            let w = &res.tallies.indirect[0];
+            (w.mean(), w.std_error(), w.count())
+        })
+        .collect();
+    let o = judge(&runs);
+    let mean_batches = runs.iter().map(|r| r.2 as f64).sum::<f64>() / RUNS as f64;
+    let met = runs.iter().filter(|r| r.1 / r.0 <= TARGET).count() as f64 / RUNS as f64;
+    println!(
+        "pilot rule: bias {:.4} +- {:.4}, coverage {:.4}, {mean_batches:.1} batches, target met in {met:.3}",
+        o.bias, o.bias_se, o.coverage
+    );
+    assert!(
+        passes(&o),
+        "bias {} +- {}, coverage {}",
+        o.bias,
+        o.bias_se,
+        o.coverage
+    );
+    // The margin meets the target in most runs: about 90 % for one receiver
+    // with normal batch means; measured 77.6 % with these skewed ones (the
+    // pilot's variance is then noisier than chi-square says).
+    assert!(met > 0.7, "target met in only {met}");
+}
+
+/// The test above has the power to see the old rule's fault: the same
+/// judgement of the first-prefix rule (stop at the first `B >= 32` whose
+/// estimated relative error meets the target) on the same kind of runs fails.
+#[test]
+fn first_prefix_rule_fails_the_same_judgement() {
+    let runs: Vec<(f64, f64, u64)> = (0..RUNS)
+        .map(|r| {
+            let mut w = Welford::new();
+            for b in 0.. {
+                w.push(lognormal(5000 + r, b));
+                if w.count() >= 32 && w.std_error() / w.mean() <= TARGET {
+                    break;
+                }
+            }
+            (w.mean(), w.std_error(), w.count())
+        })
+        .collect();
+    let o = judge(&runs);
+    println!(
+        "first-prefix rule: bias {:.4} +- {:.4}, coverage {:.4}",
+        o.bias, o.bias_se, o.coverage
+    );
+    assert!(
+        !passes(&o),
+        "bias {} +- {}, coverage {}",
+        o.bias,
+        o.bias_se,
+        o.coverage
+    );
+}
