@@ -23,15 +23,37 @@ pub enum Light {
     Sphere { c: DVec3, r: f64, i: f64 },
 }
 
-/// A sampled emitted ray; the chain's weight is the flux it carries [lm].
+/// A sampled emitted ray, with the densities it was drawn from (a named
+/// record, as pbrt's `LightLeSample`, so that multiple importance sampling
+/// and the double local estimate can be written against the pdfs).
+///
+/// The flux the ray carries is `phi = le cos / (pdf_pos pdf_dir)` [lm]. A
+/// delta position (a point source) has no area density: `pdf_pos` is then
+/// 1 and `le` is the intensity [cd] towards `d` rather than a luminance; a
+/// delta direction would likewise carry an illuminance in `le` with
+/// `pdf_dir = 1`. (No current light has one.)
 #[derive(Clone, Copy, Debug)]
 pub struct EmissionSample {
     /// Origin [m].
     pub o: DVec3,
     /// Unit direction.
     pub d: DVec3,
-    /// Flux carried by the sampled ray [lm]: the source's power for both
-    /// kinds (the samplers follow the emission exactly).
+    /// Emitted luminance [cd/m^2] at `o` towards `d`; the intensity [cd]
+    /// towards `d` when `delta_pos`.
+    pub le: f64,
+    /// Cosine between `d` and the emitting surface's normal at `o` (1 for a point).
+    pub cos: f64,
+    /// Density of `o` per area [1/m^2] (1 when `delta_pos`).
+    pub pdf_pos: f64,
+    /// Density of `d` per solid angle [1/sr] (1 when `delta_dir`).
+    pub pdf_dir: f64,
+    /// The position is a delta (a point source): it cannot be hit or sampled by area.
+    pub delta_pos: bool,
+    /// The direction is a delta (a collimated source).
+    pub delta_dir: bool,
+    /// Flux carried by the sampled ray [lm], `le cos / (pdf_pos pdf_dir)`
+    /// evaluated in closed form: the source's power for both kinds (the
+    /// samplers follow the emission exactly).
     pub phi: f64,
 }
 
@@ -54,15 +76,28 @@ impl Light {
                 EmissionSample {
                     o: p,
                     d: s.w,
+                    le: i,
+                    cos: 1.0,
+                    pdf_pos: 1.0,
+                    pdf_dir: s.pdf,
+                    delta_pos: true,
+                    delta_dir: false,
                     phi: i / s.pdf,
                 }
             }
             Light::Sphere { c, r, .. } => {
-                let m = sample_uniform_sphere(u_pos).w;
-                let d = Frame::from_normal(m).to_world(sample_cosine_hemisphere(u_dir).w);
+                let m = sample_uniform_sphere(u_pos);
+                let w = sample_cosine_hemisphere(u_dir);
                 EmissionSample {
-                    o: c + m * r,
-                    d,
+                    o: c + m.w * r,
+                    d: Frame::from_normal(m.w).to_world(w.w),
+                    le: self.luminance(),
+                    cos: w.w.z,
+                    // Uniform by area over the sphere of radius r.
+                    pdf_pos: m.pdf / (r * r),
+                    pdf_dir: w.pdf,
+                    delta_pos: false,
+                    delta_dir: false,
                     phi: self.power(),
                 }
             }
@@ -316,6 +351,32 @@ mod tests {
         }
         assert_eq!(sphere.power(), point.power());
         assert!((sphere.luminance() - 2.0 / (PI * 0.0025)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn emission_records_carry_pdfs_consistent_with_the_flux() {
+        let lights = [
+            Light::Point {
+                p: DVec3::new(0.3, -1.0, 2.0),
+                i: 7.0,
+            },
+            Light::Sphere {
+                c: DVec3::new(1.0, 2.0, 3.0),
+                r: 0.25,
+                i: 3.0,
+            },
+        ];
+        for l in lights {
+            for k in 0..64 {
+                let u = [(k as f64 + 0.5) / 64.0, (k * 29 % 64) as f64 / 64.0 + 0.01];
+                let e = l.sample_emission(u, [u[1], u[0]]);
+                let w = e.le * e.cos / (e.pdf_pos * e.pdf_dir);
+                assert!((w / e.phi - 1.0).abs() < 1e-12, "{l:?}: {w} vs {}", e.phi);
+                assert!((e.phi / l.power() - 1.0).abs() < 1e-12);
+                assert_eq!(e.delta_pos, matches!(l, Light::Point { .. }));
+                assert!(!e.delta_dir);
+            }
+        }
     }
 
     #[test]
