@@ -32,7 +32,6 @@
 //! `phi` flux [lm], `i` intensity [cd], `e` illuminance [lx], `l` luminance.
 #![forbid(unsafe_code)]
 
-pub mod backward;
 pub mod chain;
 pub mod commands;
 pub mod estimator;
@@ -46,3 +45,6 @@ pub mod run;
 pub mod sampling;
 pub mod scene;
 pub mod tally;
+
+/// The backward estimator, at its historical path.
+pub use estimator::backward;

@@ -26,6 +26,7 @@
 //! computed exactly and separately ([`Receivers::direct`]); point sources
 //! are never seen directly, so a view adds no emitted luminance.
 
+pub mod backward;
 pub mod local;
 
 use crate::chain::Collision;
