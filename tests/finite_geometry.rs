@@ -221,7 +221,8 @@ fn all_shapes_room(s: f64) -> (lumest::scene::Scene, Vec<Receiver>) {
             p: v(2.2, 2.0, 2.8),
             i: 100.0,
         }],
-    );
+    )
+    .expect("a valid programmatic scene");
     let r = |p: DVec3, n: DVec3| Receiver::illuminance(p, n);
     let receivers = vec![
         r(v(2.0, 2.0, 0.75), DVec3::Z),

@@ -36,6 +36,7 @@ fn sphere_scene(s: &Sobolev, radius: f64) -> Scene {
             i: s.intensity,
         }],
     )
+    .expect("a valid programmatic scene")
 }
 
 #[test]

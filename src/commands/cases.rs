@@ -104,7 +104,8 @@ pub fn sphere_case(rho: f64, radius: f64, source: DVec3, n_points: usize, as_sh:
     } else {
         SurfaceSpec::Sphere("sphere".into(), Sphere { c, r: radius }, Sides::Back, m)
     };
-    let scene = Scene::build(vec![spec], vec![Light::Point { p: s, i }]);
+    let scene = Scene::build(vec![spec], vec![Light::Point { p: s, i }])
+        .expect("a valid programmatic scene");
     let ind = integrating_sphere_indirect(rho, 4.0 * PI * i, radius);
     let (receivers, exact) = spiral(n_points)
         .into_iter()
@@ -176,7 +177,8 @@ pub fn plate_case(a: f64, rho: f64, n_points: usize) -> Case {
             p: pc.source,
             i: pc.intensity,
         }],
-    );
+    )
+    .expect("a valid programmatic scene");
     let mut rng = Philox4x32::new(7, 0);
     let mut receivers = Vec::with_capacity(n_points);
     let n_corner = n_points / 2;
@@ -546,6 +548,7 @@ pub fn box_room(rho: f64) -> Scene {
             },
         ],
     )
+    .expect("a valid programmatic scene")
 }
 
 /// `lumest validate box`: flux balance at growing numbers of chains (each

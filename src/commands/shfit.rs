@@ -197,7 +197,8 @@ fn comparison_scene(
             p: center + DVec3::new(1.5 * r, 0.7 * r, 3.0 * r),
             i: 100.0,
         }],
-    );
+    )
+    .expect("a valid programmatic scene");
     let mut rec = Vec::new();
     for k in 0..32 {
         let a = std::f64::consts::TAU * k as f64 / 32.0;

@@ -545,6 +545,7 @@ fn planes_scene(s: &Sobolev) -> Scene {
             i: s.intensity,
         }],
     )
+    .expect("a valid programmatic scene")
 }
 
 /// Point `k` on plane `plane` of `s` at horizontal distance `r` [m] from the
@@ -640,7 +641,8 @@ fn plain_room(s: f64) -> (Scene, Vec<(String, Receiver)>) {
             p: DVec3::new(1.5, 2.0, 2.7) * s,
             i: 300.0,
         }],
-    );
+    )
+    .expect("a valid programmatic scene");
     let points = [
         ("floor", DVec3::new(4.0, 3.0, 0.0), DVec3::Z),
         ("desk top", DVec3::new(1.8, 1.4, 0.75), DVec3::Z),

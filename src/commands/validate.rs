@@ -119,7 +119,8 @@ pub fn sobolev_case(s: &Sobolev, n_points: usize, r_max: f64) -> SobolevCase {
             p: DVec3::new(0.0, 0.0, s.h1),
             i: s.intensity,
         }],
-    );
+    )
+    .expect("a valid programmatic scene");
     let mut points = Vec::with_capacity(n_points);
     let mut plane = Vec::with_capacity(n_points);
     let mut r = Vec::with_capacity(n_points);

@@ -266,13 +266,15 @@ impl Receivers {
                     message: "position and unit normal must be finite".into(),
                 });
             }
-            for l in &scene.lights {
+            for (k, l) in scene.lights.iter().enumerate() {
                 if l.contains(p) {
+                    let c = l.position();
+                    let name = scene.light_names.get(k).map_or("a light", String::as_str);
                     return Err(ReceiverError {
                         index: j,
                         message: format!(
-                            "point lies on or inside a light at {:?}: its illuminance is not finite",
-                            l.position()
+                            "point lies on or inside {name} at ({}, {}, {}) m: its illuminance is not finite",
+                            c.x, c.y, c.z
                         ),
                     });
                 }

@@ -132,7 +132,22 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
         .iter()
         .map(|l| light(l, ctx, &planes, only_planes))
         .collect::<Result<Vec<_>, _>>()?;
-    Ok(Scene::build(surfaces, lights))
+    let names = desc
+        .light
+        .iter()
+        .enumerate()
+        .map(|(k, l)| {
+            l.get_ref()
+                .name
+                .as_ref()
+                .map_or_else(|| format!("light #{}", k + 1), |n| n.get_ref().clone())
+        })
+        .collect();
+    // Every value was checked above with its line; what `build` checks again
+    // cannot fail here.
+    let scene =
+        Scene::build(surfaces, lights).map_err(|e| ctx.invalid(0..0, "light", e.to_string()))?;
+    Ok(scene.with_light_names(names))
 }
 
 /// The fields each surface type takes (besides `type`, `name`, `material`).

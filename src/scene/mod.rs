@@ -9,7 +9,9 @@ pub mod compile;
 pub mod desc;
 pub mod world;
 
-pub use world::{MAX_PLANES, Scene, SceneSummary, ShapeRef, Sides, Surface, SurfaceSpec};
+pub use world::{
+    BuildError, MAX_PLANES, Scene, SceneSummary, ShapeRef, Sides, Surface, SurfaceSpec,
+};
 
 use std::path::{Path, PathBuf};
 

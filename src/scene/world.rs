@@ -199,10 +199,29 @@ pub struct Scene {
     shs: Vec<(ShSurface, u32)>,
     /// Light sources.
     pub lights: Vec<Light>,
+    /// The lights' names, for messages and summaries (the scene file's
+    /// `name`, else `light #k`, 1-based).
+    pub light_names: Vec<String>,
     /// Cumulative power fractions for picking a light (last entry 1).
     light_cdf: Vec<f64>,
     /// Total emitted flux [lm].
     total_power: f64,
+}
+
+/// Why [`Scene::build`] refused its input.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum BuildError {
+    /// More infinite planes than the side masks hold.
+    #[error("{0} infinite planes: at most {MAX_PLANES} are supported")]
+    TooManyPlanes(usize),
+    /// A light's values are out of range.
+    #[error("light #{}: {message}", index + 1)]
+    Light {
+        /// 0-based index of the light.
+        index: usize,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 /// Where a ray starts, for deciding which surface it must not meet at `t ~ 0`.
@@ -215,9 +234,12 @@ enum Start {
 }
 
 impl Scene {
-    /// Build a planes-only scene (validated by the caller); used by programmatic
-    /// scenes such as the Sobolev validation case.
-    pub fn from_parts(surfaces: Vec<(String, Plane, Material)>, lights: Vec<Light>) -> Self {
+    /// Build a planes-only scene; used by programmatic scenes such as the
+    /// Sobolev validation case. Validated as [`Scene::build`].
+    pub fn from_parts(
+        surfaces: Vec<(String, Plane, Material)>,
+        lights: Vec<Light>,
+    ) -> Result<Self, BuildError> {
         Self::build(
             surfaces
                 .into_iter()
@@ -227,11 +249,62 @@ impl Scene {
         )
     }
 
-    /// Build a scene from surfaces and lights (validated by the caller).
-    ///
-    /// # Panics
-    /// With more than [`MAX_PLANES`] infinite planes.
-    pub fn build(specs: Vec<SurfaceSpec>, lights: Vec<Light>) -> Self {
+    /// Build a scene from surfaces and lights, checking what the compiled
+    /// scene relies on: at most [`MAX_PLANES`] infinite planes; lights with a
+    /// finite position, a finite intensity `>= 0` [cd] (a power that does not
+    /// overflow) and a finite radius `> 0`; sphere lights only in scenes of
+    /// infinite planes and wholly on one side of each. A scene file passes
+    /// these checks at compile time with its line and field
+    /// ([`crate::scene::load`]); this is the library's own guard.
+    pub fn build(specs: Vec<SurfaceSpec>, lights: Vec<Light>) -> Result<Self, BuildError> {
+        let planes = specs
+            .iter()
+            .filter(|s| matches!(s, SurfaceSpec::Plane(..)))
+            .count();
+        if planes > MAX_PLANES {
+            return Err(BuildError::TooManyPlanes(planes));
+        }
+        let only_planes = planes == specs.len();
+        for (k, l) in lights.iter().enumerate() {
+            let bad = |message: String| BuildError::Light { index: k, message };
+            let (pos, i) = match *l {
+                Light::Point { p, i } => (p, i),
+                Light::Sphere { c, r, i } => {
+                    if !(r.is_finite() && r > 0.0) {
+                        return Err(bad(format!("radius must be finite and > 0 [m], got {r}")));
+                    }
+                    if !only_planes {
+                        return Err(bad(
+                            "sphere lights are supported only in scenes of infinite planes".into(),
+                        ));
+                    }
+                    for spec in &specs {
+                        if let SurfaceSpec::Plane(name, pl, _) = spec
+                            && pl.signed_distance(c).abs() <= r
+                        {
+                            return Err(bad(format!("the sphere light cuts plane `{name}`")));
+                        }
+                    }
+                    (c, i)
+                }
+            };
+            if !pos.is_finite() {
+                return Err(bad(format!(
+                    "position must be finite, got ({}, {}, {})",
+                    pos.x, pos.y, pos.z
+                )));
+            }
+            if !(i.is_finite() && i >= 0.0 && l.power().is_finite()) {
+                return Err(bad(format!(
+                    "intensity must be finite and >= 0 [cd] with a finite flux, got {i:e}"
+                )));
+            }
+        }
+        Ok(Self::build_checked(specs, lights))
+    }
+
+    /// [`Scene::build`] after its checks.
+    fn build_checked(specs: Vec<SurfaceSpec>, lights: Vec<Light>) -> Self {
         let mut scene = Scene {
             surfaces: Vec::new(),
             planes: Vec::new(),
@@ -243,6 +316,7 @@ impl Scene {
             meshes: Vec::new(),
             shs: Vec::new(),
             lights: Vec::new(),
+            light_names: Vec::new(),
             light_cdf: Vec::new(),
             total_power: 0.0,
         };
@@ -302,12 +376,19 @@ impl Scene {
                 }
             }
         }
-        assert!(
-            scene.planes.len() <= MAX_PLANES,
-            "at most {MAX_PLANES} planes"
-        );
+        scene.light_names = (1..=lights.len()).map(|k| format!("light #{k}")).collect();
         scene.set_lights(lights);
         scene
+    }
+
+    /// Name the lights (in their order) for messages and summaries.
+    ///
+    /// # Panics
+    /// If the number of names differs from the number of lights.
+    pub fn with_light_names(mut self, names: Vec<String>) -> Self {
+        assert_eq!(names.len(), self.lights.len(), "one name per light");
+        self.light_names = names;
+        self
     }
 
     fn set_lights(&mut self, lights: Vec<Light>) {
@@ -637,4 +718,85 @@ fn segment(a: DVec3, b: DVec3) -> Option<(DVec3, f64)> {
     let ab = b - a;
     let len = ab.length();
     (len > 0.0).then(|| (ab / len, len))
+}
+
+#[cfg(test)]
+mod build_tests {
+    use super::*;
+    use crate::geometry::Plane;
+
+    fn plane(k: usize) -> SurfaceSpec {
+        SurfaceSpec::Plane(
+            format!("p{k}"),
+            Plane::new(DVec3::new(0.0, 0.0, k as f64), DVec3::Z),
+            Material::Lambertian { rho: 0.5 },
+        )
+    }
+
+    #[test]
+    fn build_refuses_what_the_compiled_scene_cannot_hold() {
+        let light = Light::Point {
+            p: DVec3::new(0.0, 0.0, -0.5),
+            i: 1.0,
+        };
+        let ok: Vec<SurfaceSpec> = (0..MAX_PLANES).map(plane).collect();
+        assert!(Scene::build(ok, vec![light]).is_ok());
+        let many: Vec<SurfaceSpec> = (0..=MAX_PLANES).map(plane).collect();
+        assert_eq!(
+            Scene::build(many, vec![light]).unwrap_err(),
+            BuildError::TooManyPlanes(MAX_PLANES + 1)
+        );
+        for bad in [
+            Light::Point {
+                p: DVec3::new(f64::NAN, 0.0, 0.0),
+                i: 1.0,
+            },
+            Light::Point {
+                p: DVec3::ZERO,
+                i: -1.0,
+            },
+            Light::Point {
+                p: DVec3::ZERO,
+                i: 1e308,
+            },
+            Light::Sphere {
+                c: DVec3::new(0.0, 0.0, 0.5),
+                r: 0.0,
+                i: 1.0,
+            },
+            // Cuts the plane z = 0.
+            Light::Sphere {
+                c: DVec3::new(0.0, 0.0, 0.5),
+                r: 0.6,
+                i: 1.0,
+            },
+        ] {
+            let e = Scene::build(vec![plane(0)], vec![light, bad]).unwrap_err();
+            assert!(
+                matches!(e, BuildError::Light { index: 1, .. }),
+                "{bad:?}: {e}"
+            );
+            assert!(e.to_string().starts_with("light #2: "), "{e}");
+        }
+    }
+
+    #[test]
+    fn lights_keep_their_names() {
+        let scene = crate::scene::parse(
+            "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+             material = { type = \"lambertian\", reflectance = 0.5 }\n\
+             [[light]]\ntype = \"point\"\nname = \"pendant\"\nposition = [0, 0, 1]\nintensity = 1\n\
+             [[light]]\ntype = \"point\"\nposition = [1, 0, 1]\nintensity = 1\n",
+            std::path::Path::new("t.toml"),
+        )
+        .unwrap();
+        assert_eq!(scene.light_names, ["pendant", "light #2"]);
+        let e = crate::estimator::Receivers::new(&scene, &[(DVec3::new(0.0, 0.0, 1.0), DVec3::Z)])
+            .unwrap_err();
+        assert!(
+            e.message.contains("pendant at (0, 0, 1) m"),
+            "{}",
+            e.message
+        );
+    }
 }
