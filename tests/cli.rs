@@ -257,19 +257,52 @@ fn luminance_views_and_mixed_run() {
     }
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<Vec<&str>> = lines.map(|x| x.split(',').collect()).collect();
-    assert!(rows[0][col("L")].parse::<f64>().unwrap() > 0.5);
+    // The view up meets the Lambertian ceiling (rho = 0.5) at its centre:
+    // L = (rho / pi) E with E = 4.528129525817337 lx, the Sobolev value at
+    // r = 0 (data/reference/sobolev_case_A.csv; both planes alike by
+    // symmetry), so L = 0.72068...; first order (rho / pi) I / h^2 exactly.
+    let rho_pi = 0.5 / std::f64::consts::PI;
+    let num = |r: &[&str], c: &str| r[col(c)].parse::<f64>().unwrap();
+    assert!((num(&rows[0], "L_direct") / (rho_pi * 4.0) - 1.0).abs() < 1e-12);
+    let exact_l = rho_pi * 4.528_129_525_817_337;
+    let (l, se) = (num(&rows[0], "L"), num(&rows[0], "L_stderr"));
+    // Four z scores in this test (this view and the three points), each
+    // against Student t with the fewest batches a run makes (32).
+    let bound = lumest::tally::sidak_bound(1e-3, 4, Some(32));
+    assert!(se > 0.0 && se < 0.02 * exact_l, "L {l} +- {se}");
+    assert!(
+        ((l - exact_l) / se).abs() < bound,
+        "L {l} +- {se} vs exact {exact_l}"
+    );
     assert_eq!(rows[0][col("sz")], "1");
     assert_eq!(rows[1][col("L")], "0");
     assert_eq!(rows[1][col("sx")], "");
     assert_eq!(rows[2][col("L")], "0");
     assert_eq!(rows[2][col("sz")], "0");
-    assert!(
-        std::fs::read_to_string(&points_out)
-            .unwrap()
-            .lines()
-            .count()
-            == 4
-    );
+    // The points of the mixed run against the exact Sobolev values.
+    let e_text = std::fs::read_to_string(&points_out).unwrap();
+    let mut e_lines = e_text.lines();
+    let e_header: Vec<&str> = e_lines.next().unwrap().split(',').collect();
+    let ecol = |name: &str| e_header.iter().position(|h| *h == name).unwrap();
+    let sob = lumest::reference::Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).unwrap();
+    let want = [
+        sob.illuminance(1, 0.0).e,
+        sob.illuminance(1, 1.0).e,
+        sob.illuminance(2, 0.5).e,
+    ];
+    assert!((want[0] - 4.528_129_525_817_337).abs() < 1e-9);
+    let e_rows: Vec<Vec<&str>> = e_lines.map(|x| x.split(',').collect()).collect();
+    assert_eq!(e_rows.len(), 3);
+    for (r, exact) in e_rows.iter().zip(want) {
+        let e: f64 = r[ecol("E")].parse().unwrap();
+        let se: f64 = r[ecol("E_stderr")].parse().unwrap();
+        assert!(se > 0.0 && se < 0.02 * exact, "{}: E {e} +- {se}", r[0]);
+        assert!(
+            ((e - exact) / se).abs() < bound,
+            "{}: E {e} +- {se} vs exact {exact}",
+            r[0]
+        );
+    }
     // A zero view direction is an error naming the line.
     let bad = write(
         dir.path(),
