@@ -436,3 +436,78 @@ fn a_single_chain_still_gives_finite_error_bars() {
         "{out}"
     );
 }
+
+#[test]
+fn bench_reports_only_what_it_measures() {
+    // Throughput table: no speed-up against an estimator it does not run;
+    // the projected time follows from the printed columns.
+    let o = lumest()
+        .args(["bench", "--points", "4", "--time", "0.2", "--threads", "1"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(o.stdout).unwrap();
+    for claim in ["60 CPU-s", "backward tracer", "(x"] {
+        assert!(!out.contains(claim), "hard-coded claim `{claim}`: {out}");
+    }
+    let mut lines = out.lines();
+    let header: Vec<&str> = lines.next().unwrap().split_whitespace().collect();
+    let row: Vec<f64> = lines
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .take(10)
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let col = |name: &str| row[header.iter().position(|h| *h == name).unwrap()];
+    let projection = lines.next().unwrap();
+    let cpu_s: f64 = projection
+        .split(": ")
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    // The wall time with three decimals, from the same line.
+    let wall: f64 = projection
+        .split(" x ")
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((wall - col("time_s")).abs() <= 0.051, "{projection}");
+    let want = col("rms_R").powi(2) * wall / 1e-6;
+    assert!(
+        (cpu_s / want - 1.0).abs() < 1e-2,
+        "{projection}: {cpu_s} vs {want} from the table"
+    );
+    // `--compare`: the error ratio is sqrt(FOM_local / FOM_backward) of the
+    // two measured rows.
+    let o = lumest()
+        .args(["bench", "--compare", "--points", "2", "--time", "0.2"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let rows: Vec<Vec<&str>> = out
+        .lines()
+        .map(|l| l.split_whitespace().collect())
+        .collect();
+    let fom = |name: &str| -> f64 {
+        let r = rows.iter().find(|r| r.get(1) == Some(&name)).unwrap();
+        r.last().unwrap().parse().unwrap()
+    };
+    let ratio: f64 = out
+        .lines()
+        .find(|l| l.contains("backward error / local error"))
+        .and_then(|l| l.rsplit(' ').next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    let want = (fom("local") / fom("backward")).sqrt();
+    assert!(
+        (ratio / want - 1.0).abs() < 2e-3,
+        "ratio {ratio} vs {want} from the FOM columns: {out}"
+    );
+}
