@@ -23,6 +23,44 @@ intensity = 1.0
 
 const POINTS: &str = "id,x,y,z,nx,ny,nz\na,0,0,0,0,0,1\nb,1,0,0,0,0,1\nc,0.5,0,1,0,0,-1\n";
 
+/// The exact Sobolev solution of SCENE (h1 = h2 = 0.5 m, rho = 0.5, 1 cd).
+fn sobolev() -> lumest::reference::Sobolev {
+    lumest::reference::Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).unwrap()
+}
+
+/// (plane, r) of POINTS' rows a, b, c.
+const POINTS_AT: [(u8, f64); 3] = [(1, 0.0), (1, 1.0), (2, 0.5)];
+
+/// Rows of a CSV text as maps from column name to field.
+fn csv_rows(text: &str) -> Vec<std::collections::HashMap<String, String>> {
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+/// `|value - exact| / stderr` below the Sidak bound for `m` scores
+/// (Student t at the fewest batches a run makes, 32), with a real error bar.
+fn assert_z(what: &str, value: f64, se: f64, exact: f64, m: usize) {
+    let bound = lumest::tally::sidak_bound(1e-3, m, Some(32));
+    assert!(
+        se > 0.0 && se < 0.05 * exact.abs(),
+        "{what}: {value} +- {se}"
+    );
+    let z = (value - exact) / se;
+    assert!(
+        z.abs() < bound,
+        "{what}: {value} +- {se} vs exact {exact} (z {z})"
+    );
+}
+
 fn lumest() -> Command {
     Command::cargo_bin("lumest").unwrap()
 }
@@ -99,10 +137,12 @@ fn illuminance_writes_input_columns_and_results() {
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     // Exact direct term at the foot of the source: I / h^2 = 4 lx.
     assert_eq!(rows[0][col("E_direct")].parse::<f64>().unwrap(), 4.0);
-    for r in &rows {
+    // Each point against the exact Sobolev value.
+    let sob = sobolev();
+    for (r, (plane, x)) in rows.iter().zip(POINTS_AT) {
         let e: f64 = r[col("E")].parse().unwrap();
         let se: f64 = r[col("E_stderr")].parse().unwrap();
-        assert!(e.is_finite() && se.is_finite() && se > 0.0);
+        assert_z(r[0], e, se, sob.illuminance(plane, x).e, 3);
     }
     assert!(
         stderr.contains("chains/s") && stderr.contains("FOM"),
@@ -121,6 +161,41 @@ fn orders_columns_and_stdin_stdout() {
         "{header}"
     );
     assert_eq!(out.lines().count(), 4);
+    // Orders 1, 2 and the rest against the exact Neumann terms; they add
+    // up to the reflected part.
+    let sob = sobolev();
+    let rows = csv_rows(&out);
+    for (r, (plane, x)) in rows.iter().zip(POINTS_AT) {
+        let f = |c: &str| -> f64 { r[c].parse().unwrap() };
+        let exact = sob.illuminance(plane, x);
+        let o1 = sob.order(plane, x, 1);
+        let o2 = sob.order(plane, x, 2);
+        let rest = exact.e - exact.e_direct - o1 - o2;
+        let id = &r["id"];
+        assert_z(
+            &format!("{id} order 1"),
+            f("E_order1"),
+            f("E_order1_stderr"),
+            o1,
+            9,
+        );
+        assert_z(
+            &format!("{id} order 2"),
+            f("E_order2"),
+            f("E_order2_stderr"),
+            o2,
+            9,
+        );
+        assert_z(
+            &format!("{id} rest"),
+            f("E_rest"),
+            f("E_rest_stderr"),
+            rest,
+            9,
+        );
+        let sum = f("E_order1") + f("E_order2") + f("E_rest");
+        assert!((sum - f("E_indirect")).abs() <= 1e-12 * sum, "{id}: {sum}");
+    }
 }
 
 #[test]
@@ -410,13 +485,18 @@ fn diagnostics_flag_a_point_next_to_a_lit_surface() {
         let o = lumest().args(&args).output().unwrap();
         assert!(o.status.success());
         let out = String::from_utf8(o.stdout).unwrap();
-        let mut lines = out.lines();
-        let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-        let flag = header.iter().position(|h| h == "E_flag").unwrap();
-        let rows: Vec<String> = lines
-            .map(|l| l.split(',').nth(flag).unwrap().to_string())
-            .collect();
-        (rows, String::from_utf8_lossy(&o.stderr).to_string())
+        let rows = csv_rows(&out);
+        // The ordinary point against the exact Sobolev value, either way.
+        let f = |c: &str| -> f64 { rows[1][c].parse().unwrap() };
+        assert_z(
+            "fine",
+            f("E"),
+            f("E_stderr"),
+            sobolev().illuminance(1, 0.3).e,
+            2,
+        );
+        let flags: Vec<String> = rows.iter().map(|r| r["E_flag"].clone()).collect();
+        (flags, String::from_utf8_lossy(&o.stderr).to_string())
     };
     let (plain, err) = flags(&["--near-radius", "0"]);
     assert_ne!(plain[0], "ok", "near-surface point not flagged");
