@@ -173,8 +173,28 @@ fn inline_degree_zero_sh_sphere_gives_the_analytic_spheres_answers() {
         run(s, &rec, &cfg, &mut |_| true)
     };
     let (a, b) = (go(&sphere), go(&sh));
-    for j in 0..pts.len() {
+    // The integrating sphere's exact answer: the point light's direct
+    // illuminance I cos / d^2, plus the uniform reflected part
+    // rho Phi / (A (1 - rho)), Phi = 4 pi I, A = 4 pi R^2.
+    let (i, rho, radius) = (10.0, 0.8, 1.5);
+    let light = DVec3::new(0.3, 0.1, -0.2);
+    let reflected = rho * 4.0 * std::f64::consts::PI * i
+        / (4.0 * std::f64::consts::PI * radius * radius * (1.0 - rho));
+    let bound = lumest::tally::sidak_bound(1e-3, pts.len(), Some(a.tallies.batches()));
+    for (j, p) in pts.iter().enumerate() {
+        let d = light - p.p;
+        let direct = i * p.n.dot(d) / d.length().powi(3);
+        assert!((a.direct[j] - direct).abs() <= 1e-12 * direct, "point {j}");
         assert_eq!(a.direct[j], b.direct[j]);
+        let w = &a.tallies.indirect[j];
+        assert!(w.std_error() < 0.02 * reflected, "point {j}: {w:?}");
+        let z = (w.mean() - reflected) / w.std_error();
+        assert!(
+            z.abs() < bound,
+            "point {j}: {} +- {} vs exact {reflected} (z {z})",
+            w.mean(),
+            w.std_error()
+        );
         // Same chains through the same sphere: equal to rounding.
         let (ea, eb) = (a.tallies.indirect[j].mean(), b.tallies.indirect[j].mean());
         assert!((ea - eb).abs() <= 1e-9 * ea, "{ea} vs {eb}");
