@@ -346,9 +346,9 @@ fn point_lights_behind_every_kind_of_occluder_match_the_brute_force_reference() 
     // The runners hand the same first order on (a few chains suffice).
     let fwd = lumest::run::run(&scene, &rec, &chains_cfg(256, 1, 0), &mut |_| true);
     let bwd = lumest::backward::run(&scene, &rec, &chains_cfg(32, 1, 0), &mut |_| true);
-    for j in 0..pairs.len() {
-        assert!(close(fwd.direct[j], reference[j], 1e-9), "forward {j}");
-        assert!(close(bwd.direct[j], reference[j], 1e-9), "backward {j}");
+    for (j, &want) in reference.iter().enumerate() {
+        assert!(close(fwd.direct[j], want, 1e-9), "forward {j}");
+        assert!(close(bwd.direct[j], want, 1e-9), "backward {j}");
     }
     // The test can tell: each occluder shadows receivers that the others
     // leave lit (so leaving it out changes the answer by far more than

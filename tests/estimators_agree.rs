@@ -83,19 +83,18 @@ fn local_and_backward_agree_on_a_phong_scene() {
     let back = lumest::backward::run(&scene, &receivers, &cfg(20_000), &mut |_| true);
     let b = local.tallies.batches().min(back.tallies.batches());
     let bound = sidak_bound(1e-3, rec.len(), Some(b));
-    for j in 0..rec.len() {
-        assert!(direct[j] > 0.0, "receiver {j}: unlit");
+    for (j, &dj) in direct.iter().enumerate() {
+        assert!(dj > 0.0, "receiver {j}: unlit");
         for (name, got) in [("local", local.direct[j]), ("backward", back.direct[j])] {
             assert!(
-                (got - direct[j]).abs() <= 1e-9 * direct[j],
-                "receiver {j}: {name} first order {got} vs reference {}",
-                direct[j]
+                (got - dj).abs() <= 1e-9 * dj,
+                "receiver {j}: {name} first order {got} vs reference {dj}"
             );
         }
         // Totals: each estimator's reflected part on the reference's first order.
         let (a, c) = (&local.tallies.indirect[j], &back.tallies.indirect[j]);
         assert!(a.mean() > 0.0);
-        let (ta, tc) = (direct[j] + a.mean(), direct[j] + c.mean());
+        let (ta, tc) = (dj + a.mean(), dj + c.mean());
         let z = (ta - tc) / a.std_error().hypot(c.std_error());
         assert!(
             z.abs() < bound,

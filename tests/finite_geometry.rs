@@ -348,12 +348,12 @@ fn every_shape_gives_the_same_answers_from_millimetres_to_ten_kilometres() {
         let rec = Receivers::from_receivers(&scene, &recs).unwrap();
         let r = run(&scene, &rec, &chains_cfg(20_000, 4, 0), &mut |_| true);
         let direct = all_shapes_direct(&recs, &occ, &lights);
-        for j in 0..recs.len() {
+        for (j, &want) in direct.iter().enumerate() {
             assert!(
-                (r.direct[j] - direct[j]).abs() <= 1e-9 * direct[j],
+                (r.direct[j] - want).abs() <= 1e-9 * want,
                 "scale {s}, point {j}: direct {} vs reference {}",
                 r.direct[j],
-                direct[j]
+                want
             );
             let e = (r.direct[j] + r.tallies.indirect[j].mean()) * s * s;
             assert!(e.is_finite() && e > 0.0, "scale {s}, point {j}: {e}");
@@ -398,16 +398,15 @@ fn forward_and_backward_agree_among_meshes_sh_objects_spheres_and_discs() {
     // not compared); every other point is z-tested.
     const CORNER: usize = 6;
     let bound = sidak_bound(1e-3, recs.len() - 1, None);
-    for j in 0..recs.len() {
+    for (j, &dj) in direct.iter().enumerate() {
         for (name, got) in [("forward", fwd.direct[j]), ("backward", bwd.direct[j])] {
             assert!(
-                (got - direct[j]).abs() <= 1e-9 * direct[j],
-                "point {j}: {name} direct {got} vs reference {}",
-                direct[j]
+                (got - dj).abs() <= 1e-9 * dj,
+                "point {j}: {name} direct {got} vs reference {dj}"
             );
         }
         let (a, b) = (&fwd.tallies.indirect[j], &bwd.tallies.indirect[j]);
-        let (ea, eb) = (direct[j] + a.mean(), direct[j] + b.mean());
+        let (ea, eb) = (dj + a.mean(), dj + b.mean());
         let zz = (ea - eb) / a.std_error().hypot(b.std_error());
         let flag = fwd.tallies.diagnostics(j, fwd.direct[j]).flag();
         let flag_b = bwd.tallies.diagnostics(j, bwd.direct[j]).flag();
