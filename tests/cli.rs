@@ -424,13 +424,29 @@ fn fan_and_render_write_their_files() {
         .arg(&fan)
         .arg("--plot")
         .arg(&plot)
-        .args(["--chains", "2000", "--quiet"])
+        .args(["--chains", "8000", "--quiet"])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(&fan).unwrap();
     assert_eq!(text.lines().count(), 1 + 3 * 4);
     assert!(text.starts_with("theta_deg,phi_deg,x,y,z,dx,dy,dz,L,"));
+    // Every view of the fan meets the ceiling (rho = 0.5) at its sub-point
+    // s: L = (rho / pi) E_2(|s_xy|), first order (rho / pi) I h / d^3 with
+    // d the distance from the source (0, 0, 0.5) to s.
+    let sob = sobolev();
+    let rho_pi = 0.5 / std::f64::consts::PI;
+    for r in csv_rows(&text) {
+        let f = |c: &str| -> f64 { r[c].parse().unwrap() };
+        let id = format!("fan {} {}", r["theta_deg"], r["phi_deg"]);
+        assert_eq!(f("sz"), 1.0, "{id}");
+        let (sx, sy) = (f("sx"), f("sy"));
+        let d = (sx * sx + sy * sy + 0.25).sqrt();
+        let first = rho_pi * 0.5 / d.powi(3);
+        assert!((f("L_direct") / first - 1.0).abs() < 1e-12, "{id}");
+        let exact = rho_pi * sob.illuminance(2, sx.hypot(sy)).e;
+        assert_z(&id, f("L"), f("L_stderr"), exact, 12);
+    }
     assert!(std::fs::metadata(&plot).unwrap().len() > 1000);
 
     let out = dir.path().join("img.png");
