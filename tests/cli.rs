@@ -456,20 +456,32 @@ fn fan_and_render_write_their_files() {
             "--height", "6", "--out",
         ])
         .arg(&out)
-        .args(["--chains", "2000", "--quiet"])
+        .args(["--chains", "50000", "--quiet"])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for f in ["img.png", "img.hdr", "img_false.png", "img.csv"] {
         assert!(dir.path().join(f).exists(), "{f} missing");
     }
-    assert_eq!(
-        std::fs::read_to_string(dir.path().join("img.csv"))
-            .unwrap()
-            .lines()
-            .count(),
-        1 + 48
-    );
+    let img = std::fs::read_to_string(dir.path().join("img.csv")).unwrap();
+    assert_eq!(img.lines().count(), 1 + 48);
+    // Every pixel sees the floor or the ceiling: the same exact luminance,
+    // each pixel's tally passing every check.
+    for r in csv_rows(&img) {
+        let f = |c: &str| -> f64 { r[c].parse().unwrap() };
+        let id = format!("pixel {} {}", r["px"], r["py"]);
+        let plane = if f("sz") == 1.0 { 2 } else { 1 };
+        assert!(plane == 2 || f("sz") == 0.0, "{id}");
+        let (sx, sy) = (f("sx"), f("sy"));
+        let d = (sx * sx + sy * sy + 0.25).sqrt();
+        assert!(
+            (f("L_direct") / (rho_pi * 0.5 / d.powi(3)) - 1.0).abs() < 1e-12,
+            "{id}"
+        );
+        let exact = rho_pi * sob.illuminance(plane, sx.hypot(sy)).e;
+        assert_z(&id, f("L"), f("L_stderr"), exact, 48);
+        assert_eq!(r["L_flag"], "ok", "{id}");
+    }
 }
 
 #[test]
