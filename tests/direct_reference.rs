@@ -392,6 +392,22 @@ fn point_lights_behind_every_kind_of_occluder_match_the_brute_force_reference() 
     assert!(zeros >= 50, "{zeros} receivers in full shadow");
 }
 
+/// Each light gives more than 2 % of the first order at 20 receivers or
+/// more, so a dropped light fails the comparison.
+fn assert_every_light_matters(lights: &[RefLight], occ: &[Occluder], pairs: &[Pair], q: usize) {
+    for (k, l) in lights.iter().enumerate() {
+        let lit = pairs
+            .iter()
+            .filter(|p| {
+                let alone = first_order(&[*l], occ, p.rec.p, p.rec.n, p.resp, q);
+                let all = first_order(lights, occ, p.rec.p, p.rec.n, p.resp, q);
+                alone > 0.02 * all
+            })
+            .count();
+        assert!(lit >= 20, "light {k} matters at only {lit} receivers");
+    }
+}
+
 /// Sphere lights in a scene of infinite planes (where lumest allows them):
 /// floor (glossy), ceiling, a wall with a sphere light behind it; a point
 /// light too.
@@ -587,6 +603,7 @@ fn sphere_lights_cut_by_the_horizon_match_quadrature_over_the_visible_cone() {
         pairs.len()
     );
     assert!(cut >= 100, "only {cut} receivers test the horizon cut");
+    assert_every_light_matters(&lights, &occ, &pairs, 0);
 }
 
 #[test]
@@ -651,4 +668,5 @@ fn luminance_at_phong_sub_points_lit_by_sphere_lights_matches_quadrature() {
         pairs.len()
     );
     assert!(nonzero > 200, "{nonzero} lit receivers");
+    assert_every_light_matters(&lights, &occ, &pairs, 48);
 }
