@@ -1,6 +1,9 @@
 //! An independent reference for the first order (light straight from the
 //! sources), written from the definitions and sharing no code with lumest's
-//! estimators, its `Light` methods or its ray-shape intersection.
+//! estimators, its `Light` methods or its ray-shape intersection. Only shape
+//! data comes from lumest where a test's scene is built by it: the corners
+//! of a mesh's triangles and the radius function of a spherical-harmonic
+//! object ([`Occluder::Star`]); [`read_obj`] reads an OBJ file itself.
 //!
 //! - **Blocking**: an occluder blocks the open segment from a receiver to a
 //!   light point when the segment meets it at a parameter `t` in
@@ -54,6 +57,13 @@ pub enum Occluder {
     Parallelogram { o: DVec3, e1: DVec3, e2: DVec3 },
     /// Triangle.
     Triangle([DVec3; 3]),
+    /// Triangles inside the ball of centre `c` and radius `r` (a segment
+    /// that misses the ball meets none of them).
+    Mesh {
+        c: DVec3,
+        r: f64,
+        tris: Vec<Occluder>,
+    },
     /// Star-shaped object: a point `q` is inside when
     /// `|q - c| < scale * radius(rot^T (q - c))`.
     Star {
@@ -134,6 +144,10 @@ impl Occluder {
                     }
                     _ => false,
                 }
+            }
+            Occluder::Mesh { c, r, tris } => {
+                let t = ((*c - a).dot(d) / d.dot(d)).clamp(0.0, 1.0);
+                (a + d * t - *c).length() <= *r && tris.iter().any(|o| o.blocks(a, b))
             }
             Occluder::Star {
                 c,
@@ -386,6 +400,47 @@ pub fn first_order_with(
         }
     }
     sum
+}
+
+/// Triangles (corners) with their bounding ball as one occluder.
+pub fn triangle_mesh(tris: &[[DVec3; 3]]) -> Occluder {
+    let n = (3 * tris.len()) as f64;
+    let c = tris.iter().flatten().fold(DVec3::ZERO, |a, &p| a + p) / n;
+    let r = tris
+        .iter()
+        .flatten()
+        .map(|&p| (p - c).length())
+        .fold(0.0, f64::max)
+        * (1.0 + 1e-9);
+    Occluder::Mesh {
+        c,
+        r,
+        tris: tris.iter().map(|&t| Occluder::Triangle(t)).collect(),
+    }
+}
+
+/// Vertices and triangles of a Wavefront OBJ text (`v x y z` and
+/// `f i j k` lines, 1-based indices; other lines ignored).
+pub fn read_obj(text: &str) -> Vec<[DVec3; 3]> {
+    let mut v = Vec::new();
+    let mut tris = Vec::new();
+    for line in text.lines() {
+        let mut it = line.split_whitespace();
+        match it.next() {
+            Some("v") => {
+                let c: Vec<f64> = it.map(|x| x.parse().unwrap()).collect();
+                v.push(DVec3::new(c[0], c[1], c[2]));
+            }
+            Some("f") => {
+                let k: Vec<usize> = it
+                    .map(|x| x.split('/').next().unwrap().parse::<usize>().unwrap() - 1)
+                    .collect();
+                tris.push([v[k[0]], v[k[1]], v[k[2]]]);
+            }
+            _ => {}
+        }
+    }
+    tris
 }
 
 /// The triangles of a lumest mesh as occluders (corner positions only).
