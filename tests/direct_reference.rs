@@ -568,10 +568,15 @@ fn sphere_lights_cut_by_the_horizon_match_quadrature_over_the_visible_cone() {
     let pairs = sphere_receivers(&lights, false);
     let recs: Vec<Receiver> = pairs.iter().map(|p| p.rec).collect();
     let rec = Receivers::from_receivers(&scene, &recs).unwrap();
+    // What the runners report (a few chains suffice for the first order).
+    let fwd = lumest::run::run(&scene, &rec, &chains_cfg(256, 1, 0), &mut |_| true);
+    let bwd = lumest::backward::run(&scene, &rec, &chains_cfg(32, 1, 0), &mut |_| true);
     let mut cut = 0;
     let mut worst: f64 = 0.0;
     for (j, p) in pairs.iter().enumerate() {
         let want = first_order(&lights, &occ, p.rec.p, p.rec.n, p.resp, 0);
+        assert!(close(fwd.direct[j], want, 1e-9), "forward {j}");
+        assert!(close(bwd.direct[j], want, 1e-9), "backward {j}");
         let got = rec.direct()[j];
         assert!(
             close(got, want, 1e-9),
