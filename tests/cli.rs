@@ -23,6 +23,44 @@ intensity = 1.0
 
 const POINTS: &str = "id,x,y,z,nx,ny,nz\na,0,0,0,0,0,1\nb,1,0,0,0,0,1\nc,0.5,0,1,0,0,-1\n";
 
+/// The exact Sobolev solution of SCENE (h1 = h2 = 0.5 m, rho = 0.5, 1 cd).
+fn sobolev() -> lumest::reference::Sobolev {
+    lumest::reference::Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).unwrap()
+}
+
+/// (plane, r) of POINTS' rows a, b, c.
+const POINTS_AT: [(u8, f64); 3] = [(1, 0.0), (1, 1.0), (2, 0.5)];
+
+/// Rows of a CSV text as maps from column name to field.
+fn csv_rows(text: &str) -> Vec<std::collections::HashMap<String, String>> {
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+/// `|value - exact| / stderr` below the Sidak bound for `m` scores
+/// (Student t at the fewest batches a run makes, 32), with a real error bar.
+fn assert_z(what: &str, value: f64, se: f64, exact: f64, m: usize) {
+    let bound = lumest::tally::sidak_bound(1e-3, m, Some(32));
+    assert!(
+        se > 0.0 && se < 0.05 * exact.abs(),
+        "{what}: {value} +- {se}"
+    );
+    let z = (value - exact) / se;
+    assert!(
+        z.abs() < bound,
+        "{what}: {value} +- {se} vs exact {exact} (z {z})"
+    );
+}
+
 fn lumest() -> Command {
     Command::cargo_bin("lumest").unwrap()
 }
@@ -99,10 +137,12 @@ fn illuminance_writes_input_columns_and_results() {
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     // Exact direct term at the foot of the source: I / h^2 = 4 lx.
     assert_eq!(rows[0][col("E_direct")].parse::<f64>().unwrap(), 4.0);
-    for r in &rows {
+    // Each point against the exact Sobolev value.
+    let sob = sobolev();
+    for (r, (plane, x)) in rows.iter().zip(POINTS_AT) {
         let e: f64 = r[col("E")].parse().unwrap();
         let se: f64 = r[col("E_stderr")].parse().unwrap();
-        assert!(e.is_finite() && se.is_finite() && se > 0.0);
+        assert_z(r[0], e, se, sob.illuminance(plane, x).e, 3);
     }
     assert!(
         stderr.contains("chains/s") && stderr.contains("FOM"),
@@ -121,6 +161,41 @@ fn orders_columns_and_stdin_stdout() {
         "{header}"
     );
     assert_eq!(out.lines().count(), 4);
+    // Orders 1, 2 and the rest against the exact Neumann terms; they add
+    // up to the reflected part.
+    let sob = sobolev();
+    let rows = csv_rows(&out);
+    for (r, (plane, x)) in rows.iter().zip(POINTS_AT) {
+        let f = |c: &str| -> f64 { r[c].parse().unwrap() };
+        let exact = sob.illuminance(plane, x);
+        let o1 = sob.order(plane, x, 1);
+        let o2 = sob.order(plane, x, 2);
+        let rest = exact.e - exact.e_direct - o1 - o2;
+        let id = &r["id"];
+        assert_z(
+            &format!("{id} order 1"),
+            f("E_order1"),
+            f("E_order1_stderr"),
+            o1,
+            9,
+        );
+        assert_z(
+            &format!("{id} order 2"),
+            f("E_order2"),
+            f("E_order2_stderr"),
+            o2,
+            9,
+        );
+        assert_z(
+            &format!("{id} rest"),
+            f("E_rest"),
+            f("E_rest_stderr"),
+            rest,
+            9,
+        );
+        let sum = f("E_order1") + f("E_order2") + f("E_rest");
+        assert!((sum - f("E_indirect")).abs() <= 1e-12 * sum, "{id}: {sum}");
+    }
 }
 
 #[test]
@@ -257,19 +332,52 @@ fn luminance_views_and_mixed_run() {
     }
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<Vec<&str>> = lines.map(|x| x.split(',').collect()).collect();
-    assert!(rows[0][col("L")].parse::<f64>().unwrap() > 0.5);
+    // The view up meets the Lambertian ceiling (rho = 0.5) at its centre:
+    // L = (rho / pi) E with E = 4.528129525817337 lx, the Sobolev value at
+    // r = 0 (data/reference/sobolev_case_A.csv; both planes alike by
+    // symmetry), so L = 0.72068...; first order (rho / pi) I / h^2 exactly.
+    let rho_pi = 0.5 / std::f64::consts::PI;
+    let num = |r: &[&str], c: &str| r[col(c)].parse::<f64>().unwrap();
+    assert!((num(&rows[0], "L_direct") / (rho_pi * 4.0) - 1.0).abs() < 1e-12);
+    let exact_l = rho_pi * 4.528_129_525_817_337;
+    let (l, se) = (num(&rows[0], "L"), num(&rows[0], "L_stderr"));
+    // Four z scores in this test (this view and the three points), each
+    // against Student t with the fewest batches a run makes (32).
+    let bound = lumest::tally::sidak_bound(1e-3, 4, Some(32));
+    assert!(se > 0.0 && se < 0.02 * exact_l, "L {l} +- {se}");
+    assert!(
+        ((l - exact_l) / se).abs() < bound,
+        "L {l} +- {se} vs exact {exact_l}"
+    );
     assert_eq!(rows[0][col("sz")], "1");
     assert_eq!(rows[1][col("L")], "0");
     assert_eq!(rows[1][col("sx")], "");
     assert_eq!(rows[2][col("L")], "0");
     assert_eq!(rows[2][col("sz")], "0");
-    assert!(
-        std::fs::read_to_string(&points_out)
-            .unwrap()
-            .lines()
-            .count()
-            == 4
-    );
+    // The points of the mixed run against the exact Sobolev values.
+    let e_text = std::fs::read_to_string(&points_out).unwrap();
+    let mut e_lines = e_text.lines();
+    let e_header: Vec<&str> = e_lines.next().unwrap().split(',').collect();
+    let ecol = |name: &str| e_header.iter().position(|h| *h == name).unwrap();
+    let sob = lumest::reference::Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).unwrap();
+    let want = [
+        sob.illuminance(1, 0.0).e,
+        sob.illuminance(1, 1.0).e,
+        sob.illuminance(2, 0.5).e,
+    ];
+    assert!((want[0] - 4.528_129_525_817_337).abs() < 1e-9);
+    let e_rows: Vec<Vec<&str>> = e_lines.map(|x| x.split(',').collect()).collect();
+    assert_eq!(e_rows.len(), 3);
+    for (r, exact) in e_rows.iter().zip(want) {
+        let e: f64 = r[ecol("E")].parse().unwrap();
+        let se: f64 = r[ecol("E_stderr")].parse().unwrap();
+        assert!(se > 0.0 && se < 0.02 * exact, "{}: E {e} +- {se}", r[0]);
+        assert!(
+            ((e - exact) / se).abs() < bound,
+            "{}: E {e} +- {se} vs exact {exact}",
+            r[0]
+        );
+    }
     // A zero view direction is an error naming the line.
     let bad = write(
         dir.path(),
@@ -316,13 +424,29 @@ fn fan_and_render_write_their_files() {
         .arg(&fan)
         .arg("--plot")
         .arg(&plot)
-        .args(["--chains", "2000", "--quiet"])
+        .args(["--chains", "8000", "--quiet"])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(&fan).unwrap();
     assert_eq!(text.lines().count(), 1 + 3 * 4);
     assert!(text.starts_with("theta_deg,phi_deg,x,y,z,dx,dy,dz,L,"));
+    // Every view of the fan meets the ceiling (rho = 0.5) at its sub-point
+    // s: L = (rho / pi) E_2(|s_xy|), first order (rho / pi) I h / d^3 with
+    // d the distance from the source (0, 0, 0.5) to s.
+    let sob = sobolev();
+    let rho_pi = 0.5 / std::f64::consts::PI;
+    for r in csv_rows(&text) {
+        let f = |c: &str| -> f64 { r[c].parse().unwrap() };
+        let id = format!("fan {} {}", r["theta_deg"], r["phi_deg"]);
+        assert_eq!(f("sz"), 1.0, "{id}");
+        let (sx, sy) = (f("sx"), f("sy"));
+        let d = (sx * sx + sy * sy + 0.25).sqrt();
+        let first = rho_pi * 0.5 / d.powi(3);
+        assert!((f("L_direct") / first - 1.0).abs() < 1e-12, "{id}");
+        let exact = rho_pi * sob.illuminance(2, sx.hypot(sy)).e;
+        assert_z(&id, f("L"), f("L_stderr"), exact, 12);
+    }
     assert!(std::fs::metadata(&plot).unwrap().len() > 1000);
 
     let out = dir.path().join("img.png");
@@ -332,20 +456,32 @@ fn fan_and_render_write_their_files() {
             "--height", "6", "--out",
         ])
         .arg(&out)
-        .args(["--chains", "2000", "--quiet"])
+        .args(["--chains", "50000", "--quiet"])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for f in ["img.png", "img.hdr", "img_false.png", "img.csv"] {
         assert!(dir.path().join(f).exists(), "{f} missing");
     }
-    assert_eq!(
-        std::fs::read_to_string(dir.path().join("img.csv"))
-            .unwrap()
-            .lines()
-            .count(),
-        1 + 48
-    );
+    let img = std::fs::read_to_string(dir.path().join("img.csv")).unwrap();
+    assert_eq!(img.lines().count(), 1 + 48);
+    // Every pixel sees the floor or the ceiling: the same exact luminance,
+    // each pixel's tally passing every check.
+    for r in csv_rows(&img) {
+        let f = |c: &str| -> f64 { r[c].parse().unwrap() };
+        let id = format!("pixel {} {}", r["px"], r["py"]);
+        let plane = if f("sz") == 1.0 { 2 } else { 1 };
+        assert!(plane == 2 || f("sz") == 0.0, "{id}");
+        let (sx, sy) = (f("sx"), f("sy"));
+        let d = (sx * sx + sy * sy + 0.25).sqrt();
+        assert!(
+            (f("L_direct") / (rho_pi * 0.5 / d.powi(3)) - 1.0).abs() < 1e-12,
+            "{id}"
+        );
+        let exact = rho_pi * sob.illuminance(plane, sx.hypot(sy)).e;
+        assert_z(&id, f("L"), f("L_stderr"), exact, 48);
+        assert_eq!(r["L_flag"], "ok", "{id}");
+    }
 }
 
 #[test]
@@ -377,13 +513,18 @@ fn diagnostics_flag_a_point_next_to_a_lit_surface() {
         let o = lumest().args(&args).output().unwrap();
         assert!(o.status.success());
         let out = String::from_utf8(o.stdout).unwrap();
-        let mut lines = out.lines();
-        let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-        let flag = header.iter().position(|h| h == "E_flag").unwrap();
-        let rows: Vec<String> = lines
-            .map(|l| l.split(',').nth(flag).unwrap().to_string())
-            .collect();
-        (rows, String::from_utf8_lossy(&o.stderr).to_string())
+        let rows = csv_rows(&out);
+        // The ordinary point against the exact Sobolev value, either way.
+        let f = |c: &str| -> f64 { rows[1][c].parse().unwrap() };
+        assert_z(
+            "fine",
+            f("E"),
+            f("E_stderr"),
+            sobolev().illuminance(1, 0.3).e,
+            2,
+        );
+        let flags: Vec<String> = rows.iter().map(|r| r["E_flag"].clone()).collect();
+        (flags, String::from_utf8_lossy(&o.stderr).to_string())
     };
     let (plain, err) = flags(&["--near-radius", "0"]);
     assert_ne!(plain[0], "ok", "near-surface point not flagged");
@@ -401,5 +542,80 @@ fn a_single_chain_still_gives_finite_error_bars() {
     assert!(
         !out.to_lowercase().contains("nan") && !out.contains("inf"),
         "{out}"
+    );
+}
+
+#[test]
+fn bench_reports_only_what_it_measures() {
+    // Throughput table: no speed-up against an estimator it does not run;
+    // the projected time follows from the printed columns.
+    let o = lumest()
+        .args(["bench", "--points", "4", "--time", "0.2", "--threads", "1"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(o.stdout).unwrap();
+    for claim in ["60 CPU-s", "backward tracer", "(x"] {
+        assert!(!out.contains(claim), "hard-coded claim `{claim}`: {out}");
+    }
+    let mut lines = out.lines();
+    let header: Vec<&str> = lines.next().unwrap().split_whitespace().collect();
+    let row: Vec<f64> = lines
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .take(10)
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let col = |name: &str| row[header.iter().position(|h| *h == name).unwrap()];
+    let projection = lines.next().unwrap();
+    let cpu_s: f64 = projection
+        .split(": ")
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    // The wall time with three decimals, from the same line.
+    let wall: f64 = projection
+        .split(" x ")
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((wall - col("time_s")).abs() <= 0.051, "{projection}");
+    let want = col("rms_R").powi(2) * wall / 1e-6;
+    assert!(
+        (cpu_s / want - 1.0).abs() < 1e-2,
+        "{projection}: {cpu_s} vs {want} from the table"
+    );
+    // `--compare`: the error ratio is sqrt(FOM_local / FOM_backward) of the
+    // two measured rows.
+    let o = lumest()
+        .args(["bench", "--compare", "--points", "2", "--time", "0.2"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let rows: Vec<Vec<&str>> = out
+        .lines()
+        .map(|l| l.split_whitespace().collect())
+        .collect();
+    let fom = |name: &str| -> f64 {
+        let r = rows.iter().find(|r| r.get(1) == Some(&name)).unwrap();
+        r.last().unwrap().parse().unwrap()
+    };
+    let ratio: f64 = out
+        .lines()
+        .find(|l| l.contains("backward error / local error"))
+        .and_then(|l| l.rsplit(' ').next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    let want = (fom("local") / fom("backward")).sqrt();
+    assert!(
+        (ratio / want - 1.0).abs() < 2e-3,
+        "ratio {ratio} vs {want} from the FOM columns: {out}"
     );
 }

@@ -5,6 +5,7 @@
 //! forward and backward estimators where shapes occlude.
 
 mod common;
+use common::direct::{Occluder, RefLight, RefResponse, first_order, mesh_triangles};
 use common::{chains_cfg, z};
 use glam::DVec3;
 use lumest::commands::cases::{Case, box_room, flux_balance, plate_case, sphere_case};
@@ -140,24 +141,81 @@ fn forward_and_backward_agree_in_the_furnished_box() {
     let rec = Receivers::from_receivers(&scene, &recs).unwrap();
     let fwd = run(&scene, &rec, &chains_cfg(200_000, 21, 0), &mut |_| true);
     let bwd = lumest::backward::run(&scene, &rec, &chains_cfg(20_000, 22, 0), &mut |_| true);
+    // The first order from the independent reference: the room's walls,
+    // the desk and the partition as occluders of the two point lights.
+    let occ = [
+        Occluder::Box {
+            lo: DVec3::ZERO,
+            hi: DVec3::new(5.0, 4.0, 3.0),
+        },
+        Occluder::Box {
+            lo: DVec3::new(1.0, 1.0, 0.0),
+            hi: DVec3::new(2.6, 1.8, 0.75),
+        },
+        Occluder::Parallelogram {
+            o: DVec3::new(3.5, 0.0, 0.0),
+            e1: DVec3::Y * 2.0,
+            e2: DVec3::Z * 1.8,
+        },
+    ];
+    let lights = [
+        RefLight::Point {
+            q: DVec3::new(1.5, 2.0, 2.7),
+            i: 300.0,
+        },
+        RefLight::Point {
+            q: DVec3::new(4.0, 2.5, 2.7),
+            i: 200.0,
+        },
+    ];
     let bound = sidak_bound(1e-3, pts.len(), None);
-    for j in 0..pts.len() {
-        assert_eq!(fwd.direct[j], bwd.direct[j]);
+    for (j, &(p, n)) in pts.iter().enumerate() {
+        let direct = first_order(&lights, &occ, p, n, RefResponse::Illuminance, 0);
+        for (name, got) in [("forward", fwd.direct[j]), ("backward", bwd.direct[j])] {
+            assert!(
+                (got - direct).abs() <= 1e-9 * direct,
+                "point {j}: {name} direct {got} vs reference {direct}"
+            );
+        }
+        // Totals: each estimator's indirect part on the reference's direct part.
         let (a, b) = (&fwd.tallies.indirect[j], &bwd.tallies.indirect[j]);
-        let zz = (a.mean() - b.mean()) / (a.std_error().powi(2) + b.std_error().powi(2)).sqrt();
+        let (ea, eb) = (direct + a.mean(), direct + b.mean());
+        let zz = (ea - eb) / a.std_error().hypot(b.std_error());
         assert!(
             zz.abs() < bound,
-            "point {j}: forward {} backward {} z {zz}",
-            a.mean(),
-            b.mean()
+            "point {j}: forward {ea} backward {eb} (direct {direct}) z {zz}"
         );
     }
+    // Some points lie in a shadow of one light, none in both.
+    let shadowed = pts
+        .iter()
+        .filter(|&&(p, n)| {
+            let lit =
+                |k: usize| first_order(&lights[k..=k], &occ, p, n, RefResponse::Illuminance, 0);
+            lit(0) == 0.0 || lit(1) == 0.0
+        })
+        .count();
+    assert!(shadowed >= 2, "{shadowed} points in a shadow");
 }
 
 /// A room with every kind of shape at scale `s` [m per unit]: inward box,
 /// outward sphere, a mesh, an SH object, a two-sided disc and rectangle, a
 /// point light; receivers in the air, on walls, in a corner, on the objects.
 fn all_shapes_room(s: f64) -> (lumest::scene::Scene, Vec<Receiver>) {
+    let (scene, recs, _, _) = all_shapes_room_with_reference(s);
+    (scene, recs)
+}
+
+/// [`all_shapes_room`] with the same shapes and light for the independent
+/// first-order reference ([`common::direct`]).
+fn all_shapes_room_with_reference(
+    s: f64,
+) -> (
+    lumest::scene::Scene,
+    Vec<Receiver>,
+    Vec<Occluder>,
+    Vec<RefLight>,
+) {
     use glam::DMat3;
     use lumest::geometry::mesh::star_blob;
     use lumest::geometry::sh::{ShCoeff, ShSurface};
@@ -178,6 +236,40 @@ fn all_shapes_room(s: f64) -> (lumest::scene::Scene, Vec<Receiver>) {
         s,
     )
     .unwrap();
+    let mut occ = vec![
+        Occluder::Box {
+            lo: v(0.0, 0.0, 0.0),
+            hi: v(5.0, 4.0, 3.0),
+        },
+        Occluder::Sphere {
+            c: v(1.2, 1.2, 0.5),
+            r: 0.4 * s,
+        },
+        Occluder::Disc {
+            c: v(1.0, 3.0, 1.0),
+            n: DVec3::Z,
+            r: 0.5 * s,
+        },
+        Occluder::Parallelogram {
+            o: v(2.5, 0.0, 0.0),
+            e1: v(0.0, 1.5, 0.0),
+            e2: v(0.0, 0.0, 1.6),
+        },
+        {
+            let o = sh.clone();
+            Occluder::Star {
+                c: sh.center(),
+                rot: sh.rotation(),
+                scale: sh.scale(),
+                radius: Box::new(move |d| o.radius(d)),
+            }
+        },
+    ];
+    occ.extend(mesh_triangles(&blob));
+    let lights = vec![RefLight::Point {
+        q: v(2.2, 2.0, 2.8),
+        i: 100.0,
+    }];
     let scene = Scene::build(
         vec![
             SurfaceSpec::Box(
@@ -239,17 +331,31 @@ fn all_shapes_room(s: f64) -> (lumest::scene::Scene, Vec<Receiver>) {
         r(v(1.2, 1.2, 0.9), DVec3::Z),  // top of the ball
         r(v(3.5, 3.0, 0.5), DVec3::Z),  // under the SH object
     ];
-    (scene, receivers)
+    (scene, receivers, occ, lights)
+}
+
+/// The independent first order at each receiver of [`all_shapes_room`].
+fn all_shapes_direct(recs: &[Receiver], occ: &[Occluder], lights: &[RefLight]) -> Vec<f64> {
+    recs.iter()
+        .map(|r| first_order(lights, occ, r.p, r.n, RefResponse::Illuminance, 0))
+        .collect()
 }
 
 #[test]
 fn every_shape_gives_the_same_answers_from_millimetres_to_ten_kilometres() {
     let mut base: Option<RunResult> = None;
     for s in [1.0, 1e-3, 1e4] {
-        let (scene, recs) = all_shapes_room(s);
+        let (scene, recs, occ, lights) = all_shapes_room_with_reference(s);
         let rec = Receivers::from_receivers(&scene, &recs).unwrap();
         let r = run(&scene, &rec, &chains_cfg(20_000, 4, 0), &mut |_| true);
-        for j in 0..recs.len() {
+        let direct = all_shapes_direct(&recs, &occ, &lights);
+        for (j, &want) in direct.iter().enumerate() {
+            assert!(
+                (r.direct[j] - want).abs() <= 1e-9 * want,
+                "scale {s}, point {j}: direct {} vs reference {}",
+                r.direct[j],
+                want
+            );
             let e = (r.direct[j] + r.tallies.indirect[j].mean()) * s * s;
             assert!(e.is_finite() && e > 0.0, "scale {s}, point {j}: {e}");
         }
@@ -277,53 +383,78 @@ fn every_shape_gives_the_same_answers_from_millimetres_to_ten_kilometres() {
 
 #[test]
 fn forward_and_backward_agree_among_meshes_sh_objects_spheres_and_discs() {
-    let (scene, recs) = all_shapes_room(1.0);
+    let (scene, recs, occ, lights) = all_shapes_room_with_reference(1.0);
     let rec = Receivers::from_receivers(&scene, &recs).unwrap();
-    // The plain local estimate (no near/far split), against the backward estimator.
+    // The plain local estimate (no near/far split), whatever the default.
     let plain = lumest::run::RunConfig {
+        near: (0.0, 0),
         near_auto: false,
         ..chains_cfg(200_000, 31, 0)
     };
     let fwd = run(&scene, &rec, &plain, &mut |_| true);
     let bwd = lumest::backward::run(&scene, &rec, &chains_cfg(16_000, 32, 0), &mut |_| true);
-    let bound = sidak_bound(1e-3, recs.len(), None);
-    for j in 0..recs.len() {
+    let direct = all_shapes_direct(&recs, &occ, &lights);
+    // Point 6 lies 1 mm from a corner, where the plain local estimate's
+    // kernel 1/d^2 has a heavy tail: its forward tally must say so (and is
+    // not compared); every other point is z-tested.
+    const CORNER: usize = 6;
+    let bound = sidak_bound(1e-3, recs.len() - 1, None);
+    for (j, &dj) in direct.iter().enumerate() {
+        for (name, got) in [("forward", fwd.direct[j]), ("backward", bwd.direct[j])] {
+            assert!(
+                (got - dj).abs() <= 1e-9 * dj,
+                "point {j}: {name} direct {got} vs reference {dj}"
+            );
+        }
         let (a, b) = (&fwd.tallies.indirect[j], &bwd.tallies.indirect[j]);
-        let zz = (a.mean() - b.mean()) / (a.std_error().powi(2) + b.std_error().powi(2)).sqrt();
+        let (ea, eb) = (dj + a.mean(), dj + b.mean());
+        let zz = (ea - eb) / a.std_error().hypot(b.std_error());
         let flag = fwd.tallies.diagnostics(j, fwd.direct[j]).flag();
         let flag_b = bwd.tallies.diagnostics(j, bwd.direct[j]).flag();
-        eprintln!(
-            "point {j}: forward {} backward {} z {zz:.2} flags {flag} / {flag_b}",
-            a.mean(),
-            b.mean()
-        );
-        // The point 1 mm from a corner (6) is where the plain local
-        // estimate's kernel 1/d^2 is close to singular: the `near` check
-        // must flag it, the only row excused from the z test. Every other
-        // row agrees within the Sidak bound.
-        if j == 6 {
-            assert!(flag.contains("near"), "point 6: flag {flag}");
-        } else {
+        eprintln!("point {j}: forward {ea} backward {eb} z {zz:.2} flags {flag} / {flag_b}");
+        if j != CORNER {
             assert!(
                 zz.abs() < bound,
-                "point {j}: forward {} backward {} z {zz} (flags {flag} / {flag_b})",
-                a.mean(),
-                b.mean()
+                "point {j}: forward {ea} backward {eb} z {zz} (flags {flag} / {flag_b})"
             );
         }
     }
+    // The corner's only excuse: the `near` check flags it (a surface 1 mm
+    // away, on the plain estimate).
+    let corner = fwd.tallies.diagnostics(CORNER, fwd.direct[CORNER]).flag();
+    assert!(corner.contains("near"), "corner: flag {corner}");
+    // The light is hidden from some receivers (under the table, behind
+    // the screen) and seen by the others.
+    assert!(
+        direct.iter().filter(|&&d| d == 0.0).count() >= 2,
+        "{direct:?}"
+    );
 }
 
 #[test]
 fn near_field_split_fixes_the_corner_point() {
     // The point 1 mm from the room's corner (flagged above): with the
-    // near/far split it agrees with the backward estimator, with a finite variance.
+    // near/far split at the CLI's default radius (`--near-radius auto`: a
+    // tenth of the distance to the light, 0.35 m here) it agrees with the
+    // backward estimator and passes every statistical check.
+    //
+    // With a fixed R = 0.05 m instead the mean also agrees and the VOV is
+    // small (0.01-0.04), but the far part's kernel, bounded only by 1/R^2,
+    // leaves 1024-chain batch means skewed (skewness 0.3-1.5; measured on
+    // seeds 1-6 and 31: the `tail` check fired on 2 of 6 seeds and on seed
+    // 31). 4096-chain batches (skewness 0.2) or R = 0.2 m (skewness 0.1)
+    // pass; more near-part paths (256) do not help. So that flag is right:
+    // such batch means are not yet normal enough for the interval.
     let (scene, recs) = all_shapes_room(1.0);
     let recs = vec![recs[6]];
     let rec = Receivers::from_receivers(&scene, &recs).unwrap();
+    let split = rec.clone().with_auto_near_field(64);
+    let radius = split.near_field().1[0];
+    assert!((0.3..0.4).contains(&radius), "auto radius {radius}");
     let cfg = lumest::run::RunConfig {
-        near: (0.05, 64),
-        // ~200 batches: enough for the VOV to measure the tail.
+        near: (0.0, 64),
+        near_auto: true,
+        // ~200 batches: enough for the VOV and the tail check to see a tail.
         batch_size: Some(1024),
         ..chains_cfg(200_000, 31, 0)
     };
@@ -339,8 +470,8 @@ fn near_field_split_fixes_the_corner_point() {
         b.std_error()
     );
     assert!(zz.abs() < sidak_bound(1e-3, 1, None), "z {zz}");
-    // The variance is finite now (VOV small); the `tail` check may still
-    // fire here: collisions just beyond R from a point 1 mm from three walls
-    // give a long (but bounded) tail to batch means of a few hundred chains.
-    assert!(a.vov() < 0.1, "VOV {}", a.vov());
+    // The split's tally, and the backward one, pass every statistical check.
+    let flag = fwd.tallies.diagnostics(0, fwd.direct[0]).flag();
+    assert_eq!(flag, "ok", "VOV {}", a.vov());
+    assert_eq!(bwd.tallies.diagnostics(0, bwd.direct[0]).flag(), "ok");
 }

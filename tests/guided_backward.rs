@@ -103,8 +103,9 @@ fn sparse_check_flags_the_far_field_the_plain_estimate_misses() {
 
 #[test]
 fn recursive_near_part_recovers_the_far_field() {
-    // rho1 rho2 = 0.99, r = 100 and 1e4: `--near-radius auto` joins the
-    // near part's path vertices to the chains' collisions around the source.
+    // rho1 rho2 = 0.99, r = 1e4: `--near-radius auto` joins the near
+    // part's path vertices to the chains' collisions around the source.
+    // (r = 100 m: see `far_field_at_100_m_is_precise_and_unflagged`.)
     let rho = 0.99f64.sqrt();
     let s = Sobolev::new(0.5, 0.5, rho, rho, 1.0).unwrap();
     let case = sobolev_case(&s, 2, 1.0);
@@ -120,26 +121,79 @@ fn recursive_near_part_recovers_the_far_field() {
         ..chains_cfg(8192, 2, 0)
     };
     let r = run(&case.scene, &rec, &cfg, &mut |_| true);
-    let bound = sidak_bound(1e-3, at.len(), None);
-    for (j, &x) in at.iter().enumerate() {
-        let exact = s.illuminance(1, x).e;
-        let zj = z(&r, j, exact);
-        let est = r.direct[j] + r.tallies.indirect[j].mean();
-        let flag = r.tallies.diagnostics(j, r.direct[j]).flag();
-        eprintln!(
-            "r = {x}: {est:.6e} against {exact:.6e}, z = {zj:.2}, R = {:.2e}, {flag}",
-            r.tallies.indirect[j].std_error() / est
+    let (j, x) = (1, 1e4);
+    let exact = s.illuminance(1, x).e;
+    let zj = z(&r, j, exact);
+    let est = r.direct[j] + r.tallies.indirect[j].mean();
+    let rel = r.tallies.indirect[j].std_error() / est;
+    let flag = r.tallies.diagnostics(j, r.direct[j]).flag();
+    eprintln!("r = {x}: {est:.6e} against {exact:.6e}, z = {zj:.2}, R = {rel:.2e}, {flag}");
+    let bound = sidak_bound(1e-3, 1, Some(r.tallies.batches()));
+    assert!(zj.abs() < bound, "r = {x}: |z| = {zj:.2} > {bound:.2}");
+    // An error bar that means something (measured 0.45 %), and a tally
+    // that passes every check.
+    assert!(rel < 0.02, "r = {x}: R = {rel}");
+    assert_eq!(flag, "ok", "r = {x}");
+}
+
+/// Known failure (issue 10, items 2 and 7). At r = 100 m in the same far
+/// field (rho1 rho2 = 0.99, exact E = 2.3228e-3 lx) no configuration of the
+/// local estimator reaches a trustworthy estimate in test time, and one is
+/// silently wrong. Measured on one point, 8192 chains unless stated:
+///
+/// - `--near-radius auto` (R = 10 m), 16 paths: seeds 2-5 give R = 8.4 %
+///   (ok, z -2.98), 33 % (R;VOV;tail), 7.4 % (ok), 12 % (R;VOV); 32768
+///   chains: R = 8.5 % (VOV;tail): the error does not fall like 1/sqrt(N);
+///   128 paths: R = 5.8 % in 14 s;
+/// - plain, 65536 chains: R = 8.3 % (tail); backward, 4096 paths: R = 23-31 %;
+/// - **fixed R = 50 m (d / 2), seed 2: 1.151e-3 lx, R = 2.7 %, flag `ok`,
+///   z = -37** (half the light missing, every check passing); R = 30 m:
+///   z = -12.6, `ok`; seed 3 at R = 50 m: 2.13e-3, R = 43 % (R;VOV;tail).
+///   The same from the command line: data/sobolev.toml with both
+///   reflectances 0.99498743710662, one point (100, 0, 0) facing up,
+///   `--chains 8192 --near-radius 50 --near-paths 16 --seed 2` prints
+///   E = 1.1513e-3 +- 3.1e-5, flag `ok`.
+///
+/// The split's heavy tail: the light at the point comes from rare paths
+/// that link it with the region around the source; runs without such an
+/// event are low and look converged. With the split covering the point's
+/// watched ball the `sparse` check is off, and nothing else sees it.
+#[test]
+#[ignore = "known failure, issue 10 items 2 and 7: far field at r = 100 m (see the doc comment)"]
+fn far_field_at_100_m_is_precise_and_unflagged() {
+    let rho = 0.99f64.sqrt();
+    let s = Sobolev::new(0.5, 0.5, rho, rho, 1.0).unwrap();
+    let case = sobolev_case(&s, 2, 1.0);
+    let rec = Receivers::new(&case.scene, &[(DVec3::new(100.0, 0.0, 0.0), DVec3::Z)]).unwrap();
+    let exact = s.illuminance(1, 100.0).e;
+    let mut failures = Vec::new();
+    for (name, near, seed) in [
+        ("auto", (0.0, 16), 2),
+        ("auto", (0.0, 16), 3),
+        ("R = 50 m", (50.0, 16), 2),
+    ] {
+        let cfg = RunConfig {
+            near,
+            near_auto: near.0 == 0.0,
+            ..chains_cfg(8192, seed, 0)
+        };
+        let r = run(&case.scene, &rec, &cfg, &mut |_| true);
+        let est = r.direct[0] + r.tallies.indirect[0].mean();
+        let rel = r.tallies.indirect[0].std_error() / est;
+        let zj = z(&r, 0, exact);
+        let flag = r.tallies.diagnostics(0, r.direct[0]).flag();
+        let line = format!(
+            "{name}, seed {seed}: {est:.4e} vs {exact:.4e}, z = {zj:.2}, R = {rel:.2e}, {flag}"
         );
-        assert!(zj.abs() < bound, "r = {x}: |z| = {zj:.2} > {bound:.2}");
-        assert!(!flag.contains("sparse"), "r = {x}: {flag}");
-        // An error bar that means something at r = 1e4 (measured 0.3 %). At
-        // r = 100 the point's own far part (collisions beyond R = 10 m) is
-        // noisy: R 9-17 %, flagged `R` (the `auto` radius 0.1 d; d / 2 there
-        // cost the office ten times its FOM).
-        if x > 1e3 {
-            assert!(r.tallies.indirect[j].std_error() < 0.02 * est, "r = {x}");
+        eprintln!("{line}");
+        // Asked: a precise estimate (R < 5 %) that passes every check and
+        // agrees with the exact value (Sidak over the three runs).
+        let bound = sidak_bound(1e-3, 3, Some(r.tallies.batches()));
+        if !(rel < 0.05 && flag == "ok" && zj.abs() < bound) {
+            failures.push(line);
         }
     }
+    assert!(failures.is_empty(), "{failures:#?}");
 }
 
 #[test]

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod direct;
+
 use lumest::commands::validate::{SobolevCase, sobolev_case};
 use lumest::estimator::Receivers;
 use lumest::reference::Sobolev;
