@@ -227,18 +227,18 @@ fn verdict(
 /// Check a case: calibrated as run, and the bound rejects error bars 20 %
 /// too small or too large on the same data (all three lines are printed).
 fn check(name: &str, runs: &[Vec<(f64, f64)>], exact: Option<&[f64]>, batches: u64) {
-    let ok = verdict(name, runs, exact, batches, 1.0);
-    eprintln!("{}", ok.as_ref().unwrap_or_else(|e| e));
-    for s in [0.8, 1.2] {
-        let bad = verdict(name, runs, exact, batches, s);
-        eprintln!("{}", bad.as_ref().unwrap_or_else(|e| e));
+    let [ok, small, large] = [1.0, 0.8, 1.2].map(|s| verdict(name, runs, exact, batches, s));
+    for v in [&ok, &small, &large] {
+        eprintln!("{}", v.as_ref().unwrap_or_else(|e| e));
+    }
+    assert!(ok.is_ok(), "error bars miscalibrated: {}", ok.unwrap_err());
+    for (s, bad) in [(0.8, small), (1.2, large)] {
         assert!(
             bad.is_err(),
             "the calibration bound does not resolve error bars scaled by {s}: {}",
             bad.unwrap()
         );
     }
-    assert!(ok.is_ok(), "error bars miscalibrated: {}", ok.unwrap_err());
 }
 
 /// `runs` runs of `chains` chains (seeds `seed0..`) on the default path.
@@ -251,13 +251,18 @@ fn runs_of(
 ) -> (Vec<Vec<(f64, f64)>>, u64) {
     let rec = Receivers::new(scene, points).unwrap();
     let mut out = Vec::new();
-    let mut batches = 0;
+    let mut batches = None;
     for seed in seed0..seed0 + runs {
         let r = run(scene, &rec, &cli_default(chains, seed), &mut |_| true);
-        batches = r.tallies.batches();
+        // The runner's own rule: at least 32 batches of at least 256 chains.
+        assert!(r.tallies.batches() >= 32 && r.batch_size >= 256);
+        assert_eq!(
+            *batches.get_or_insert(r.tallies.batches()),
+            r.tallies.batches()
+        );
         out.push(estimates(&r));
     }
-    (out, batches)
+    (out, batches.unwrap())
 }
 
 #[test]
