@@ -30,11 +30,11 @@
 //! scaled by 0.8 (error bars 20 % too small, `E[z^2]` about 1.67) and by 1.2
 //! (20 % too large, about 0.74). The run counts put the standard error of
 //! mean `z^2` near 0.05 (measured spread of the per-run means: 0.56 Sobolev,
-//! 0.72 room, 0.70 office), so that a 20 % scale lies more than 3.3 standard
+//! 0.68 room, 0.70 office), so that a 20 % scale lies more than 3.3 standard
 //! errors beyond the bound and each of these checks misses with probability
 //! below about 5e-4: the case's total false-alarm rate is below about 2e-3.
 //!
-//! Cost: about 42 CPU-s in release (Sobolev 3, room 12, office 27), 72 s wall
+//! Cost: about 43 CPU-s in release (Sobolev 3, room 14, office 26), 48 s wall
 //! on two cores shared with other jobs.
 
 use glam::DVec3;
