@@ -53,27 +53,32 @@ use std::path::Path;
 /// Family-wise false-alarm rate of each case (two two-sided bounds).
 const ALPHA: f64 = 1e-3;
 
-/// The CLI's default configuration (`lumest illuminance --chains N --seed S`:
-/// see `RunArgs::config` in `src/commands/mod.rs`), run on all cores.
+/// The CLI's default configuration (`lumest illuminance --chains N --seed S`),
+/// which is the library's default: the test below checks that they agree.
 fn cli_default(chains: u64, seed: u64) -> RunConfig {
     RunConfig {
         seed,
-        threads: 0,
         stop: Stop {
             chains: Some(chains),
             ..Stop::default()
         },
-        orders: 0,
-        chain: ChainParams {
-            rr_weight: ChainParams::default().rr_weight,
-            max_order: None,
-            guide: true,
-        },
-        batch_size: None,
-        stratify: true,
-        near: (0.0, 16),
-        near_auto: true,
+        ..RunConfig::default()
     }
+}
+
+#[test]
+fn library_default_is_the_command_lines() {
+    use clap::Parser;
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        run: lumest::commands::RunArgs,
+    }
+    let cli = Cli::parse_from(["lumest", "--chains", "4096", "--seed", "9"])
+        .run
+        .config()
+        .unwrap();
+    assert_eq!(format!("{cli:?}"), format!("{:?}", cli_default(4096, 9)));
 }
 
 /// Estimates `(E, se)` [lx] of every point of one run.
@@ -344,7 +349,7 @@ fn box_room_error_bars_are_calibrated() {
     // The default path really splits the points close to a surface.
     let split = Receivers::new(&scene, &points)
         .unwrap()
-        .with_auto_near_field(&scene, 16);
+        .with_auto_near_field(16);
     let radii = split.near_field().1;
     let split: Vec<bool> = radii.iter().map(|&r| r > 0.0).collect();
     assert_eq!(
