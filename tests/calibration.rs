@@ -38,7 +38,6 @@
 //! on two cores shared with other jobs.
 
 use glam::DVec3;
-use lumest::chain::ChainParams;
 use lumest::commands::cases::box_room;
 use lumest::commands::validate::sobolev_case;
 use lumest::estimator::Receivers;
