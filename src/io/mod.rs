@@ -2,6 +2,7 @@
 
 pub mod csvio;
 pub mod image;
+pub mod photometry;
 pub mod plot;
 
 pub use csvio::{

@@ -1,0 +1,533 @@
+//! IES LM-63 photometric files: the 1986 layout (no header line), 1991
+//! (`IESNA91`), 1995 (`IESNA:LM-63-1995`), 2002 (`IESNA:LM-63-2002`) and
+//! 2019 (`IES:LM-63-2019`).
+//!
+//! Layout: an optional header line; keyword or label lines up to the
+//! `TILT=` line; then a stream of numbers that may wrap anywhere (spaces,
+//! tabs, commas and line ends all separate them):
+//!
+//! 1. with `TILT=INCLUDE` only: lamp-to-luminaire geometry, the number of
+//!    tilt angles `n`, `n` angles, `n` multiplying factors;
+//! 2. number of lamps, lumens per lamp (`-1`: absolute photometry),
+//!    candela multiplier, number of vertical angles, number of horizontal
+//!    angles, photometric type (1 = C, 2 = B, 3 = A), units (1 = feet,
+//!    2 = metres), width, length, height of the luminous opening;
+//! 3. ballast factor, a factor whose meaning depends on the version (the
+//!    ballast-lamp photometric factor in 1986-1995, "future use" in 2002,
+//!    the file-generation type in 2019), input watts;
+//! 4. the vertical angles, the horizontal angles, and the candela values,
+//!    all vertical angles of the first horizontal angle first.
+//!
+//! The intensity is the file's candela value times the candela multiplier
+//! times the ballast factor, times the ballast-lamp photometric factor for
+//! the versions that define one (never the 2019 file-generation type), and
+//! times the tilt factor at 0 degrees (the luminaire used as measured) with
+//! `TILT=INCLUDE`. A `TILT=<file>` reference is refused: the data must be
+//! included. A negative width is a round opening of that diameter (LM-63-2002).
+
+use super::{Opening, PhotometricType, Photometry, PhotometryError, check_angles};
+
+/// Most angles per axis and values in a table (larger files are refused
+/// before anything is allocated for them).
+const MAX_ANGLES: usize = 100_000;
+const MAX_VALUES: usize = 10_000_000;
+
+/// The versions, by header line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Version {
+    Lm1986,
+    Lm1991,
+    Lm1995,
+    Lm2002,
+    Lm2019,
+}
+
+/// Numbers after the `TILT=` line, each with its 1-based line.
+struct Tokens<'a> {
+    items: Vec<(&'a str, usize)>,
+    next: usize,
+    file: &'a str,
+    last_line: usize,
+}
+
+impl<'a> Tokens<'a> {
+    fn err(&self, line: usize, field: &str, message: impl Into<String>) -> PhotometryError {
+        PhotometryError {
+            file: self.file.to_string(),
+            line,
+            field: field.to_string(),
+            message: message.into(),
+        }
+    }
+
+    /// The next number, named `field` in messages.
+    fn number(&mut self, field: &str) -> Result<(f64, usize), PhotometryError> {
+        let Some(&(tok, line)) = self.items.get(self.next) else {
+            return Err(self.err(self.last_line, field, "the file ends before this value"));
+        };
+        self.next += 1;
+        match tok.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok((v, line)),
+            _ => Err(self.err(line, field, format!("`{tok}` is not a finite number"))),
+        }
+    }
+
+    /// The next number, which must be a whole number in `lo..=hi`.
+    fn count(&mut self, field: &str, lo: i64, hi: i64) -> Result<i64, PhotometryError> {
+        let (v, line) = self.number(field)?;
+        if v.fract() != 0.0 || v < lo as f64 || v > hi as f64 {
+            return Err(self.err(
+                line,
+                field,
+                format!("must be a whole number in [{lo}, {hi}], got {v}"),
+            ));
+        }
+        Ok(v as i64)
+    }
+
+    /// `n` numbers, checked to be available before allocating.
+    fn numbers(&mut self, n: usize, field: &str) -> Result<Vec<f64>, PhotometryError> {
+        let left = self.items.len() - self.next;
+        if n > left {
+            return Err(self.err(
+                self.last_line,
+                field,
+                format!("{n} values expected, only {left} numbers left in the file"),
+            ));
+        }
+        (0..n)
+            .map(|k| self.number(&format!("{field} #{}", k + 1)).map(|v| v.0))
+            .collect()
+    }
+
+    /// The 1-based line of the next number (or the last line).
+    fn line(&self) -> usize {
+        self.items.get(self.next).map_or(self.last_line, |t| t.1)
+    }
+}
+
+/// Parse the text of an IES LM-63 file; `file` names it in messages.
+pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
+    let err = |line: usize, field: &str, message: String| PhotometryError {
+        file: file.to_string(),
+        line,
+        field: field.to_string(),
+        message,
+    };
+    let lines: Vec<&str> = text.lines().collect();
+    let first = lines.first().map_or("", |l| l.trim());
+    let version = match first {
+        s if s.starts_with("IESNA:LM-63-1995") => Version::Lm1995,
+        s if s.starts_with("IESNA:LM-63-2002") => Version::Lm2002,
+        s if s.starts_with("IES:LM-63-2019") => Version::Lm2019,
+        s if s.starts_with("IESNA91") => Version::Lm1991,
+        s if s.starts_with("IESNA") || s.starts_with("IES:") => {
+            return Err(err(
+                1,
+                "header",
+                format!(
+                    "unknown LM-63 version `{s}` (known: 1986 without a header, IESNA91, IESNA:LM-63-1995, IESNA:LM-63-2002, IES:LM-63-2019)"
+                ),
+            ));
+        }
+        _ => Version::Lm1986,
+    };
+    let Some(tilt_at) = lines
+        .iter()
+        .position(|l| l.trim_start().starts_with("TILT"))
+    else {
+        return Err(err(0, "TILT", "no `TILT=` line".into()));
+    };
+    let tilt_line = lines[tilt_at].trim();
+    let tilt = tilt_line
+        .strip_prefix("TILT")
+        .map(str::trim_start)
+        .and_then(|s| s.strip_prefix('='))
+        .map(str::trim)
+        .ok_or_else(|| {
+            err(
+                tilt_at + 1,
+                "TILT",
+                format!("expected `TILT=`, got `{tilt_line}`"),
+            )
+        })?;
+    let include = match tilt {
+        "NONE" => false,
+        "INCLUDE" => true,
+        other => {
+            return Err(err(
+                tilt_at + 1,
+                "TILT",
+                format!(
+                    "`TILT={other}` refers to a separate tilt file, which lumest does not read: \
+                     put the data in this file with TILT=INCLUDE, or use TILT=NONE"
+                ),
+            ));
+        }
+    };
+    let mut t = Tokens {
+        items: lines
+            .iter()
+            .enumerate()
+            .skip(tilt_at + 1)
+            .flat_map(|(i, l)| {
+                l.split(|c: char| c.is_whitespace() || c == ',')
+                    .filter(|s| !s.is_empty())
+                    .map(move |s| (s, i + 1))
+            })
+            .collect(),
+        next: 0,
+        file,
+        last_line: lines.len(),
+    };
+    let tilt_factor = if include {
+        t.count("TILT lamp-to-luminaire geometry", 1, 3)?;
+        let n = t.count("number of TILT angles", 1, MAX_ANGLES as i64)? as usize;
+        let line = t.line();
+        let angles = t.numbers(n, "TILT angle")?;
+        check_angles(&angles, -180.0, 180.0, |m| err(line, "TILT angles", m))?;
+        let line = t.line();
+        let factors = t.numbers(n, "TILT multiplying factor")?;
+        if let Some(f) = factors.iter().find(|f| **f < 0.0) {
+            return Err(err(
+                line,
+                "TILT multiplying factors",
+                format!("must be >= 0, got {f}"),
+            ));
+        }
+        interpolate(&angles, &factors, 0.0)
+    } else {
+        1.0
+    };
+    let line = t.line();
+    let lamps = t.count("number of lamps", 1, 1_000_000)?;
+    let (lumens, l_line) = t.number("lumens per lamp")?;
+    if !(lumens > 0.0 || lumens == -1.0) {
+        return Err(err(
+            l_line,
+            "lumens per lamp",
+            format!("must be > 0, or -1 for absolute photometry, got {lumens}"),
+        ));
+    }
+    let (multiplier, m_line) = t.number("candela multiplier")?;
+    if multiplier <= 0.0 {
+        return Err(err(
+            m_line,
+            "candela multiplier",
+            format!("must be > 0, got {multiplier}"),
+        ));
+    }
+    let n_v = t.count("number of vertical angles", 1, MAX_ANGLES as i64)? as usize;
+    let n_h = t.count("number of horizontal angles", 1, MAX_ANGLES as i64)? as usize;
+    if n_v * n_h > MAX_VALUES {
+        return Err(err(
+            line,
+            "number of angles",
+            format!("{n_v} x {n_h} candela values: at most {MAX_VALUES} are supported"),
+        ));
+    }
+    let kind = match t.count("photometric type", 1, 3)? {
+        1 => PhotometricType::C,
+        2 => PhotometricType::B,
+        _ => PhotometricType::A,
+    };
+    let unit = if t.count("units type", 1, 2)? == 1 {
+        0.3048
+    } else {
+        1.0
+    };
+    let (w, _) = t.number("width")?;
+    let (l, _) = t.number("length")?;
+    let (h, _) = t.number("height")?;
+    let (ballast, b_line) = t.number("ballast factor")?;
+    if ballast <= 0.0 {
+        return Err(err(
+            b_line,
+            "ballast factor",
+            format!("must be > 0, got {ballast}"),
+        ));
+    }
+    let (second, s_line) = t.number(match version {
+        Version::Lm2002 => "future use",
+        Version::Lm2019 => "file generation type",
+        _ => "ballast-lamp photometric factor",
+    })?;
+    let lamp_factor = match version {
+        Version::Lm1986 | Version::Lm1991 | Version::Lm1995 => {
+            if second <= 0.0 {
+                return Err(err(
+                    s_line,
+                    "ballast-lamp photometric factor",
+                    format!("must be > 0, got {second}"),
+                ));
+            }
+            second
+        }
+        Version::Lm2002 | Version::Lm2019 => 1.0,
+    };
+    let (watts, w_line) = t.number("input watts")?;
+    if watts < 0.0 {
+        return Err(err(
+            w_line,
+            "input watts",
+            format!("must be >= 0, got {watts}"),
+        ));
+    }
+    let line = t.line();
+    let v_angles = t.numbers(n_v, "vertical angle")?;
+    let (v_lo, v_hi) = match kind {
+        PhotometricType::C => (0.0, 180.0),
+        _ => (-90.0, 90.0),
+    };
+    check_angles(&v_angles, v_lo, v_hi, |m| err(line, "vertical angles", m))?;
+    let line = t.line();
+    let h_angles = t.numbers(n_h, "horizontal angle")?;
+    let (h_lo, h_hi) = match kind {
+        PhotometricType::C => (0.0, 360.0),
+        _ => (-90.0, 90.0),
+    };
+    check_angles(&h_angles, h_lo, h_hi, |m| err(line, "horizontal angles", m))?;
+    if kind == PhotometricType::C && n_h > 1 {
+        let (first, last) = (h_angles[0], h_angles[n_h - 1]);
+        let known = (first == 0.0 && [90.0, 180.0, 360.0].contains(&last))
+            || (first == 90.0 && last == 270.0);
+        if !known {
+            return Err(err(
+                line,
+                "horizontal angles",
+                format!(
+                    "a type C table must span 0-90, 0-180, 0-360 or 90-270 degrees, got {first}-{last}"
+                ),
+            ));
+        }
+    }
+    let scale = multiplier * ballast * lamp_factor * tilt_factor;
+    let mut candela = Vec::with_capacity(n_h);
+    for (i, c) in h_angles.iter().enumerate() {
+        let line = t.line();
+        let row = t.numbers(n_v, &format!("candela value at horizontal angle {c}"))?;
+        if let Some(k) = row.iter().position(|v| *v < 0.0) {
+            return Err(err(
+                line,
+                "candela values",
+                format!(
+                    "value {} of horizontal angle #{} is {}: must be >= 0",
+                    k + 1,
+                    i + 1,
+                    row[k]
+                ),
+            ));
+        }
+        candela.push(row.into_iter().map(|v| v * scale).collect());
+    }
+    if t.next < t.items.len() {
+        let (tok, line) = t.items[t.next];
+        return Err(err(
+            line,
+            "end of file",
+            format!("unexpected `{tok}` after the last candela value"),
+        ));
+    }
+    let round = w < 0.0;
+    Ok(Photometry {
+        kind,
+        v_angles,
+        h_angles,
+        candela,
+        lamp_lumens: (lumens > 0.0).then_some(lumens * lamps as f64),
+        opening: Opening {
+            width: w.abs() * unit,
+            length: if round { 0.0 } else { l.abs() * unit },
+            height: h.abs() * unit,
+            round,
+        },
+        watts: (watts > 0.0).then_some(watts),
+        format: match version {
+            Version::Lm1986 => "IES LM-63-1986",
+            Version::Lm1991 => "IES LM-63-1991",
+            Version::Lm1995 => "IES LM-63-1995",
+            Version::Lm2002 => "IES LM-63-2002",
+            Version::Lm2019 => "IES LM-63-2019",
+        }
+        .to_string(),
+    })
+}
+
+/// Piecewise-linear interpolation of `ys` over ascending `xs` at `x`,
+/// clamped to the end values outside.
+fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    let k = xs.partition_point(|&a| a <= x);
+    if k == 0 {
+        return ys[0];
+    }
+    if k == xs.len() {
+        return ys[xs.len() - 1];
+    }
+    let t = (x - xs[k - 1]) / (xs[k] - xs[k - 1]);
+    ys[k - 1] + t * (ys[k] - ys[k - 1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The pendant luminaire printed in seed 001 (LM-63-1995).
+    pub(crate) const PENDANT: &str = "IESNA:LM-63-1995
+[TEST]     21307
+[MANUFAC]ECLIPSE LIGHTING - PENDANT LUMINAIRE
+[LUMCAT]ME-XL1-QL165-277VOLT
+[LUMINAIRE]WHITE PLASTIC TUBE WITH TOP AND BOTTOM OPEN
+[LAMP]ONE PHILIPS 165 WATT INDUCTION LAMP
+[LAMPCAT]QL165W/840. LUMEN RATING = 8289 LMS.
+[OTHER]ONE PHILIPS QL165W S/1 GENERATOR OPERATING AT 277 VAC AND 147 WATTS
+TILT=NONE
+1   8289   1   73  1   1  1   -1.00   0.00   1.92  1  1
+147.0000
+
+0 2.5 5 7.5 10 12.5 15 17.5 20 22.5 25 27.5 30 32.5 35 37.5
+40 42.5 45 47.5 50 52.5 55 57.5 60 62.5 65 67.5 70 72.5 75
+77.5 80 82.5 85 87.5 90 92.5 95 97.5 100 102.5 105 107.5 110
+112.5 115 117.5 120 122.5 125 127.5 130 132.5 135 137.5 140
+142.5 145 147.5 150 152.5 155 157.5 160 162.5 165 167.5 170
+172.5 175 177.5 180
+0
+
+879.2      897.2      941.6     1001.1     1060.8     1116.3     1165.3     1171.1     1131.6     1064.3
+986.6      910.8      845.1      792.7      760.3      745.7      735.6      724.5      714.6      703.8
+693.0      683.0      675.6      672.1      672.0      673.9      675.9      677.6      679.3      680.9
+682.3      682.9      682.7      681.2      678.5      676.6      680.7      684.8      683.3      680.9
+676.9      671.2      664.1      655.9      646.6      636.3      625.0      612.7      599.6      586.1
+572.3      558.1      544.0      530.5      517.8      506.6      496.4      486.5      477.0      469.6
+470.0      482.8      502.2      520.6      526.0      496.0      414.4      315.6      235.7      169.7
+108.4       59.4       35.8
+";
+
+    #[test]
+    fn reads_the_pendant_of_seed_001() {
+        let p = parse(PENDANT, "pendant.ies").unwrap();
+        assert_eq!(p.format, "IES LM-63-1995");
+        assert_eq!(p.kind, PhotometricType::C);
+        assert_eq!(p.v_angles.len(), 73);
+        assert_eq!(p.h_angles, [0.0]);
+        assert_eq!(p.candela[0][0], 879.2);
+        assert_eq!(p.candela[0][72], 35.8);
+        assert_eq!(p.lamp_lumens, Some(8289.0));
+        assert_eq!(p.watts, Some(147.0));
+        assert_eq!(p.symmetry(), super::super::Symmetry::Rotational);
+        // Units 1: feet; a negative width is a round opening.
+        assert!(p.opening.round);
+        assert!((p.opening.width - 0.3048).abs() < 1e-15);
+        assert!((p.opening.height - 1.92 * 0.3048).abs() < 1e-15);
+    }
+
+    #[test]
+    fn versions_multipliers_and_wrapped_numbers() {
+        // 1986 (no header), numbers wrapped anywhere, commas as separators,
+        // multiplier 2, ballast 0.5, ballast-lamp factor 3 (applied before 2002).
+        let f86 = "label line\nTILT=NONE\n1 1000 2 3 1\n1 2 0 0 0 0.5\n3 10 0,45\n90 0 4 5\n6\n";
+        let p = parse(f86, "a.ies").unwrap();
+        assert_eq!(p.format, "IES LM-63-1986");
+        assert_eq!(p.v_angles, [0.0, 45.0, 90.0]);
+        assert_eq!(p.candela[0], [12.0, 15.0, 18.0]);
+        assert_eq!(p.opening, Opening::default());
+        // 2002: the second factor is "future use"; 2019: the file generation
+        // type. Neither multiplies.
+        for (head, fmt) in [
+            ("IESNA:LM-63-2002", "IES LM-63-2002"),
+            ("IES:LM-63-2019", "IES LM-63-2019"),
+        ] {
+            let f = format!(
+                "{head}\n[TEST] x\nTILT=NONE\n1 -1 2 3 1 1 2 0 0 0\n0.5 1.10001 10\n0 45 90 0\n4 5 6\n"
+            );
+            let p = parse(&f, "b.ies").unwrap();
+            assert_eq!(p.format, fmt);
+            assert_eq!(p.candela[0], [4.0, 5.0, 6.0]);
+            assert_eq!(p.lamp_lumens, None);
+        }
+        // TILT=INCLUDE: the factor at 0 degrees multiplies.
+        let f = "IESNA91\nTILT=INCLUDE\n1\n3\n-10 0 10\n0.8 0.5 0.8\n1 100 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\n2 4\n";
+        let p = parse(f, "c.ies").unwrap();
+        assert_eq!(p.candela[0], [1.0, 2.0]);
+    }
+
+    #[test]
+    fn errors_name_line_and_field() {
+        let cases = [
+            ("IESNA:LM-63-1995\nTILT=lamp.tlt\n", 2, "TILT"),
+            ("IESNA:LM-63-1995\n[TEST]\n", 0, "TILT"),
+            (
+                "IESNA:LM-63-1995\nTILT=NONE\n1 1000 1 3 1 1 2 0 0 0\n1 1 10\n0 45 90\n0\n1 2\n",
+                7,
+                "candela value at horizontal angle 0",
+            ),
+            (
+                "IESNA:LM-63-1995\nTILT=NONE\n1 1000 1 3 1 4 2 0 0 0\n",
+                3,
+                "photometric type",
+            ),
+            (
+                "IESNA:LM-63-1995\nTILT=NONE\n1 1000 1 3 1 1 2 0 0 0\n1 1 10\n0 90 45\n0\n1 2 3\n",
+                5,
+                "vertical angles",
+            ),
+            (
+                "IESNA:LM-63-1995\nTILT=NONE\n1 1000 1 3 1 1 2 0 0 0\n1 1 10\n0 45 90\n0\n1 -2 3\n",
+                7,
+                "candela values",
+            ),
+            (
+                "IESNA:LM-63-1995\nTILT=NONE\n1 1000 1 3 2 1 2 0 0 0\n1 1 10\n0 45 90\n0 45\n1 2 3\n1 2 3\n",
+                6,
+                "horizontal angles",
+            ),
+            (
+                "IESNA:LM-63-1995\nTILT=NONE\n1 1000 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\n1 2 3\n",
+                7,
+                "end of file",
+            ),
+            (
+                "IESNA:LM-63-1995\nTILT=NONE\n1 1000 1 99999 99999 1 2 0 0 0\n",
+                3,
+                "number of angles",
+            ),
+            (
+                "IESNA:LM-63-1995\nTILT=NONE\n1 1e999 1 2 1 1 2 0 0 0\n",
+                3,
+                "lumens per lamp",
+            ),
+        ];
+        for (text, line, field) in cases {
+            let e = parse(text, "x.ies").unwrap_err();
+            assert_eq!((e.line, e.field.as_str()), (line, field), "{e}");
+            assert!(
+                e.to_string()
+                    .starts_with(&format!("x.ies:{line}: {field}: ")),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
+    fn no_panic_on_any_prefix_or_byte_flip() {
+        // Every prefix of a valid file and every single-byte corruption of
+        // it gives Ok or an error, never a panic.
+        let text = PENDANT;
+        for n in 0..text.len() {
+            if text.is_char_boundary(n) {
+                let _ = parse(&text[..n], "p.ies");
+            }
+        }
+        let bytes = text.as_bytes();
+        for (k, b) in [b'-', b'9', b'x', b' ', b'\n', b'.', b'e']
+            .iter()
+            .enumerate()
+        {
+            for i in (k..bytes.len()).step_by(7) {
+                let mut v = bytes.to_vec();
+                v[i] = *b;
+                let s: String = v.iter().map(|&c| c as char).collect();
+                let _ = parse(&s, "p.ies");
+            }
+        }
+    }
+}
