@@ -50,6 +50,7 @@
 //! Numbers in, statistics out: nothing here knows about scenes or chains.
 
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
+pub mod zcheck;
 
 /// Mergeable running mean, variance, third and fourth central moments and
 /// extremes (Welford 1962; Chan, Golub & LeVeque 1979; Pébay 2008).
