@@ -222,7 +222,7 @@ impl StressOptions {
     }
 
     /// Run configuration for one run with seed `seed`; `tuned` chains under
-    /// [`Budget::Tuned`].
+    /// [`Budget::Tuned`]; the plain local estimate (no near/far split).
     fn config(&self, seed: u64, tuned: u64) -> RunConfig {
         let chains = match self.budget {
             Budget::Time(_) => None,
@@ -248,6 +248,10 @@ impl StressOptions {
             // and the t bound). A timed run keeps the runner's batch size,
             // which obeys the same rule.
             batch_size: chains.map(|c| (c / 128).clamp(MIN_BATCH_CHAINS, 1 << 16)),
+            // The plain local estimate, whatever the library default: the
+            // remedy rows turn the split on themselves.
+            near: (0.0, 0),
+            near_auto: false,
             ..RunConfig::default()
         }
     }
