@@ -5,7 +5,7 @@
 //! rare huge scores; and the `sparse` check on the far field.
 
 mod common;
-use common::{chains_cfg, z};
+use common::{chains_cfg, z, zcheck};
 use glam::DVec3;
 use lumest::chain::ChainParams;
 use lumest::commands::validate::sobolev_case;
@@ -216,7 +216,7 @@ fn recursive_near_part_keeps_reflection_orders_apart() {
         for k in 0..3 {
             let w = &r.tallies.orders[k][j];
             let exact = s.order(case.plane[j], case.r[j], k as u32 + 1);
-            worst = worst.max(((w.mean() - exact) / w.std_error()).abs());
+            worst = zcheck::max_abs(worst, zcheck::z_score(w.mean(), w.std_error(), exact));
         }
     }
     let bound = sidak_bound(1e-3, 3 * case.points.len(), Some(r.tallies.batches()));

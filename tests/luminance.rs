@@ -2,18 +2,13 @@
 //! the exact Sobolev luminance `rho_j E_j(r') / pi`; views that see nothing.
 
 mod common;
-use common::chains_cfg;
+use common::{chains_cfg, max_abs_z, z, zcheck};
 use glam::DVec3;
 use lumest::commands::validate::{sobolev_case, sobolev_receivers};
 use lumest::estimator::{Receivers, ViewTarget, view_target};
 use lumest::reference::Sobolev;
-use lumest::run::{RunConfig, RunResult, Stop, run};
+use lumest::run::{RunConfig, Stop, run};
 use lumest::tally::sidak_bound;
-
-fn z(r: &RunResult, j: usize, exact: f64) -> f64 {
-    let w = &r.tallies.indirect[j];
-    (r.direct[j] + w.mean() - exact) / w.std_error()
-}
 
 #[test]
 fn double_local_estimate_matches_exact_luminance_with_points_in_the_same_run() {
@@ -35,7 +30,7 @@ fn double_local_estimate_matches_exact_luminance_with_points_in_the_same_run() {
         );
         batches = batches.min(r.tallies.batches());
         for (j, &e) in exact.iter().enumerate() {
-            worst = worst.max(z(&r, j, e).abs());
+            worst = zcheck::max_abs(worst, z(&r, j, e));
         }
         m += exact.len();
     }
@@ -57,9 +52,7 @@ fn backward_estimator_matches_exact_values() {
         ..RunConfig::default()
     };
     let r = lumest::backward::run(&case.scene, &rec, &cfg, &mut |_| true);
-    let worst = (0..exact.len())
-        .map(|j| z(&r, j, exact[j]).abs())
-        .fold(0.0, f64::max);
+    let worst = max_abs_z((0..exact.len()).map(|j| z(&r, j, exact[j])));
     let bound = sidak_bound(1e-3, exact.len(), Some(r.tallies.batches()));
     assert!(worst < bound, "max |z| {worst} >= {bound}");
     // Thread count does not matter for the backward estimator either.

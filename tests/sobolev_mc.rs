@@ -3,7 +3,7 @@
 //! order agreement. Fixed seeds; fast in release mode.
 
 mod common;
-use common::{chains_cfg, sobolev_run, z};
+use common::{chains_cfg, sobolev_run, z, zcheck};
 use lumest::reference::Sobolev;
 use lumest::run::RunConfig;
 use lumest::tally::sidak_bound;
@@ -29,7 +29,7 @@ fn agrees_with_exact_solution_on_both_planes() {
         for j in 0..n {
             let zj = z(&r, j, case.exact[j].e);
             assert!(zj.is_finite());
-            worst = worst.max(zj.abs());
+            worst = zcheck::max_abs(worst, zj);
         }
     }
     let bound = sidak_bound(ALPHA, configs.len() * n, Some(batches));
@@ -54,7 +54,7 @@ fn orders_agree_with_neumann_terms() {
         for k in 0..3 {
             let w = &r.tallies.orders[k][j];
             let exact = s.order(case.plane[j], case.r[j], k as u32 + 1);
-            worst = worst.max(((w.mean() - exact) / w.std_error()).abs());
+            worst = zcheck::max_abs(worst, zcheck::z_score(w.mean(), w.std_error(), exact));
         }
         // The buckets add up to the indirect total.
         let sum: f64 = r.tallies.orders.iter().map(|b| b[j].mean()).sum();
@@ -106,7 +106,7 @@ fn error_bars_are_calibrated() {
             let c = t.cdf(x);
             (c - i as f64 / m).abs().max(((i + 1) as f64 / m - c).abs())
         })
-        .fold(0.0, f64::max);
+        .fold(0.0, zcheck::max_abs);
     // Asymptotic KS critical value at level ALPHA: sqrt(-ln(ALPHA/2)/2) / sqrt(m).
     let crit = (-(ALPHA / 2.0).ln() / 2.0).sqrt() / m.sqrt();
     assert!(ks < crit, "KS distance {ks} >= {crit}");

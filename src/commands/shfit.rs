@@ -17,6 +17,7 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::run::{RunConfig, run};
 use crate::scene::{Scene, Sides, SurfaceSpec};
+use crate::tally::zcheck;
 use anyhow::Context;
 use clap::Args;
 use glam::{DMat3, DVec3};
@@ -260,10 +261,8 @@ fn compare(mesh: Mesh, sh: ShSurface, center: DVec3, r: f64, t: f64, threads: us
         let se = (a.tallies.indirect[j].std_error().powi(2)
             + b.tallies.indirect[j].std_error().powi(2))
         .sqrt();
-        dmax = dmax.max((ea - eb).abs() / ea.abs().max(1e-300));
-        if se > 0.0 {
-            zmax = zmax.max((ea - eb).abs() / se);
-        }
+        dmax = zcheck::max_abs(dmax, (ea - eb) / ea.abs().max(1e-300));
+        zmax = zcheck::max_abs(zmax, zcheck::z_score(ea, se, eb));
     }
     println!(
         "cost per chain, SH / mesh: {:.2}; largest relative difference of E over the 48 points {:.3e} \

@@ -65,6 +65,7 @@
 //! Numbers in, statistics out: nothing here knows about scenes or chains.
 
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
+pub mod zcheck;
 
 mod tallies;
 pub use tallies::{Tallies, bucket, bucket_count};

@@ -7,6 +7,7 @@ use lumest::commands::validate::{SobolevCase, sobolev_case};
 use lumest::estimator::Receivers;
 use lumest::reference::Sobolev;
 use lumest::run::{RunConfig, RunResult, Stop, run};
+pub use lumest::tally::zcheck;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// A Sobolev case with `n` points and a run of `chains` chains.
@@ -36,10 +37,19 @@ pub fn chains_cfg(chains: u64, seed: u64, threads: usize) -> RunConfig {
     }
 }
 
-/// z score of point `j` against an exact total `exact` [lx].
+/// z score of point `j` against an exact total `exact` [lx], by the rules
+/// of [`zcheck`]: NaN for a non-finite number, and with zero standard error
+/// 0 only when the estimate is exact (otherwise infinite), so that it fails
+/// any bound.
 pub fn z(r: &RunResult, j: usize, exact: f64) -> f64 {
     let w = &r.tallies.indirect[j];
-    (r.direct[j] + w.mean() - exact) / w.std_error()
+    zcheck::z_score(r.direct[j] + w.mean(), w.std_error(), exact)
+}
+
+/// Largest `|z|` over `zs`, NaN if any is NaN ([`zcheck::max_abs_z`];
+/// `f64::max` would drop a NaN); test it with [`zcheck::within`].
+pub fn max_abs_z(zs: impl IntoIterator<Item = f64>) -> f64 {
+    zcheck::max_abs_z(zs)
 }
 
 /// Pearson's statistic with pooling of cells whose expected count is < 5.
