@@ -9,6 +9,8 @@
 //!   globe; for a small luminaire the difference from an opaque body is
 //!   negligible). Seen from outside it has luminance `L`.
 
+pub mod goniometric;
+
 use crate::math::quadrature::panel;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
 use glam::DVec3;

@@ -1,0 +1,568 @@
+//! The intensity distribution of a goniometric luminaire (from an IES or
+//! EULUMDAT file, [`crate::io::photometry`]): interpolation, power and
+//! emission sampling, in the luminaire's own frame.
+//!
+//! # Frame and angles
+//!
+//! Type C (every EULUMDAT file, most IES files): the photometric nadir
+//! (`gamma = 0`) points along `-z`, the C0 plane contains `+x` and C90
+//! contains `+y`; a unit direction `d` has `gamma = acos(-d_z)` and
+//! `C = atan2(d_y, d_x)` in `[0, 360)`. Type B (floodlights): the beam axis
+//! is `-z` and the B-planes turn about the transverse axis `y`; `H` is the
+//! plane's angle from the axis towards `+x` and `V` the angle out of the
+//! `xz` plane towards `+y`: `d = (cos V sin H, sin V, -cos V cos H)`. Type A
+//! swaps the roles of `x` and `y`: `d = (sin V, cos V sin H, -cos V cos H)`.
+//!
+//! # Interpolation
+//!
+//! Bilinear in (horizontal angle, vertical angle), the de-facto rule of
+//! photometric software, after expanding the stored planes by the file's
+//! symmetry to a full turn (type C) or to `H` in `[-90, 90]` (types A, B),
+//! periodic in `C`. **Zero outside the measured vertical range**: a
+//! downlight measured over 0-90 degrees emits nothing upward (extrapolating
+//! the last value would add flux the file does not have).
+//!
+//! # Power and sampling
+//!
+//! `power = int I dOmega` [lm] is integrated exactly for the bilinear
+//! interpolant, cell by cell (`dOmega = cos V dV dH` for types A and B,
+//! `sin gamma dgamma dC` for type C). Emission directions are drawn from a
+//! piecewise-constant density: a cell is picked in proportion to its
+//! largest corner intensity times its solid angle (an alias-free binary
+//! search over the cumulative table, `O(log n)`), and a direction uniformly
+//! in solid angle within it. The density is positive wherever the
+//! interpolant is, so the weight `I(d) / pdf(d)` is exact and unbiased.
+
+use crate::io::photometry::{PhotometricType, Photometry, Symmetry};
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// A goniometric intensity distribution [cd] over the luminaire's frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Goniometric {
+    kind: PhotometricType,
+    /// Horizontal angles [rad], ascending, covering the full range.
+    h: Vec<f64>,
+    /// Vertical angles [rad], ascending (the measured range only).
+    v: Vec<f64>,
+    /// Intensity [cd] at `(h[i], v[k])`: `i[i * v.len() + k]`.
+    i: Vec<f64>,
+    /// Cumulative sampling weights of the cells `(i, k)`, last entry 1.
+    cdf: Vec<f64>,
+    /// Total of the sampling weights [cd sr].
+    weight_total: f64,
+    /// Emitted flux [lm].
+    power: f64,
+}
+
+/// A direction drawn from [`Goniometric::sample`].
+#[derive(Clone, Copy, Debug)]
+pub struct GonioSample {
+    /// Unit direction in the luminaire's frame.
+    pub d: DVec3,
+    /// Density per solid angle [1/sr].
+    pub pdf: f64,
+    /// Intensity towards `d` [cd].
+    pub i: f64,
+}
+
+impl Goniometric {
+    /// Expand a photometric table by its symmetry and build the sampler.
+    /// `scale` multiplies every intensity (a multiplier or a flux override).
+    pub fn new(p: &Photometry, scale: f64) -> Self {
+        let (h_deg, rows) = expand(p);
+        let nv = p.v_angles.len();
+        let h: Vec<f64> = h_deg.iter().map(|a| a.to_radians()).collect();
+        let v: Vec<f64> = p.v_angles.iter().map(|a| a.to_radians()).collect();
+        let i: Vec<f64> = rows.iter().flatten().map(|c| c * scale).collect();
+        let mut g = Self {
+            kind: p.kind,
+            h,
+            v,
+            i,
+            cdf: Vec::new(),
+            weight_total: 0.0,
+            power: 0.0,
+        };
+        let mut acc = 0.0;
+        let mut power = 0.0;
+        let (nh, nvc) = (g.h.len().saturating_sub(1), nv.saturating_sub(1));
+        for a in 0..nh {
+            for k in 0..nvc {
+                let c = [
+                    g.at(a, k),
+                    g.at(a, k + 1),
+                    g.at(a + 1, k),
+                    g.at(a + 1, k + 1),
+                ];
+                let dh = g.h[a + 1] - g.h[a];
+                let omega = dh * g.measure(g.v[k], g.v[k + 1]);
+                acc += c.iter().copied().fold(0.0, f64::max) * omega;
+                power += dh
+                    * g.linear_moment(g.v[k], g.v[k + 1], 0.5 * (c[0] + c[2]), 0.5 * (c[1] + c[3]));
+                g.cdf.push(acc);
+            }
+        }
+        if acc > 0.0 {
+            for x in &mut g.cdf {
+                *x /= acc;
+            }
+        }
+        if let Some(last) = g.cdf.last_mut() {
+            *last = 1.0;
+        }
+        g.weight_total = acc;
+        g.power = power;
+        g
+    }
+
+    fn at(&self, a: usize, k: usize) -> f64 {
+        self.i[a * self.v.len() + k]
+    }
+
+    /// `int_{v0}^{v1}` of the vertical measure: `cos v0 - cos v1` for type C
+    /// (`sin gamma dgamma`), `sin v1 - sin v0` for types A and B (`cos V dV`).
+    fn measure(&self, v0: f64, v1: f64) -> f64 {
+        match self.kind {
+            PhotometricType::C => v0.cos() - v1.cos(),
+            _ => v1.sin() - v0.sin(),
+        }
+    }
+
+    /// `int_{v0}^{v1} f(v) dmu(v)` for `f` linear from `f0` to `f1`.
+    fn linear_moment(&self, v0: f64, v1: f64, f0: f64, f1: f64) -> f64 {
+        let dv = v1 - v0;
+        // int (v - v0) dmu over [v0, v1].
+        let m1 = match self.kind {
+            // int (v - v0) sin v dv = [-(v - v0) cos v + sin v]
+            PhotometricType::C => -dv * v1.cos() + v1.sin() - v0.sin(),
+            // int (v - v0) cos v dv = [(v - v0) sin v + cos v]
+            _ => dv * v1.sin() + v1.cos() - v0.cos(),
+        };
+        f0 * self.measure(v0, v1) + (f1 - f0) / dv * m1
+    }
+
+    /// Emitted flux [lm], exact for the bilinear interpolant.
+    pub fn power(&self) -> f64 {
+        self.power
+    }
+
+    /// Largest intensity of the table [cd].
+    pub fn max_intensity(&self) -> f64 {
+        self.i.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// (horizontal, vertical) angles [rad] of a unit direction in the
+    /// luminaire's frame (module docs).
+    pub fn angles(&self, d: DVec3) -> (f64, f64) {
+        match self.kind {
+            PhotometricType::C => {
+                let g = (-d.z).clamp(-1.0, 1.0).acos();
+                let mut c = d.y.atan2(d.x);
+                if c < 0.0 {
+                    c += 2.0 * PI;
+                }
+                (c, g)
+            }
+            PhotometricType::B => ((d.x).atan2(-d.z), d.y.clamp(-1.0, 1.0).asin()),
+            PhotometricType::A => ((d.y).atan2(-d.z), d.x.clamp(-1.0, 1.0).asin()),
+        }
+    }
+
+    /// The unit direction of (horizontal, vertical) angles [rad].
+    pub fn direction(&self, h: f64, v: f64) -> DVec3 {
+        match self.kind {
+            PhotometricType::C => {
+                let (sg, cg) = v.sin_cos();
+                let (sc, cc) = h.sin_cos();
+                DVec3::new(sg * cc, sg * sc, -cg)
+            }
+            PhotometricType::B => {
+                let (sv, cv) = v.sin_cos();
+                let (sh, ch) = h.sin_cos();
+                DVec3::new(cv * sh, sv, -cv * ch)
+            }
+            PhotometricType::A => {
+                let (sv, cv) = v.sin_cos();
+                let (sh, ch) = h.sin_cos();
+                DVec3::new(sv, cv * sh, -cv * ch)
+            }
+        }
+    }
+
+    /// Intensity [cd] towards unit direction `d` (luminaire frame).
+    pub fn intensity(&self, d: DVec3) -> f64 {
+        let (h, v) = self.angles(d);
+        self.intensity_at(h, v)
+    }
+
+    /// Intensity [cd] at angles `(h, v)` [rad]: bilinear, zero outside the
+    /// measured vertical range and outside the horizontal range of types A/B.
+    pub fn intensity_at(&self, h: f64, v: f64) -> f64 {
+        let (nh, nv) = (self.h.len(), self.v.len());
+        if nv == 0
+            || nh == 0
+            || v < self.v[0]
+            || v > self.v[nv - 1]
+            || h < self.h[0]
+            || h > self.h[nh - 1]
+        {
+            return 0.0;
+        }
+        let (a, th) = locate(&self.h, h);
+        let (k, tv) = locate(&self.v, v);
+        let a1 = (a + 1).min(nh - 1);
+        let k1 = (k + 1).min(nv - 1);
+        let lo = self.at(a, k) + tv * (self.at(a, k1) - self.at(a, k));
+        let hi = self.at(a1, k) + tv * (self.at(a1, k1) - self.at(a1, k));
+        lo + th * (hi - lo)
+    }
+
+    /// Draw a direction: `u[0]` picks the cell, `u[1]` and the rescaled
+    /// remainder of `u[0]` place the direction in it (module docs). `None`
+    /// when the table is all zero.
+    pub fn sample(&self, u: [f64; 2], u2: f64) -> Option<GonioSample> {
+        if self.weight_total <= 0.0 {
+            return None;
+        }
+        let cell = self
+            .cdf
+            .partition_point(|&c| c <= u[0])
+            .min(self.cdf.len() - 1);
+        let nvc = self.v.len() - 1;
+        let (a, k) = (cell / nvc, cell % nvc);
+        let h = self.h[a] + u[1] * (self.h[a + 1] - self.h[a]);
+        let (v0, v1) = (self.v[k], self.v[k + 1]);
+        let v = match self.kind {
+            // Uniform in cos gamma between the cell's edges.
+            PhotometricType::C => {
+                let c = v0.cos() + u2 * (v1.cos() - v0.cos());
+                c.clamp(-1.0, 1.0).acos()
+            }
+            // Uniform in sin V.
+            _ => {
+                let s = v0.sin() + u2 * (v1.sin() - v0.sin());
+                s.clamp(-1.0, 1.0).asin()
+            }
+        };
+        let d = self.direction(h, v);
+        let pdf = self.pdf_cell(a, k);
+        Some(GonioSample {
+            d,
+            pdf,
+            i: self.intensity_at(h, v),
+        })
+    }
+
+    /// Density [1/sr] of [`Self::sample`] towards unit direction `d`.
+    pub fn pdf(&self, d: DVec3) -> f64 {
+        let (h, v) = self.angles(d);
+        let (nh, nv) = (self.h.len(), self.v.len());
+        if self.weight_total <= 0.0
+            || v < self.v[0]
+            || v > self.v[nv - 1]
+            || h < self.h[0]
+            || h > self.h[nh - 1]
+        {
+            return 0.0;
+        }
+        let (a, _) = locate(&self.h, h);
+        let (k, _) = locate(&self.v, v);
+        self.pdf_cell(a.min(nh - 2), k.min(nv - 2))
+    }
+
+    fn pdf_cell(&self, a: usize, k: usize) -> f64 {
+        let nvc = self.v.len() - 1;
+        let cell = a * nvc + k;
+        let p = self.cdf[cell] - if cell > 0 { self.cdf[cell - 1] } else { 0.0 };
+        let omega = (self.h[a + 1] - self.h[a]) * self.measure(self.v[k], self.v[k + 1]);
+        if omega > 0.0 { p / omega } else { 0.0 }
+    }
+}
+
+/// Index `k` with `xs[k] <= x <= xs[k + 1]` and the fraction of the way.
+fn locate(xs: &[f64], x: f64) -> (usize, f64) {
+    let n = xs.len();
+    if n < 2 {
+        return (0, 0.0);
+    }
+    let k = xs.partition_point(|&a| a <= x).clamp(1, n - 1) - 1;
+    let span = xs[k + 1] - xs[k];
+    let t = if span > 0.0 {
+        ((x - xs[k]) / span).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (k, t)
+}
+
+/// The table over the full horizontal range [deg] with one row per
+/// horizontal angle: type C to `[0, 360]` (periodic), types A and B to
+/// `[-90, 90]`.
+fn expand(p: &Photometry) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let mut planes: Vec<(f64, Vec<f64>)> = p
+        .h_angles
+        .iter()
+        .copied()
+        .zip(p.candela.iter().cloned())
+        .collect();
+    let mirror = |planes: &mut Vec<(f64, Vec<f64>)>, f: &dyn Fn(f64) -> f64| {
+        let extra: Vec<(f64, Vec<f64>)> = planes.iter().map(|(a, r)| (f(*a), r.clone())).collect();
+        planes.extend(extra);
+    };
+    match p.kind {
+        PhotometricType::C => match p.symmetry() {
+            Symmetry::Rotational => {
+                let r = planes[0].1.clone();
+                planes = vec![(0.0, r.clone()), (360.0, r)];
+            }
+            Symmetry::Quadrant => {
+                mirror(&mut planes, &|a| 180.0 - a);
+                mirror(&mut planes, &|a| 360.0 - a);
+            }
+            Symmetry::BilateralC0 => mirror(&mut planes, &|a| 360.0 - a),
+            Symmetry::BilateralC90 => {
+                // C(phi) = C(180 - phi): the stored C90-C270 half gives the
+                // rest (180 -> 0, 135 -> 45, 225 -> 315, ...).
+                mirror(&mut planes, &|a| (540.0 - a) % 360.0);
+                if let Some(r0) = planes.iter().find(|q| q.0 == 0.0).map(|q| q.1.clone()) {
+                    planes.push((360.0, r0));
+                }
+            }
+            Symmetry::None => {
+                if p.h_angles.last() != Some(&360.0) {
+                    let r = planes[0].1.clone();
+                    planes.push((360.0, r));
+                }
+            }
+        },
+        PhotometricType::A | PhotometricType::B => {
+            if p.h_angles.first().is_some_and(|&a| a >= 0.0) && p.h_angles.len() > 1 {
+                mirror(&mut planes, &|a| -a);
+            } else if p.h_angles.len() == 1 {
+                let r = planes[0].1.clone();
+                planes = vec![(-90.0, r.clone()), (90.0, r)];
+            }
+        }
+    }
+    planes.sort_by(|a, b| a.0.total_cmp(&b.0));
+    planes.dedup_by(|a, b| a.0 == b.0);
+    planes.into_iter().unzip()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::photometry::{Opening, ies, ldt};
+
+    /// `int I dOmega` by the midpoint rule on an `n x 2n` grid in (cos theta, phi)
+    /// over the whole sphere: independent of the cell integration above.
+    fn quadrature(g: &Goniometric, n: usize) -> f64 {
+        let mut sum = 0.0;
+        for a in 0..n {
+            let z = -1.0 + 2.0 * (a as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            for b in 0..2 * n {
+                let phi = PI * (b as f64 + 0.5) / n as f64;
+                sum += g.intensity(DVec3::new(r * phi.cos(), r * phi.sin(), z));
+            }
+        }
+        sum * (2.0 / n as f64) * (PI / n as f64)
+    }
+
+    fn table(
+        kind: PhotometricType,
+        h: &[f64],
+        v: &[f64],
+        f: impl Fn(f64, f64) -> f64,
+    ) -> Photometry {
+        Photometry {
+            kind,
+            v_angles: v.to_vec(),
+            h_angles: h.to_vec(),
+            candela: h
+                .iter()
+                .map(|&a| v.iter().map(|&b| f(a, b)).collect())
+                .collect(),
+            lamp_lumens: None,
+            opening: Opening::default(),
+            watts: None,
+            format: "test".into(),
+        }
+    }
+
+    fn tables() -> Vec<(&'static str, Photometry)> {
+        let g: Vec<f64> = (0..=18).map(|k| k as f64 * 5.0).collect(); // downlight 0-90
+        let full: Vec<f64> = (0..=36).map(|k| k as f64 * 5.0).collect();
+        let asym = |c: f64, gm: f64| 100.0 + 50.0 * (c.to_radians()).cos() + gm;
+        vec![
+            ("pendant", ies::parse(ies::tests::PENDANT, "p.ies").unwrap()),
+            (
+                "quadrant downlight",
+                table(PhotometricType::C, &[0.0, 30.0, 60.0, 90.0], &g, |c, gm| {
+                    (300.0 - 3.0 * gm)
+                        * (1.0 + 0.2 * (2.0 * c.to_radians()).cos() * gm.to_radians().sin())
+                }),
+            ),
+            (
+                "bilateral C0",
+                table(
+                    PhotometricType::C,
+                    &[0.0, 45.0, 90.0, 135.0, 180.0],
+                    &full,
+                    asym,
+                ),
+            ),
+            (
+                "bilateral C90",
+                table(
+                    PhotometricType::C,
+                    &[90.0, 135.0, 180.0, 225.0, 270.0],
+                    &full,
+                    asym,
+                ),
+            ),
+            (
+                "no symmetry",
+                table(PhotometricType::C, &[0.0, 90.0, 180.0, 270.0], &full, asym),
+            ),
+            (
+                "type B",
+                table(
+                    PhotometricType::B,
+                    &[0.0, 20.0, 40.0, 90.0],
+                    &[-90.0, -30.0, 0.0, 30.0, 90.0],
+                    |h, v| 500.0 - 4.0 * h - 2.0 * v.abs(),
+                ),
+            ),
+            (
+                "type A",
+                table(
+                    PhotometricType::A,
+                    &[-90.0, 0.0, 90.0],
+                    &[-60.0, 0.0, 60.0],
+                    |h, v| 100.0 + h + v,
+                ),
+            ),
+        ]
+    }
+
+    #[test]
+    fn power_is_the_integral_of_the_interpolated_intensity() {
+        for (name, p) in tables() {
+            let g = Goniometric::new(&p, 1.0);
+            let q = quadrature(&g, 1000);
+            assert!(
+                (g.power() / q - 1.0).abs() < 2e-4,
+                "{name}: power {} vs quadrature {q}",
+                g.power()
+            );
+        }
+    }
+
+    #[test]
+    fn nodes_are_reproduced_and_nothing_is_emitted_outside_the_measured_range() {
+        let (_, p) = tables().swap_remove(1);
+        let g = Goniometric::new(&p, 2.0);
+        for (a, &c) in p.h_angles.iter().enumerate() {
+            for (k, &gm) in p.v_angles.iter().enumerate() {
+                let d = g.direction(c.to_radians(), gm.to_radians());
+                let i = g.intensity(d);
+                assert!(
+                    (i - 2.0 * p.candela[a][k]).abs() < 1e-9 * i.max(1.0),
+                    "C{c} g{gm}: {i}"
+                );
+            }
+        }
+        // Quadrant symmetry: C300 = C60, C120 = C60, C200 = C20.
+        for (x, y) in [(300.0f64, 60.0f64), (120.0, 60.0), (200.0, 20.0)] {
+            let (a, b) = (
+                g.intensity_at(x.to_radians(), 0.5),
+                g.intensity_at(y.to_radians(), 0.5),
+            );
+            assert!((a - b).abs() < 1e-9 * b, "{x} vs {y}");
+        }
+        // Measured 0-90: nothing goes up, however close to the horizon.
+        assert_eq!(g.intensity(DVec3::new(1.0, 0.0, 1e-9).normalize()), 0.0);
+        assert_eq!(g.intensity(DVec3::Z), 0.0);
+        assert!(g.intensity(DVec3::new(1.0, 0.0, -1e-9).normalize()) > 0.0);
+        // Half the sphere: the flux of the lower hemisphere only.
+        let q = quadrature(&g, 1000);
+        assert!((g.power() / q - 1.0).abs() < 2e-4);
+    }
+
+    #[test]
+    fn sampling_weights_average_to_the_power_and_follow_the_pdf() {
+        use crate::sampling::Philox4x32;
+        for (name, p) in tables() {
+            let g = Goniometric::new(&p, 1.0);
+            let mut rng = Philox4x32::new(7, 0);
+            let n = 200_000;
+            let (mut s, mut s2) = (0.0, 0.0);
+            for _ in 0..n {
+                let u = rng.next_2d();
+                let e = g.sample(u, rng.next_f64()).unwrap();
+                assert!((e.d.length() - 1.0).abs() < 1e-12);
+                let pdf = g.pdf(e.d);
+                assert!(
+                    (pdf / e.pdf - 1.0).abs() < 1e-9,
+                    "{name}: pdf {pdf} vs {}",
+                    e.pdf
+                );
+                let w = e.i / e.pdf;
+                s += w;
+                s2 += w * w;
+            }
+            let mean = s / n as f64;
+            let se = ((s2 / n as f64 - mean * mean) / n as f64).sqrt();
+            let z = (mean - g.power()) / se;
+            assert!(
+                z.abs() < 4.5,
+                "{name}: mean weight {mean} +- {se} vs power {} (z {z})",
+                g.power()
+            );
+        }
+    }
+
+    #[test]
+    fn an_ies_and_an_ldt_of_the_same_distribution_agree() {
+        // C0-C180 bilateral, gamma 0-180 in 45 degree steps, values in cd.
+        let rows: [[f64; 5]; 5] = [
+            [400.0, 300.0, 100.0, 10.0, 0.0],
+            [380.0, 280.0, 90.0, 10.0, 0.0],
+            [360.0, 250.0, 80.0, 5.0, 0.0],
+            [380.0, 270.0, 95.0, 10.0, 0.0],
+            [400.0, 290.0, 100.0, 12.0, 0.0],
+        ];
+        let mut ies_text = String::from(
+            "IESNA:LM-63-2002\n[TEST] pair\nTILT=NONE\n1 1000 1 5 5 1 2 0 0 0\n1 1 20\n0 45 90 135 180\n0 45 90 135 180\n",
+        );
+        for r in rows {
+            ies_text += &format!("{}\n", r.map(|v| v.to_string()).join(" "));
+        }
+        // EULUMDAT in cd/klm for a 1000 lm lamp: the same numbers.
+        let mut l = vec![
+            "pair", "1", "2", "8", "45", "5", "45", "r", "n", "n", "f", "d", "0", "0", "0", "0",
+            "0", "0", "0", "0", "0", "100", "100", "1", "0", "1", "1", "LED", "1000", "840", "1A",
+            "20",
+        ]
+        .into_iter()
+        .map(String::from)
+        .collect::<Vec<_>>();
+        l.extend((0..10).map(|_| "0.5".to_string()));
+        l.extend((0..8).map(|k| (k * 45).to_string()));
+        l.extend((0..5).map(|k| (k * 45).to_string()));
+        for r in rows {
+            l.extend(r.map(|v| v.to_string()));
+        }
+        let a = Goniometric::new(&ies::parse(&ies_text, "p.ies").unwrap(), 1.0);
+        let b = Goniometric::new(&ldt::parse(&l.join("\n"), "p.ldt").unwrap(), 1.0);
+        assert!((a.power() / b.power() - 1.0).abs() < 1e-12);
+        let mut rng = crate::sampling::Philox4x32::new(3, 1);
+        for _ in 0..1000 {
+            let d = crate::sampling::warp::sample_uniform_sphere(rng.next_2d()).w;
+            let (x, y) = (a.intensity(d), b.intensity(d));
+            assert!((x - y).abs() <= 1e-12 * x.max(1.0), "{d}: {x} vs {y}");
+        }
+    }
+}
