@@ -3,6 +3,7 @@
 pub mod csvio;
 pub mod image;
 pub mod plot;
+pub mod sh_coeffs;
 
 pub use csvio::{
     InputError, PointTable, ViewTable, format_number, read_points, read_views, write_atomic,
