@@ -55,6 +55,26 @@
 //! start or end may still report a crossing there or not (the level is zero
 //! to rounding on both sides).
 //!
+//! ## Termination (no step cap)
+//!
+//! The march has no cap on its steps, so it never reports a miss for a ray
+//! that crosses (a cap did until it was removed: rays aimed at a dimple that
+//! comes close to the centre needed more evaluations and were lost). It
+//! still ends: every step is at least the floor step `floor = FLOOR_REL r_max`
+//! and `t + h` rounds to at least `t + floor / 2` when an ulp of `t` is
+//! below `floor`; otherwise the next double after `t` is taken, which is
+//! further than `floor`. The clipped segment is at most `2 r_out` long, so
+//! a march takes at most `4 (1 + CLIP_REL) / FLOOR_REL + 3` (about `4e9`)
+//! level evaluations. Real rays take tens to thousands.
+//!
+//! Long marches come from loose bounds: outside and moving inwards the
+//! bound `rho >= max(r_min, b)` holds over any step, and when the surface
+//! nearly touches the centre (`r_min` tiny) it makes `M` huge and the steps
+//! tiny all the way in. After `STEP_BUDGET` evaluations the march also tries
+//! the step certified on `[t, t + rho(t) / 2]`, where `rho >= rho(t) / 2`,
+//! and takes the longer of the two certified steps (before the budget it
+//! keeps the first rule alone, so that existing results stay bit for bit).
+//!
 //! Cost: each level evaluation (value and gradient) is `O(L^2)`, the
 //! recurrences of two orders interleaved; a ray needs about 20 (degree 8)
 //! to 50 (degree 30) evaluations, march and refinement together.
@@ -77,9 +97,10 @@ const CLIP_REL: f64 = 1e-8;
 /// Relative tolerance in `t` of the bracket refinement.
 const REFINE_REL: f64 = 1e-12;
 
-/// Cap on level evaluations of one march; never reached in the tests
-/// (see the step statistics there). Reaching it reports a miss.
-const MAX_STEPS: usize = 100_000;
+/// Level evaluations after which the march also tries the wider outside
+/// step (see the module docs, "Termination"). It is a switch, not a cap:
+/// the march goes on until it finds a bracket or reaches the end.
+pub(super) const STEP_BUDGET: usize = 100_000;
 
 /// Cap on refinement iterations (Newton converges in a few; bisection of a
 /// floor-step bracket to `1e-12` needs about 12).
@@ -230,9 +251,7 @@ impl ShSurface {
                 }
                 on_start = false;
             }
-            if steps >= MAX_STEPS {
-                return (March::Miss, steps);
-            }
+            let over_budget = steps >= STEP_BUDGET;
             let g = (side * pr.f).max(0.0);
             let gp = side * pr.fp;
             let outward = (p0 + t * d).dot(d) >= 0.0;
@@ -246,35 +265,49 @@ impl ShSurface {
             } else {
                 (0.5 * pr.rho, 0.5 * pr.rho)
             };
-            let lip = if side > 0.0 {
-                // h <= f keeps rho >= rho(t) - h >= scale U(t).
-                1.0 + sg / rho_lo.max(pr.su)
-            } else {
-                1.0 + sg / rho_lo
+            // The certified step on `[t, t + h]` given a lower bound `rho_lo`
+            // of `rho` there, valid for `h <= cap`.
+            let safe_step = |rho_lo: f64, cap: f64| {
+                let lip = if side > 0.0 {
+                    // h <= f keeps rho >= rho(t) - h >= scale U(t).
+                    1.0 + sg / rho_lo.max(pr.su)
+                } else {
+                    1.0 + sg / rho_lo
+                };
+                let h1 = g / lip;
+                let m2 = 1.0 / rho_lo + sgh / (rho_lo * rho_lo);
+                let disc = (gp * gp + 2.0 * m2 * g).sqrt();
+                let h2 = if gp >= 0.0 {
+                    (gp + disc) / m2
+                } else {
+                    2.0 * g / (disc - gp)
+                };
+                if on_start {
+                    // Leaving the surface: half the root keeps f clearly off zero.
+                    0.5 * h2
+                } else {
+                    h1.max(h2)
+                }
+                .min(cap)
             };
-            let h1 = g / lip;
-            let m2 = 1.0 / rho_lo + sgh / (rho_lo * rho_lo);
-            let disc = (gp * gp + 2.0 * m2 * g).sqrt();
-            let h2 = if gp >= 0.0 {
-                (gp + disc) / m2
-            } else {
-                2.0 * g / (disc - gp)
-            };
-            let mut h = if on_start {
-                // Leaving the surface: half the root keeps f clearly off zero.
-                on_start = false;
-                0.5 * h2
-            } else {
-                h1.max(h2)
+            let mut h = safe_step(rho_lo, cap);
+            if over_budget && side > 0.0 && !outward {
+                // Outside and moving inwards: with h <= rho(t) / 2 also
+                // rho >= rho(t) / 2, a far better bound than r_min or b when
+                // the surface comes close to the centre.
+                let wide = safe_step(rmin.max(b).max(0.5 * pr.rho), 0.5 * pr.rho);
+                h = h.max(wide);
             }
-            .min(cap);
+            on_start = false;
             if h.is_nan() || h < floor {
                 h = floor;
             }
-            let (tn, last) = if t + h >= t_end {
+            // Rounding of `t + h` when |t| is huge: still advance.
+            let tn = if t + h > t { t + h } else { t.next_up() };
+            let (tn, last) = if tn >= t_end {
                 (t_end, true)
             } else {
-                (t + h, false)
+                (tn, false)
             };
             let pn = self.probe(p0 + tn * d, d);
             steps += 1;

@@ -782,3 +782,59 @@ fn bench_first_hit() {
         best_level / n * 1e9
     );
 }
+
+/// A deep dimple: `U = 1 + (1 - 1e-5) cos theta` comes within `1e-5` of the
+/// centre at the south pole, so the Lipschitz bounds there (`r_min = 1e-5`)
+/// force steps of about `2e-5` on rays aimed at it from outside. Such a ray
+/// needs more level evaluations than the march's first budget; the old march
+/// reported a miss there (`MAX_STEPS` level evaluations, then `None`). Every
+/// ray must give the first crossing that a dense brute-force root search
+/// finds (`1e6` samples along the chord, then bisection).
+#[test]
+fn rays_beyond_the_step_budget_still_hit() {
+    let s = ShSurface::new(
+        &[c(0, 0, 1.0, 0.0), c(1, 0, 1.0 - 1e-5, 0.0)],
+        DVec3::ZERO,
+        DMat3::IDENTITY,
+        1.0,
+    )
+    .unwrap();
+    let (rmin, rmax) = s.bounds();
+    assert!((rmin - 1e-5).abs() <= 1e-15, "r_min {rmin}");
+    let rays = [
+        (DVec3::new(1e-6, 0.0, -3.0), DVec3::Z),
+        (
+            DVec3::new(0.0, 2e-5, -2.5),
+            DVec3::new(0.0, -1e-6, 1.0).normalize(),
+        ),
+        (
+            DVec3::new(0.4, -0.3, -2.0),
+            DVec3::new(-0.4, 0.3, 2.0).normalize(),
+        ),
+    ];
+    let mut beyond = 0;
+    for (o, d) in rays {
+        let (got, steps) = s.first_hit_counted(o, d, 0.0, f64::INFINITY);
+        beyond += usize::from(steps > super::march::STEP_BUDGET);
+        let (want, dt) = brute_first(&s, o, d, 0.0, f64::INFINITY, 1_000_000);
+        let want = want.expect("the ray crosses the dimple");
+        let (t, n) = got.unwrap_or_else(|| panic!("miss after {steps} evaluations: o {o}, d {d}"));
+        assert!(
+            (t - want).abs() <= dt,
+            "t {t} vs brute force {want} (+- {dt}), {steps} evaluations"
+        );
+        let x = o + t * d;
+        assert!(
+            s.level(x).abs() <= 1e-12 * rmax,
+            "level {} at the hit",
+            s.level(x)
+        );
+        assert!((n - s.normal(x)).length() <= 1e-9);
+    }
+    // The case is the one it is meant to be: rays past the old cap.
+    assert!(
+        beyond >= 1,
+        "no ray needed more than {} evaluations",
+        super::march::STEP_BUDGET
+    );
+}
