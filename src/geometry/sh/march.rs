@@ -303,7 +303,7 @@ impl ShSurface {
                 h = floor;
             }
             // Rounding of `t + h` when |t| is huge: still advance.
-            let tn = if t + h > t { t + h } else { t.next_up() };
+            let tn = if t + h > t { t + h } else { next_up(t) };
             let (tn, last) = if tn >= t_end {
                 (t_end, true)
             } else {
@@ -430,5 +430,16 @@ impl ShSurface {
     /// found, without refining it. Endpoints on the surface do not count.
     pub fn crosses(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> bool {
         matches!(self.march(o, d, t_min, t_max).0, March::Bracket { .. })
+    }
+}
+
+/// The next double above a finite `t` (`f64::next_up`, stable only since Rust 1.86).
+fn next_up(t: f64) -> f64 {
+    if t == 0.0 {
+        f64::from_bits(1)
+    } else if t > 0.0 {
+        f64::from_bits(t.to_bits() + 1)
+    } else {
+        f64::from_bits(t.to_bits() - 1)
     }
 }
