@@ -94,6 +94,10 @@ const ON_SURFACE_REL: f64 = 1e-12;
 /// inside the SH surface despite rounding (a sphere has `r_min = r_max`).
 const CLIP_REL: f64 = 1e-8;
 
+/// Origins further than this many outer radii from the centre are moved
+/// along the ray before the march (see `ShSurface::rebase`).
+const REBASE_REL: f64 = 1e6;
+
 /// Relative tolerance in `t` of the bracket refinement.
 const REFINE_REL: f64 = 1e-12;
 
@@ -385,6 +389,26 @@ impl ShSurface {
         (t, pr, evals)
     }
 
+    /// Shift `t0` of the ray's origin for the march: `0` unless the origin
+    /// lies more than `REBASE_REL r_max` from the centre and before the
+    /// segment's start, and then the `t` two outer radii before the closest
+    /// approach. Positions `o + t d` with `|t|` that large carry rounding
+    /// errors (about `|t| 1e-16`) beyond the clip margin `CLIP_REL r_max`,
+    /// so that the first probe could even find itself inside; from the
+    /// shifted origin they are exact to the scale of the object. The shifted
+    /// ray is the same line to the rounding of `o + t0 d`; an unshifted ray
+    /// (`t0 = 0`) is marched exactly as before.
+    fn rebase(&self, o: DVec3, d: DVec3, t_min: f64) -> f64 {
+        let p0 = o - self.center;
+        let r_max = self.scale * self.r_max;
+        let t0 = -p0.dot(d) - 2.0 * r_max;
+        if p0.length() > REBASE_REL * r_max && t0 > t_min {
+            t0
+        } else {
+            0.0
+        }
+    }
+
     /// First crossing of the surface by the ray `o + t d` (unit `d`) with
     /// `t` in the open interval `(t_min, t_max)`: `(t [m], outward unit
     /// normal)`. Entering from outside or leaving from inside both count.
@@ -406,6 +430,8 @@ impl ShSurface {
         t_min: f64,
         t_max: f64,
     ) -> (Option<(f64, DVec3)>, usize) {
+        let t0 = self.rebase(o, d, t_min);
+        let (o, t_min, t_max) = (o + t0 * d, t_min - t0, t_max - t0);
         match self.march(o, d, t_min, t_max) {
             (March::Miss, n) => (None, n),
             (
@@ -419,7 +445,7 @@ impl ShSurface {
                 n,
             ) => {
                 let (t, pr, nr) = self.refine(o - self.center, d, (ta, pa), (tb, pb), side);
-                let hit = (t > t_min && t < t_max).then(|| (t, pr.grad.normalize()));
+                let hit = (t > t_min && t < t_max).then(|| (t0 + t, pr.grad.normalize()));
                 (hit, n + nr)
             }
         }
@@ -429,6 +455,8 @@ impl ShSurface {
     /// `d`), crosses the surface (shadow rays). Stops at the first bracket
     /// found, without refining it. Endpoints on the surface do not count.
     pub fn crosses(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> bool {
+        let t0 = self.rebase(o, d, t_min);
+        let (o, t_min, t_max) = (o + t0 * d, t_min - t0, t_max - t0);
         matches!(self.march(o, d, t_min, t_max).0, March::Bracket { .. })
     }
 }

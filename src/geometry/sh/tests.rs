@@ -838,3 +838,30 @@ fn rays_beyond_the_step_budget_still_hit() {
         super::march::STEP_BUDGET
     );
 }
+
+/// Rays from very far away (up to `1e11` radii, where an ulp of `t` exceeds
+/// the floor step and the rounding of `o + t d` the clip margin) find the
+/// analytic sphere's entry point to the precision of `t`. Without moving
+/// the origin (`ShSurface::rebase`), the ray from `1e8` radii reported the
+/// exit point and the one from `1e9` radii a miss.
+#[test]
+fn far_origins_still_hit() {
+    let r0 = 1.3;
+    let center = DVec3::new(0.3, -0.2, 0.5);
+    let s = ShSurface::new(&[c(0, 0, r0, 0.0)], center, rotation(), 1.0).unwrap();
+    let mut r = Philox4x32::new(31, 0);
+    for far in [1e6, 1e8, 1e11] {
+        for _ in 0..50 {
+            let d = unit(&mut r);
+            let aim = center + 0.9 * r0 * tangent(&mut r, d) * r.next_f64();
+            let o = aim - far * d;
+            let want = sphere_hit(center, r0, o, d, 0.0, f64::INFINITY).unwrap();
+            let (got, steps) = s.first_hit_counted(o, d, 0.0, f64::INFINITY);
+            let (t, _) = got.unwrap_or_else(|| panic!("miss from {far}: {steps} evaluations"));
+            assert!(
+                (t - want).abs() <= 1e-12 * r0 + 8.0 * f64::EPSILON * far,
+                "from {far}: t {t} vs {want}"
+            );
+        }
+    }
+}
