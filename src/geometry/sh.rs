@@ -20,23 +20,23 @@
 //! surface is then star-shaped about `center` (every ray from the centre
 //! crosses it exactly once) and it bounds a solid.
 //!
-//! The pieces, one per file:
+//! The pieces, one module each (their docs hold the maths):
 //!
 //! - the surface, its evaluation (value, surface gradient, normal) and its
-//!   construction: `surface.rs` ([`ShSurface`]); the Legendre recurrences
+//!   construction: [`surface`] ([`ShSurface`]); the Legendre recurrences
 //!   behind it are in [`crate::math::sph_harm`];
 //! - the radius and derivative bounds that make the ray march safe, and the
-//!   grid that proves `U > 0`: `bounds.rs`;
-//! - the ray intersection by a Lipschitz-certified march: `march.rs`
+//!   grid that proves `U > 0`: [`bounds`];
+//! - the ray intersection by a Lipschitz-certified march: [`march`]
 //!   ([`ShSurface::first_hit`], [`ShSurface::crosses`]);
-//! - the least-squares fit of a point set: `fit.rs` ([`fit`]);
+//! - the least-squares fit of a point set: [`fit()`];
 //! - coefficient CSV files: [`crate::io::sh_coeffs`] ([`read_coefficients`]
 //!   adds this module's degree limit and error type).
 
-mod bounds;
-mod fit;
-mod march;
-mod surface;
+pub mod bounds;
+pub mod fit;
+pub mod march;
+pub mod surface;
 #[cfg(test)]
 mod tests;
 

@@ -8,7 +8,7 @@
 //! write, since the fields are public).
 //!
 //! Text (tick labels, titles) is drawn by plotters with a font embedded in
-//! the binary (see [`super::text`]), so nothing depends on system fonts.
+//! the binary (see `io/text.rs`), so nothing depends on system fonts.
 
 use super::csvio::write_atomic;
 use ::image::codecs::hdr::HdrEncoder;
@@ -582,7 +582,7 @@ impl Rgb8Image {
     }
 }
 
-/// Cap height and descender depth [px] at text scale 1 (see [`super::text`]).
+/// Cap height and descender depth [px] at text scale 1 (see `io/text.rs`).
 const GLYPH_H: i64 = super::text::CAP_HEIGHT;
 const DESCENT: i64 = super::text::DESCENT;
 

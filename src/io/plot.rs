@@ -1,5 +1,5 @@
 //! Log-log line plots as SVG (plotters), written atomically. Text is laid
-//! out with the embedded font of [`super::text`].
+//! out with the embedded font of `io/text.rs`.
 
 use plotters::prelude::*;
 
