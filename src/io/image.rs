@@ -7,8 +7,8 @@
 //! error when the data are checked (at construction and again before each
 //! write, since the fields are public).
 //!
-//! Text (tick labels, titles) is drawn with a built-in 5x7 bitmap font at an
-//! integer scale, so nothing depends on system fonts.
+//! Text (tick labels, titles) is drawn by plotters with a font embedded in
+//! the binary (see `io/text.rs`), so nothing depends on system fonts.
 
 use super::csvio::write_atomic;
 use ::image::codecs::hdr::HdrEncoder;
@@ -582,33 +582,20 @@ impl Rgb8Image {
     }
 }
 
-/// Glyph cell of the bitmap font: 5 x 7 pixels above the baseline (cap
-/// height 7) plus 2 rows of descender, advance 6.
-const GLYPH_W: i64 = 5;
-const GLYPH_H: i64 = 7;
-const DESCENT: i64 = 2;
-const ADVANCE: i64 = 6;
+/// Cap height and descender depth [px] at text scale 1 (see `io/text.rs`).
+const GLYPH_H: i64 = super::text::CAP_HEIGHT;
+const DESCENT: i64 = super::text::DESCENT;
 
 /// Width [px] of `text` drawn at integer scale `s`.
 fn text_width(text: &str, s: i64) -> i64 {
-    let n = text.chars().count() as i64;
-    if n == 0 { 0 } else { (n * ADVANCE - 1) * s }
+    super::text::text_width(text, s)
 }
 
-/// Draw `text` with its top-left corner at (x, y), each font pixel an
-/// `s x s` block of colour `c`.
+/// Draw `text` in colour `c` at integer scale `s`, its capitals from row `y`
+/// down to the baseline `y + 7 s`, its left edge at `x` (plotters, embedded font).
 fn draw_text(img: &mut Rgb8Image, x: i64, y: i64, text: &str, s: i64, c: [u8; 3]) {
-    for (k, ch) in text.chars().enumerate() {
-        let rows = font::glyph(ch);
-        let x0 = x + k as i64 * ADVANCE * s;
-        for (r, bits) in rows.iter().enumerate() {
-            for col in 0..GLYPH_W {
-                if bits >> (GLYPH_W - 1 - col) & 1 == 1 {
-                    img.fill_rect(x0 + col * s, y + r as i64 * s, s, s, c);
-                }
-            }
-        }
-    }
+    let size = (img.width, img.height);
+    super::text::draw_text(&mut img.data, size, (x, y), text, s, c);
 }
 
 /// Text in `c` with a one-font-pixel outline in `halo`, readable on any background.
@@ -634,242 +621,6 @@ fn draw_text_halo(
         draw_text(img, x + dx * s, y + dy * s, text, s, halo);
     }
     draw_text(img, x, y, text, s, c);
-}
-
-/// A 5 x 7 bitmap font (with 2-row descenders): digits, ASCII letters,
-/// common punctuation, `°`, `θ`, `φ`.
-mod font {
-    /// Rows top to bottom, bit 4 the leftmost pixel: rows 0..=6 from the cap
-    /// height to the baseline, rows 7..=8 for descenders (g, j, p, q, y, `,`,
-    /// `;`). Unknown characters draw as `?`.
-    pub fn glyph(c: char) -> [u8; 9] {
-        let tail = match c {
-            'g' => Some([
-                0, 0, 0b01111, 0b10001, 0b10001, 0b10001, 0b01111, 0b00001, 0b01110,
-            ]),
-            'j' => Some([
-                0b00010, 0, 0b00110, 0b00010, 0b00010, 0b00010, 0b00010, 0b10010, 0b01100,
-            ]),
-            'p' => Some([
-                0, 0, 0b11110, 0b10001, 0b10001, 0b10001, 0b11110, 0b10000, 0b10000,
-            ]),
-            'q' => Some([
-                0, 0, 0b01111, 0b10001, 0b10001, 0b10001, 0b01111, 0b00001, 0b00001,
-            ]),
-            'y' => Some([
-                0, 0, 0b10001, 0b10001, 0b10001, 0b10001, 0b01111, 0b00001, 0b01110,
-            ]),
-            ',' => Some([0, 0, 0, 0, 0, 0b01100, 0b01100, 0b00100, 0b01000]),
-            ';' => Some([
-                0, 0b01100, 0b01100, 0, 0, 0b01100, 0b01100, 0b00100, 0b01000,
-            ]),
-            _ => None,
-        };
-        if let Some(rows) = tail {
-            return rows;
-        }
-        let b = body(c);
-        [b[0], b[1], b[2], b[3], b[4], b[5], b[6], 0, 0]
-    }
-
-    /// Glyphs without descenders, rows 0..=6.
-    fn body(c: char) -> [u8; 7] {
-        match c {
-            ' ' => [0, 0, 0, 0, 0, 0, 0],
-            '0' => [
-                0b01110, 0b10001, 0b10011, 0b10101, 0b11001, 0b10001, 0b01110,
-            ],
-            '1' => [
-                0b00100, 0b01100, 0b00100, 0b00100, 0b00100, 0b00100, 0b01110,
-            ],
-            '2' => [
-                0b01110, 0b10001, 0b00001, 0b00010, 0b00100, 0b01000, 0b11111,
-            ],
-            '3' => [
-                0b11111, 0b00010, 0b00100, 0b00010, 0b00001, 0b10001, 0b01110,
-            ],
-            '4' => [
-                0b00010, 0b00110, 0b01010, 0b10010, 0b11111, 0b00010, 0b00010,
-            ],
-            '5' => [
-                0b11111, 0b10000, 0b11110, 0b00001, 0b00001, 0b10001, 0b01110,
-            ],
-            '6' => [
-                0b00110, 0b01000, 0b10000, 0b11110, 0b10001, 0b10001, 0b01110,
-            ],
-            '7' => [
-                0b11111, 0b00001, 0b00010, 0b00100, 0b01000, 0b01000, 0b01000,
-            ],
-            '8' => [
-                0b01110, 0b10001, 0b10001, 0b01110, 0b10001, 0b10001, 0b01110,
-            ],
-            '9' => [
-                0b01110, 0b10001, 0b10001, 0b01111, 0b00001, 0b00010, 0b01100,
-            ],
-            '.' => [0, 0, 0, 0, 0, 0b01100, 0b01100],
-            ':' => [0, 0b01100, 0b01100, 0, 0b01100, 0b01100, 0],
-            '-' => [0, 0, 0, 0b11111, 0, 0, 0],
-            '+' => [0, 0b00100, 0b00100, 0b11111, 0b00100, 0b00100, 0],
-            '=' => [0, 0, 0b11111, 0, 0b11111, 0, 0],
-            '/' => [0, 0b00001, 0b00010, 0b00100, 0b01000, 0b10000, 0],
-            '\\' => [0, 0b10000, 0b01000, 0b00100, 0b00010, 0b00001, 0],
-            '(' => [
-                0b00010, 0b00100, 0b01000, 0b01000, 0b01000, 0b00100, 0b00010,
-            ],
-            ')' => [
-                0b01000, 0b00100, 0b00010, 0b00010, 0b00010, 0b00100, 0b01000,
-            ],
-            '[' => [
-                0b01110, 0b01000, 0b01000, 0b01000, 0b01000, 0b01000, 0b01110,
-            ],
-            ']' => [
-                0b01110, 0b00010, 0b00010, 0b00010, 0b00010, 0b00010, 0b01110,
-            ],
-            '<' => [
-                0b00010, 0b00100, 0b01000, 0b10000, 0b01000, 0b00100, 0b00010,
-            ],
-            '>' => [
-                0b01000, 0b00100, 0b00010, 0b00001, 0b00010, 0b00100, 0b01000,
-            ],
-            '^' => [0b00100, 0b01010, 0b10001, 0, 0, 0, 0],
-            '_' => [0, 0, 0, 0, 0, 0, 0b11111],
-            '*' => [0, 0b00100, 0b10101, 0b01110, 0b10101, 0b00100, 0],
-            '%' => [
-                0b11000, 0b11001, 0b00010, 0b00100, 0b01000, 0b10011, 0b00011,
-            ],
-            '!' => [0b00100, 0b00100, 0b00100, 0b00100, 0b00100, 0, 0b00100],
-            '\'' => [0b01100, 0b00100, 0b01000, 0, 0, 0, 0],
-            '"' => [0b01010, 0b01010, 0b01010, 0, 0, 0, 0],
-            '#' => [
-                0b01010, 0b01010, 0b11111, 0b01010, 0b11111, 0b01010, 0b01010,
-            ],
-            '|' => [
-                0b00100, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100,
-            ],
-            '~' => [0, 0, 0b01000, 0b10101, 0b00010, 0, 0],
-            '°' => [0b01100, 0b10010, 0b10010, 0b01100, 0, 0, 0],
-            'θ' => [
-                0b01110, 0b10001, 0b10001, 0b11111, 0b10001, 0b10001, 0b01110,
-            ],
-            'φ' => [
-                0b00100, 0b01110, 0b10101, 0b10101, 0b10101, 0b01110, 0b00100,
-            ],
-            'A' => [
-                0b01110, 0b10001, 0b10001, 0b10001, 0b11111, 0b10001, 0b10001,
-            ],
-            'B' => [
-                0b11110, 0b10001, 0b10001, 0b11110, 0b10001, 0b10001, 0b11110,
-            ],
-            'C' => [
-                0b01110, 0b10001, 0b10000, 0b10000, 0b10000, 0b10001, 0b01110,
-            ],
-            'D' => [
-                0b11100, 0b10010, 0b10001, 0b10001, 0b10001, 0b10010, 0b11100,
-            ],
-            'E' => [
-                0b11111, 0b10000, 0b10000, 0b11110, 0b10000, 0b10000, 0b11111,
-            ],
-            'F' => [
-                0b11111, 0b10000, 0b10000, 0b11110, 0b10000, 0b10000, 0b10000,
-            ],
-            'G' => [
-                0b01110, 0b10001, 0b10000, 0b10111, 0b10001, 0b10001, 0b01111,
-            ],
-            'H' => [
-                0b10001, 0b10001, 0b10001, 0b11111, 0b10001, 0b10001, 0b10001,
-            ],
-            'I' => [
-                0b01110, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100, 0b01110,
-            ],
-            'J' => [
-                0b00111, 0b00010, 0b00010, 0b00010, 0b00010, 0b10010, 0b01100,
-            ],
-            'K' => [
-                0b10001, 0b10010, 0b10100, 0b11000, 0b10100, 0b10010, 0b10001,
-            ],
-            'L' => [
-                0b10000, 0b10000, 0b10000, 0b10000, 0b10000, 0b10000, 0b11111,
-            ],
-            'M' => [
-                0b10001, 0b11011, 0b10101, 0b10101, 0b10001, 0b10001, 0b10001,
-            ],
-            'N' => [
-                0b10001, 0b10001, 0b11001, 0b10101, 0b10011, 0b10001, 0b10001,
-            ],
-            'O' => [
-                0b01110, 0b10001, 0b10001, 0b10001, 0b10001, 0b10001, 0b01110,
-            ],
-            'P' => [
-                0b11110, 0b10001, 0b10001, 0b11110, 0b10000, 0b10000, 0b10000,
-            ],
-            'Q' => [
-                0b01110, 0b10001, 0b10001, 0b10001, 0b10101, 0b10010, 0b01101,
-            ],
-            'R' => [
-                0b11110, 0b10001, 0b10001, 0b11110, 0b10100, 0b10010, 0b10001,
-            ],
-            'S' => [
-                0b01111, 0b10000, 0b10000, 0b01110, 0b00001, 0b00001, 0b11110,
-            ],
-            'T' => [
-                0b11111, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100,
-            ],
-            'U' => [
-                0b10001, 0b10001, 0b10001, 0b10001, 0b10001, 0b10001, 0b01110,
-            ],
-            'V' => [
-                0b10001, 0b10001, 0b10001, 0b10001, 0b10001, 0b01010, 0b00100,
-            ],
-            'W' => [
-                0b10001, 0b10001, 0b10001, 0b10101, 0b10101, 0b10101, 0b01010,
-            ],
-            'X' => [
-                0b10001, 0b10001, 0b01010, 0b00100, 0b01010, 0b10001, 0b10001,
-            ],
-            'Y' => [
-                0b10001, 0b10001, 0b10001, 0b01010, 0b00100, 0b00100, 0b00100,
-            ],
-            'Z' => [
-                0b11111, 0b00001, 0b00010, 0b00100, 0b01000, 0b10000, 0b11111,
-            ],
-            'a' => [0, 0, 0b01110, 0b00001, 0b01111, 0b10001, 0b01111],
-            'b' => [
-                0b10000, 0b10000, 0b10110, 0b11001, 0b10001, 0b10001, 0b11110,
-            ],
-            'c' => [0, 0, 0b01110, 0b10000, 0b10000, 0b10001, 0b01110],
-            'd' => [
-                0b00001, 0b00001, 0b01101, 0b10011, 0b10001, 0b10001, 0b01111,
-            ],
-            'e' => [0, 0, 0b01110, 0b10001, 0b11111, 0b10000, 0b01110],
-            'f' => [
-                0b00110, 0b01001, 0b01000, 0b11100, 0b01000, 0b01000, 0b01000,
-            ],
-            'h' => [
-                0b10000, 0b10000, 0b10110, 0b11001, 0b10001, 0b10001, 0b10001,
-            ],
-            'i' => [0b00100, 0, 0b01100, 0b00100, 0b00100, 0b00100, 0b01110],
-            'k' => [
-                0b10000, 0b10000, 0b10010, 0b10100, 0b11000, 0b10100, 0b10010,
-            ],
-            'l' => [
-                0b01100, 0b00100, 0b00100, 0b00100, 0b00100, 0b00100, 0b01110,
-            ],
-            'm' => [0, 0, 0b11010, 0b10101, 0b10101, 0b10001, 0b10001],
-            'n' => [0, 0, 0b10110, 0b11001, 0b10001, 0b10001, 0b10001],
-            'o' => [0, 0, 0b01110, 0b10001, 0b10001, 0b10001, 0b01110],
-            'r' => [0, 0, 0b10110, 0b11001, 0b10000, 0b10000, 0b10000],
-            's' => [0, 0, 0b01110, 0b10000, 0b01110, 0b00001, 0b11110],
-            't' => [
-                0b01000, 0b01000, 0b11100, 0b01000, 0b01000, 0b01001, 0b00110,
-            ],
-            'u' => [0, 0, 0b10001, 0b10001, 0b10001, 0b10011, 0b01101],
-            'v' => [0, 0, 0b10001, 0b10001, 0b10001, 0b01010, 0b00100],
-            'w' => [0, 0, 0b10001, 0b10001, 0b10101, 0b10101, 0b01010],
-            'x' => [0, 0, 0b10001, 0b01010, 0b00100, 0b01010, 0b10001],
-            'z' => [0, 0, 0b11111, 0b00010, 0b00100, 0b01000, 0b11111],
-            _ => [0b01110, 0b10001, 0b00001, 0b00010, 0b00100, 0, 0b00100],
-        }
-    }
 }
 
 // ---------------------------------------------------------------------------
@@ -1459,31 +1210,6 @@ mod tests {
     }
 
     #[test]
-    fn text_draws_exactly_the_glyph_bits() {
-        let mut img = Rgb8Image::new(20, 10, WHITE);
-        draw_text(&mut img, 1, 1, "1", 1, INK);
-        let ink = (0..10)
-            .flat_map(|y| (0..20).map(move |x| (x, y)))
-            .filter(|&(x, y)| img.pixel(x, y) == INK)
-            .count();
-        let bits: u32 = font::glyph('1').iter().map(|r| r.count_ones()).sum();
-        assert_eq!(ink, bits as usize);
-        // Scale 3: nine times the pixels.
-        let mut big = Rgb8Image::new(40, 30, WHITE);
-        draw_text(&mut big, 0, 0, "1", 3, INK);
-        assert_eq!(
-            big.data.chunks(3).filter(|c| *c == INK).count(),
-            9 * bits as usize
-        );
-        // Every character the labels use has its own glyph (not the '?' fallback).
-        let unknown = font::glyph('\u{1}');
-        for c in "0123456789.-+e cd/m2L=θφ°".chars() {
-            assert!(c == '?' || font::glyph(c) != unknown || c == ' ', "{c}");
-        }
-        assert_eq!(text_width("ab", 2), 22);
-    }
-
-    #[test]
     fn scale_bar_labels_put_ink_beside_the_strip() {
         let scale = ColourScale {
             min: 0.01,
@@ -1504,7 +1230,7 @@ mod tests {
             let y0 = (*y - 7).max(0) as usize;
             let ink = (y0..y0 + 14)
                 .flat_map(|yy| (label_x0..img.width).map(move |x| (x, yy)))
-                .filter(|&(x, yy)| img.pixel(x, yy) == INK)
+                .filter(|&(x, yy)| img.pixel(x, yy).iter().all(|&v| v < 60))
                 .count();
             assert!(ink > 10, "label {label} at y={y} has {ink} ink pixels");
         }

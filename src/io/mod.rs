@@ -4,6 +4,8 @@ pub mod csvio;
 pub mod image;
 pub mod photometry;
 pub mod plot;
+pub mod sh_coeffs;
+mod text;
 
 pub use csvio::{
     InputError, PointTable, ViewTable, format_number, read_points, read_views, write_atomic,

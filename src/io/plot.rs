@@ -1,4 +1,5 @@
-//! Log-log line plots as SVG (plotters), written atomically.
+//! Log-log line plots as SVG (plotters), written atomically. Text is laid
+//! out with the embedded font of `io/text.rs`.
 
 use plotters::prelude::*;
 
@@ -34,6 +35,7 @@ pub fn loglog_svg(
         return Err("nothing to plot".into());
     }
     let (x0, x1, y0, y1) = (x0 / 1.5, x1 * 1.5, y0 / 2.0, y1 * 2.0);
+    super::text::register_fonts();
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (800, 560)).into_drawing_area();
@@ -88,4 +90,37 @@ pub fn loglog_svg(
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn loglog_plot_has_its_title_labels_and_legend() {
+        let series = [
+            Series {
+                name: "max |z|".into(),
+                points: vec![(0.1, 3.0), (1.0, 1.0), (10.0, 0.3)],
+                dashed: false,
+            },
+            Series {
+                name: "1/sqrt(T)".into(),
+                points: vec![(0.1, 3.0), (10.0, 0.3)],
+                dashed: true,
+            },
+        ];
+        let svg = loglog_svg("Error against time", "T [s]", "error [lx]", &series).unwrap();
+        for text in [
+            "Error against time",
+            "T [s]",
+            "error [lx]",
+            "max |z|",
+            "1/sqrt(T)",
+        ] {
+            assert!(svg.contains(text), "{text} missing");
+        }
+        assert!(svg.matches("<circle").count() >= 3);
+        assert!(loglog_svg("t", "x", "y", &[]).is_err());
+    }
 }

@@ -1,3 +1,4 @@
 //! Numerical building blocks that know nothing of scenes or light.
 
 pub mod quadrature;
+pub mod sph_harm;
