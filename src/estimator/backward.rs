@@ -551,10 +551,16 @@ fn next_event(
         let dist = dist2.sqrt();
         let cos_l = h.n.dot(to_c) / dist;
         if guide && cos_l > 0.0 {
-            p_b += l.power() / total * cos_l / (4.0 * PI * dist2);
+            p_b += match l {
+                // The photon's direction density towards `h`, per solid angle.
+                Light::Gonio { .. } => {
+                    l.power() / total * l.photon_pdf(-to_c / dist) * cos_l / dist2
+                }
+                _ => l.power() / total * cos_l / (4.0 * PI * dist2),
+            };
         }
         match *l {
-            Light::Point { .. } => {
+            Light::Point { .. } | Light::Gonio { .. } => {
                 let e = l.direct_illuminance(h.p, h.n);
                 if e > 0.0 {
                     nee += m.eval(f_frame.to_local(to_c / dist), wo) * e;
@@ -580,7 +586,7 @@ fn next_event(
 
 /// Strategy B of the light-guided connection from vertex `x` (on surface and
 /// primitive `from`, if any): a photon from a light picked by power, leaving
-/// its centre isotropically, lands at its first hit `y`; if `x` sees `y`'s
+/// its centre isotropically (a goniometric light: by its emission sampler), lands at its first hit `y`; if `x` sees `y`'s
 /// front side within `max_t` [m], the score `T N(y) / (p_A + p_B)` (see
 /// [`trace`]). `transfer(w)` gives `x`'s transfer towards unit world
 /// direction `w` (path weight times BRDF or response, times `cos_x`) and the
@@ -594,7 +600,12 @@ fn connect(
     transfer: impl Fn(DVec3) -> (f64, f64),
 ) -> f64 {
     let light = scene.pick_light(rng.next_f64());
-    let dir = sample_uniform_sphere(rng.next_2d()).w;
+    // Isotropic from points and spheres; a goniometric light's photons
+    // follow its emission (so that p_B stays positive where it emits).
+    let dir = match light {
+        Light::Gonio { .. } => light.photon(rng.next_2d(), rng.next_f64()),
+        _ => sample_uniform_sphere(rng.next_2d()).w,
+    };
     let ray = Ray {
         o: light.position(),
         d: dir,

@@ -12,17 +12,73 @@
 pub mod goniometric;
 
 use crate::math::quadrature::panel;
+pub use goniometric::Goniometric;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
 use glam::DVec3;
 use std::f64::consts::PI;
 
 /// A light source (closed set).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Light {
     /// Isotropic point source at `p` [m] with intensity `i` [cd].
     Point { p: DVec3, i: f64 },
     /// Lambertian emitting sphere: centre `c` [m], radius `r` [m], intensity `i` [cd].
     Sphere { c: DVec3, r: f64, i: f64 },
+    /// Goniometric point luminaire at `p` [m] (an IES or EULUMDAT file):
+    /// intensity `dist.intensity(frame.to_local(w))` [cd] towards world
+    /// direction `w`.
+    Gonio {
+        p: DVec3,
+        frame: LuminaireFrame,
+        dist: std::sync::Arc<Goniometric>,
+    },
+}
+
+/// A luminaire's orientation: the world directions of its local axes
+/// (`-z` is the photometric nadir, `x` the C0 plane, `y` the C90 plane).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LuminaireFrame {
+    /// World direction of the local `x` axis (C0).
+    pub x: DVec3,
+    /// World direction of the local `y` axis (C90).
+    pub y: DVec3,
+    /// World direction of the local `z` axis (opposite the nadir).
+    pub z: DVec3,
+}
+
+impl LuminaireFrame {
+    /// The default orientation: nadir down (`-z`), C0 along `+x`.
+    pub const DEFAULT: Self = Self {
+        x: DVec3::X,
+        y: DVec3::Y,
+        z: DVec3::Z,
+    };
+
+    /// The frame whose nadir points along unit `aim`, turned by `rotate`
+    /// [rad] about it (right-handed about the nadir... about `-aim`): C0 is
+    /// the world `+x` axis projected onto the plane normal to `aim` (the
+    /// world `+y` axis when `aim` is along `x`), then rotated.
+    pub fn aimed(aim: DVec3, rotate: f64) -> Self {
+        let z = -aim.normalize();
+        let seed = if z.x.abs() > 0.999_999 { DVec3::Y } else { DVec3::X };
+        let x0 = (seed - z * seed.dot(z)).normalize();
+        let y0 = z.cross(x0);
+        let (s, c) = rotate.sin_cos();
+        let x = x0 * c + y0 * s;
+        Self { x, y: z.cross(x), z }
+    }
+
+    /// A world direction in the luminaire's frame.
+    #[inline]
+    pub fn to_local(&self, w: DVec3) -> DVec3 {
+        DVec3::new(w.dot(self.x), w.dot(self.y), w.dot(self.z))
+    }
+
+    /// A local direction in the world.
+    #[inline]
+    pub fn to_world(&self, d: DVec3) -> DVec3 {
+        self.x * d.x + self.y * d.y + self.z * d.z
+    }
 }
 
 /// A sampled emitted ray, with the densities it was drawn from (a named
@@ -62,8 +118,42 @@ pub struct EmissionSample {
 impl Light {
     /// Total emitted luminous flux [lm]: `4 pi I` for both kinds.
     pub fn power(&self) -> f64 {
-        match *self {
+        match self {
             Light::Point { i, .. } | Light::Sphere { i, .. } => 4.0 * PI * i,
+            Light::Gonio { dist, .. } => dist.power(),
+        }
+    }
+
+    /// Intensity [cd] of a point-like light towards unit world direction
+    /// `w` (0 for a sphere, which is not point-like).
+    #[inline]
+    pub fn intensity(&self, w: DVec3) -> f64 {
+        match self {
+            Light::Point { i, .. } => *i,
+            Light::Sphere { .. } => 0.0,
+            Light::Gonio { frame, dist, .. } => dist.intensity(frame.to_local(w)),
+        }
+    }
+
+    /// Density [1/sr] of the photon directions [`Self::photon`] draws from
+    /// the light's centre: uniform for points and spheres, the emission
+    /// sampler's for a goniometric light.
+    #[inline]
+    pub fn photon_pdf(&self, w: DVec3) -> f64 {
+        match self {
+            Light::Gonio { frame, dist, .. } => dist.pdf(frame.to_local(w)),
+            _ => crate::sampling::warp::uniform_sphere_pdf(),
+        }
+    }
+
+    /// A photon direction from the light's centre (see [`Self::photon_pdf`]).
+    #[inline]
+    pub fn photon(&self, u: [f64; 2], u2: f64) -> DVec3 {
+        match self {
+            Light::Gonio { frame, dist, .. } => dist
+                .sample(u, u2)
+                .map_or(DVec3::Z, |s| frame.to_world(s.d)),
+            _ => sample_uniform_sphere(u).w,
         }
     }
 
@@ -73,6 +163,35 @@ impl Light {
     #[inline]
     pub fn sample_emission(&self, u_dir: [f64; 2], u_pos: [f64; 2]) -> EmissionSample {
         match *self {
+            Light::Gonio {
+                p,
+                ref frame,
+                ref dist,
+            } => match dist.sample(u_dir, u_pos[0]) {
+                Some(s) => EmissionSample {
+                    o: p,
+                    d: frame.to_world(s.d),
+                    le: s.i,
+                    cos: 1.0,
+                    pdf_pos: 1.0,
+                    pdf_dir: s.pdf,
+                    delta_pos: true,
+                    delta_dir: false,
+                    phi: s.i / s.pdf,
+                },
+                // A dark table has no power and is never picked.
+                None => EmissionSample {
+                    o: p,
+                    d: -frame.z,
+                    le: 0.0,
+                    cos: 1.0,
+                    pdf_pos: 1.0,
+                    pdf_dir: 1.0,
+                    delta_pos: true,
+                    delta_dir: false,
+                    phi: 0.0,
+                },
+            },
             Light::Point { p, i } => {
                 let s = sample_uniform_sphere(u_dir);
                 EmissionSample {
@@ -109,7 +228,7 @@ impl Light {
     /// Position of a point light, centre of a sphere [m] (for visibility tests).
     pub fn position(&self) -> DVec3 {
         match *self {
-            Light::Point { p, .. } => p,
+            Light::Point { p, .. } | Light::Gonio { p, .. } => p,
             Light::Sphere { c, .. } => c,
         }
     }
@@ -117,7 +236,7 @@ impl Light {
     /// Luminance of the emitting surface [cd/m^2] (0 for a point).
     pub fn luminance(&self) -> f64 {
         match *self {
-            Light::Point { .. } => 0.0,
+            Light::Point { .. } | Light::Gonio { .. } => 0.0,
             Light::Sphere { r, i, .. } => i / (PI * r * r),
         }
     }
@@ -125,7 +244,7 @@ impl Light {
     /// Whether `x` [m] is inside (or on) a sphere source, or on a point source.
     pub fn contains(&self, x: DVec3) -> bool {
         match *self {
-            Light::Point { p, .. } => {
+            Light::Point { p, .. } | Light::Gonio { p, .. } => {
                 (p - x).length() <= 1e-12 * p.abs().max_element().max(x.abs().max_element())
             }
             Light::Sphere { c, r, .. } => (c - x).length() <= r,
@@ -136,7 +255,7 @@ impl Light {
     /// source, if it does so before `t_max`; `None` for a point.
     pub fn hit(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<f64> {
         match *self {
-            Light::Point { .. } => None,
+            Light::Point { .. } | Light::Gonio { .. } => None,
             Light::Sphere { c, r, .. } => {
                 let oc = o - c;
                 let b = oc.dot(d);
@@ -168,6 +287,17 @@ impl Light {
                     i * c / (d2 * d2.sqrt())
                 }
             }
+            Light::Gonio { p, .. } => {
+                let d = p - x;
+                let d2 = d.length_squared();
+                let c = n.dot(d);
+                if c <= 0.0 || d2 == 0.0 {
+                    0.0
+                } else {
+                    let dist = d2.sqrt();
+                    self.intensity(-d / dist) * c / (d2 * dist)
+                }
+            }
             Light::Sphere { c, r, .. } => {
                 let d = c - x;
                 let dist = d.length();
@@ -187,7 +317,7 @@ impl Light {
     /// [`Self::direct_illuminance`].
     pub fn direct_weighted(&self, x: DVec3, n: DVec3, w: &dyn Fn(DVec3) -> f64) -> f64 {
         match *self {
-            Light::Point { p, .. } => {
+            Light::Point { p, .. } | Light::Gonio { p, .. } => {
                 let wi = (p - x).normalize();
                 self.direct_illuminance(x, n) * w(wi)
             }

@@ -507,6 +507,17 @@ fn light(
             _ => Ok(()),
         }
     };
+    let kind = d.kind.get_ref().as_str();
+    if kind == "ies" || kind == "ldt" {
+        return goniometric(l, ctx);
+    }
+    let gonio_only = [
+        ("file", d.file.as_ref().map(Spanned::span)),
+        ("aim", d.aim.as_ref().map(Spanned::span)),
+        ("rotate", d.rotate.as_ref().map(Spanned::span)),
+        ("multiplier", d.multiplier.as_ref().map(Spanned::span)),
+    ];
+    not_for(kind, &gonio_only)?;
     let i = match (&d.intensity, &d.flux) {
         (Some(i), None) => ctx.nonneg(i, "intensity")?,
         (None, Some(f)) => ctx.nonneg(f, "flux")? / (4.0 * PI),
@@ -594,7 +605,78 @@ fn light(
         other => Err(ctx.invalid(
             d.kind.span(),
             "type",
-            format!("unknown light type `{other}` (this version knows: point, sphere)"),
+            format!("unknown light type `{other}` (this version knows: point, sphere, ies, ldt)"),
         )),
     }
+}
+
+/// A goniometric luminaire (`type = "ies"` or `"ldt"`): the photometric
+/// file, its placement and orientation, and an optional `flux` [lm] or
+/// `multiplier` on its candela values.
+fn goniometric(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<Light, SceneError> {
+    use crate::light::{Goniometric, LuminaireFrame};
+    let d = l.get_ref();
+    let kind = d.kind.get_ref().as_str();
+    for (name, span) in [
+        ("intensity", d.intensity.as_ref().map(Spanned::span)),
+        ("center", d.center.as_ref().map(Spanned::span)),
+        ("radius", d.radius.as_ref().map(Spanned::span)),
+    ] {
+        if let Some(span) = span {
+            return Err(ctx.invalid(
+                span,
+                name,
+                format!("not allowed for a `{kind}` luminaire (its file gives the intensities; scale them with `flux` or `multiplier`)"),
+            ));
+        }
+    }
+    let fs = ctx.required(&d.file, l.span(), "file")?;
+    let path = ctx.relative(fs.get_ref());
+    let ext_ok = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case(kind));
+    if !ext_ok {
+        return Err(ctx.invalid(
+            fs.span(),
+            "file",
+            format!("a `{kind}` luminaire needs a .{kind} file, got `{}`", fs.get_ref()),
+        ));
+    }
+    let photometry = crate::io::photometry::read(&path)
+        .map_err(|e| ctx.invalid(fs.span(), "file", e.to_string()))?;
+    let p = ctx.finite_vec(ctx.required(&d.position, l.span(), "position")?, "position")?;
+    let aim = match &d.aim {
+        Some(a) => ctx.unit_vec(a, "aim")?,
+        None => -DVec3::Z,
+    };
+    let rotate = match &d.rotate {
+        Some(r) if r.get_ref().is_finite() => r.get_ref().to_radians(),
+        Some(r) => return Err(ctx.invalid(r.span(), "rotate", "must be a finite angle [deg]")),
+        None => 0.0,
+    };
+    let unscaled = Goniometric::new(&photometry, 1.0);
+    let scale = match (&d.flux, &d.multiplier) {
+        (Some(_), Some(m)) => {
+            return Err(ctx.invalid(m.span(), "multiplier", "give either `flux` [lm] or `multiplier`, not both"));
+        }
+        (Some(f), None) => {
+            let f = ctx.nonneg(f, "flux")?;
+            if unscaled.power() <= 0.0 {
+                return Err(ctx.invalid(fs.span(), "file", "the table emits nothing: it cannot be scaled to a flux"));
+            }
+            f / unscaled.power()
+        }
+        (None, Some(m)) => ctx.nonneg(m, "multiplier")?,
+        (None, None) => 1.0,
+    };
+    let dist = Goniometric::new(&photometry, scale);
+    if !(dist.power().is_finite() && dist.max_intensity() <= 1e250) {
+        return Err(ctx.invalid(fs.span(), "file", "intensities too large: at most 1e250 cd"));
+    }
+    Ok(Light::Gonio {
+        p,
+        frame: LuminaireFrame::aimed(aim, rotate),
+        dist: std::sync::Arc::new(dist),
+    })
 }

@@ -111,7 +111,7 @@ pub struct MaterialDesc {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
-    /// Light kind: `"point"` or `"sphere"`.
+    /// Light kind: `"point"`, `"sphere"`, `"ies"` or `"ldt"`.
     #[serde(rename = "type")]
     pub kind: Spanned<String>,
     /// Optional name used in messages and summaries.
@@ -124,6 +124,18 @@ pub struct LightDesc {
     pub radius: Option<Spanned<f64>>,
     /// Luminous intensity [cd] (isotropic point source). Exclusive with `flux`.
     pub intensity: Option<Spanned<f64>>,
-    /// Luminous flux [lm]. Exclusive with `intensity`.
+    /// Luminous flux [lm]. Exclusive with `intensity`; for a goniometric
+    /// luminaire, the flux its table is scaled to (exclusive with `multiplier`).
     pub flux: Option<Spanned<f64>>,
+    /// Photometric file of a goniometric luminaire (`type = "ies"` or
+    /// `"ldt"`), relative to the scene file.
+    pub file: Option<Spanned<String>>,
+    /// Direction of a goniometric luminaire's photometric nadir (gamma = 0);
+    /// default `[0, 0, -1]`.
+    pub aim: Option<Spanned<[f64; 3]>>,
+    /// Turn of a goniometric luminaire about its nadir [deg], from C0 along
+    /// the world `+x` axis (projected); default 0.
+    pub rotate: Option<Spanned<f64>>,
+    /// Factor on a goniometric luminaire's candela values; default 1.
+    pub multiplier: Option<Spanned<f64>>,
 }

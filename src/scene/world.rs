@@ -124,6 +124,8 @@ pub struct SceneSummary {
     pub point_lights: usize,
     /// Number of sphere lights.
     pub sphere_lights: usize,
+    /// Number of goniometric luminaires (IES, LDT).
+    pub goniometric_lights: usize,
     /// Whether an acceleration structure (BVH) was built.
     pub bvh: bool,
     /// Whether the spherical-harmonic machinery was built.
@@ -146,9 +148,14 @@ impl std::fmt::Display for SceneSummary {
             .filter(|k| k.0 > 0)
             .map(|k| format!("{} {}", k.0, k.1))
             .collect();
+        let gonio = if self.goniometric_lights > 0 {
+            format!(", {} goniometric luminaire(s)", self.goniometric_lights)
+        } else {
+            String::new()
+        };
         write!(
             f,
-            "{}, {} point light(s), {} sphere light(s), BVH: {}, SH: {}",
+            "{}, {} point light(s), {} sphere light(s){gonio}, BVH: {}, SH: {}",
             if shapes.is_empty() {
                 "no surfaces".to_string()
             } else {
@@ -269,6 +276,7 @@ impl Scene {
             let bad = |message: String| BuildError::Light { index: k, message };
             let (pos, i) = match *l {
                 Light::Point { p, i } => (p, i),
+                Light::Gonio { p, .. } => (p, l.power() / (4.0 * std::f64::consts::PI)),
                 Light::Sphere { c, r, i } => {
                     if !(r.is_finite() && r > 0.0) {
                         return Err(bad(format!("radius must be finite and > 0 [m], got {r}")));
@@ -448,6 +456,7 @@ impl Scene {
             meshes: self.meshes.len(),
             sh_objects: self.shs.len(),
             point_lights: count(|l| matches!(l, Light::Point { .. })),
+            goniometric_lights: count(|l| matches!(l, Light::Gonio { .. })),
             sphere_lights: count(|l| matches!(l, Light::Sphere { .. })),
             bvh: !self.meshes.is_empty(),
             sh: !self.shs.is_empty(),
@@ -740,10 +749,10 @@ mod build_tests {
             i: 1.0,
         };
         let ok: Vec<SurfaceSpec> = (0..MAX_PLANES).map(plane).collect();
-        assert!(Scene::build(ok, vec![light]).is_ok());
+        assert!(Scene::build(ok, vec![light.clone()]).is_ok());
         let many: Vec<SurfaceSpec> = (0..=MAX_PLANES).map(plane).collect();
         assert_eq!(
-            Scene::build(many, vec![light]).unwrap_err(),
+            Scene::build(many, vec![light.clone()]).unwrap_err(),
             BuildError::TooManyPlanes(MAX_PLANES + 1)
         );
         for bad in [
@@ -771,10 +780,11 @@ mod build_tests {
                 i: 1.0,
             },
         ] {
-            let e = Scene::build(vec![plane(0)], vec![light, bad]).unwrap_err();
+            let what = format!("{bad:?}");
+            let e = Scene::build(vec![plane(0)], vec![light.clone(), bad]).unwrap_err();
             assert!(
                 matches!(e, BuildError::Light { index: 1, .. }),
-                "{bad:?}: {e}"
+                "{what}: {e}"
             );
             assert!(e.to_string().starts_with("light #2: "), "{e}");
         }
