@@ -29,26 +29,74 @@ pub struct BoxArgs {
     pub report: PathBuf,
 }
 
-/// The furnished test room of `validate box`: a 5 x 4 x 3 m box with
-/// inward normals, a solid desk (an outward box), a partition rectangle
-/// reflecting on both sides, and two point lights.
-pub fn box_room(rho: f64) -> Scene {
-    let wall = Material::Lambertian { rho };
-    let faces = [
-        wall,
-        wall,
-        wall,
-        wall,
-        Material::Lambertian { rho: 0.5 * rho },
-        Material::Lambertian { rho: 0.9 * rho },
-    ];
-    Scene::build(
-        vec![
+/// A 5 x 4 x 3 m box room with inward normals and a solid desk (an outward
+/// box of reflectance 0.4), every length times `scale`: the one builder of
+/// the box rooms of the validation cases ([`BoxRoom::furnished`] for
+/// `validate box`, [`BoxRoom::plain`] for the `scaled` stress family).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoxRoom {
+    /// Reflectance of the four walls.
+    pub walls: f64,
+    /// Reflectance of the floor.
+    pub floor: f64,
+    /// Reflectance of the ceiling.
+    pub ceiling: f64,
+    /// Add the glossy partition (Phong `kd = 0.5`, `ks = 0.3`, `n = 20`,
+    /// reflecting on both sides) at `x = 3.5`, 2 m wide and 1.8 m high.
+    pub partition: bool,
+    /// Add the second point light (200 cd at `(4, 2.5, 2.7)`) to the first
+    /// (300 cd at `(1.5, 2, 2.7)`).
+    pub second_light: bool,
+    /// Length scale [1].
+    pub scale: f64,
+}
+
+impl BoxRoom {
+    /// The furnished room of `validate box`: walls `rho`, floor `rho / 2`,
+    /// ceiling `0.9 rho`, the partition and both lights, unscaled.
+    pub fn furnished(rho: f64) -> Self {
+        Self {
+            walls: rho,
+            floor: 0.5 * rho,
+            ceiling: 0.9 * rho,
+            partition: true,
+            second_light: true,
+            scale: 1.0,
+        }
+    }
+
+    /// The plain room of the `scaled` stress family: walls 0.8, floor 0.4,
+    /// ceiling 0.7, no partition, one light, lengths times `s`.
+    pub fn plain(s: f64) -> Self {
+        Self {
+            walls: 0.8,
+            floor: 0.4,
+            ceiling: 0.7,
+            partition: false,
+            second_light: false,
+            scale: s,
+        }
+    }
+
+    /// The room as a scene (surfaces: room, desk, partition; the lights in
+    /// the order above).
+    pub fn scene(&self) -> Scene {
+        let s = self.scale;
+        let wall = Material::Lambertian { rho: self.walls };
+        let faces = [
+            wall,
+            wall,
+            wall,
+            wall,
+            Material::Lambertian { rho: self.floor },
+            Material::Lambertian { rho: self.ceiling },
+        ];
+        let mut surfaces = vec![
             SurfaceSpec::Box(
                 "room".into(),
                 AaBox {
                     lo: DVec3::ZERO,
-                    hi: DVec3::new(5.0, 4.0, 3.0),
+                    hi: DVec3::new(5.0, 4.0, 3.0) * s,
                 },
                 Sides::Back,
                 faces,
@@ -56,35 +104,49 @@ pub fn box_room(rho: f64) -> Scene {
             SurfaceSpec::Box(
                 "desk".into(),
                 AaBox {
-                    lo: DVec3::new(1.0, 1.0, 0.0),
-                    hi: DVec3::new(2.6, 1.8, 0.75),
+                    lo: DVec3::new(1.0, 1.0, 0.0) * s,
+                    hi: DVec3::new(2.6, 1.8, 0.75) * s,
                 },
                 Sides::Front,
                 [Material::Lambertian { rho: 0.4 }; 6],
             ),
-            SurfaceSpec::Rect(
+        ];
+        if self.partition {
+            surfaces.push(SurfaceSpec::Rect(
                 "partition".into(),
-                Rect::new(DVec3::new(3.5, 0.0, 0.0), DVec3::Y * 2.0, DVec3::Z * 1.8).expect("rect"),
+                Rect::new(
+                    DVec3::new(3.5, 0.0, 0.0) * s,
+                    DVec3::Y * 2.0 * s,
+                    DVec3::Z * 1.8 * s,
+                )
+                .expect("rect"),
                 Sides::Both,
                 Material::Phong {
                     kd: 0.5,
                     ks: 0.3,
                     n: 20.0,
                 },
-            ),
-        ],
-        vec![
-            Light::Point {
-                p: DVec3::new(1.5, 2.0, 2.7),
-                i: 300.0,
-            },
-            Light::Point {
-                p: DVec3::new(4.0, 2.5, 2.7),
+            ));
+        }
+        let mut lights = vec![Light::Point {
+            p: DVec3::new(1.5, 2.0, 2.7) * s,
+            i: 300.0,
+        }];
+        if self.second_light {
+            lights.push(Light::Point {
+                p: DVec3::new(4.0, 2.5, 2.7) * s,
                 i: 200.0,
-            },
-        ],
-    )
-    .expect("a valid programmatic scene")
+            });
+        }
+        Scene::build(surfaces, lights).expect("a valid programmatic scene")
+    }
+}
+
+/// The furnished test room of `validate box` ([`BoxRoom::furnished`]): a
+/// 5 x 4 x 3 m box with inward normals, a solid desk (an outward box), a
+/// partition rectangle reflecting on both sides, and two point lights.
+pub fn box_room(rho: f64) -> Scene {
+    BoxRoom::furnished(rho).scene()
 }
 
 /// `lumest validate box`: flux balance at growing numbers of chains (each

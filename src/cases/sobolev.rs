@@ -69,10 +69,11 @@ fn layout(j: usize, n: usize, r_max: f64) -> (u8, f64, f64) {
     )
 }
 
-/// Build the Sobolev validation case.
-pub fn sobolev_case(s: &Sobolev, n_points: usize, r_max: f64) -> SobolevCase {
-    let h = s.h1 + s.h2;
-    let scene = Scene::from_parts(
+/// The Sobolev problem `s` as a scene: plane 1 `z = 0` (normal +z,
+/// reflectance `rho1`), the point source of `I` [cd] at `z = h1`, plane 2
+/// `z = h1 + h2` (normal -z, reflectance `rho2`).
+pub fn sobolev_scene(s: &Sobolev) -> Scene {
+    Scene::from_parts(
         vec![
             (
                 "plane 1".into(),
@@ -81,7 +82,7 @@ pub fn sobolev_case(s: &Sobolev, n_points: usize, r_max: f64) -> SobolevCase {
             ),
             (
                 "plane 2".into(),
-                Plane::new(DVec3::new(0.0, 0.0, h), -DVec3::Z),
+                Plane::new(DVec3::new(0.0, 0.0, s.h1 + s.h2), -DVec3::Z),
                 Material::Lambertian { rho: s.rho2 },
             ),
         ],
@@ -90,18 +91,32 @@ pub fn sobolev_case(s: &Sobolev, n_points: usize, r_max: f64) -> SobolevCase {
             i: s.intensity,
         }],
     )
-    .expect("a valid programmatic scene");
+    .expect("a valid programmatic scene")
+}
+
+/// The point of plane `plane` (1 or 2) of [`sobolev_scene`] at horizontal
+/// distance `r` [m] from the foot of the source and azimuth `phi` [rad],
+/// with the plane's normal (towards the source): `(r cos phi, r sin phi, z)`
+/// with `z = 0` on plane 1 and `z = h1 + h2` on plane 2.
+pub fn plane_point(s: &Sobolev, plane: u8, r: f64, phi: f64) -> (DVec3, DVec3) {
+    let (z, n) = if plane == 1 {
+        (0.0, DVec3::Z)
+    } else {
+        (s.h1 + s.h2, -DVec3::Z)
+    };
+    (DVec3::new(r * phi.cos(), r * phi.sin(), z), n)
+}
+
+/// Build the Sobolev validation case: [`sobolev_scene`] with the points of
+/// [`SobolevCase`] ([`plane_point`]) and their exact values.
+pub fn sobolev_case(s: &Sobolev, n_points: usize, r_max: f64) -> SobolevCase {
+    let scene = sobolev_scene(s);
     let mut points = Vec::with_capacity(n_points);
     let mut plane = Vec::with_capacity(n_points);
     let mut r = Vec::with_capacity(n_points);
     for j in 0..n_points {
         let (pl, rk, phi) = layout(j, n_points, r_max);
-        let (z, n) = if pl == 1 {
-            (0.0, DVec3::Z)
-        } else {
-            (h, -DVec3::Z)
-        };
-        points.push((DVec3::new(rk * phi.cos(), rk * phi.sin(), z), n));
+        points.push(plane_point(s, pl, rk, phi));
         plane.push(pl);
         r.push(rk);
     }

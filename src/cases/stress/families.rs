@@ -4,18 +4,15 @@
 use super::options::{MIN_CHAINS, StressOptions};
 use super::row::{Reference, StressRow, make_row};
 use super::verdict::Verdict;
-use crate::cases::box_room::box_room;
+use crate::cases::box_room::{BoxRoom, box_room};
 use crate::cases::integrating_sphere::sphere_case;
 use crate::cases::report::{Checkpoint, convergence};
+use crate::cases::sobolev::{plane_point, sobolev_scene};
 use crate::estimator::{Receiver, Receivers};
-use crate::geometry::Plane;
-use crate::geometry::shapes::AaBox;
 use crate::io::format_number;
-use crate::light::Light;
-use crate::material::Material;
 use crate::reference::Sobolev;
 use crate::run::{RunResult, run};
-use crate::scene::{Scene, Sides, SurfaceSpec};
+use crate::scene::Scene;
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -150,43 +147,8 @@ impl Ctx<'_> {
     }
 }
 
-/// The two Sobolev planes of `s` as a scene: plane 1 `z = 0` (normal +z),
-/// the source at `z = h1`, plane 2 `z = h1 + h2` (normal -z).
-fn planes_scene(s: &Sobolev) -> Scene {
-    Scene::from_parts(
-        vec![
-            (
-                "plane 1".into(),
-                Plane::new(DVec3::ZERO, DVec3::Z),
-                Material::Lambertian { rho: s.rho1 },
-            ),
-            (
-                "plane 2".into(),
-                Plane::new(DVec3::new(0.0, 0.0, s.h1 + s.h2), -DVec3::Z),
-                Material::Lambertian { rho: s.rho2 },
-            ),
-        ],
-        vec![Light::Point {
-            p: DVec3::new(0.0, 0.0, s.h1),
-            i: s.intensity,
-        }],
-    )
-    .expect("a valid programmatic scene")
-}
-
-/// Point `k` on plane `plane` of `s` at horizontal distance `r` [m] from the
-/// foot of the source (azimuth by the golden angle), facing the source side.
-fn plane_point(s: &Sobolev, plane: u8, r: f64, k: usize) -> (DVec3, DVec3) {
-    let phi = PI * (3.0 - 5f64.sqrt()) * (k as f64 + 0.5);
-    let (z, n) = if plane == 1 {
-        (0.0, DVec3::Z)
-    } else {
-        (s.h1 + s.h2, -DVec3::Z)
-    };
-    (DVec3::new(r * phi.cos(), r * phi.sin(), z), n)
-}
-
-/// Points of `s` at `(plane, r)` with exact values `E(plane, r / scale) / scale^2`
+/// Points of `s` at `(plane, r)` ([`plane_point`], point `k` at the
+/// azimuth `(k + 1/2)` times the golden angle) with exact values `E(plane, r / scale) / scale^2`
 /// of `exact_of` (the unscaled problem; `scale = 1` for no scaling).
 fn sobolev_points(
     s: &Sobolev,
@@ -197,7 +159,8 @@ fn sobolev_points(
     at.iter()
         .enumerate()
         .map(|(k, &(plane, r))| {
-            let (p, n) = plane_point(s, plane, r, k);
+            let phi = PI * (3.0 - 5f64.sqrt()) * (k as f64 + 0.5);
+            let (p, n) = plane_point(s, plane, r, phi);
             let v = exact_of.illuminance(plane, r / scale);
             let k = 1.0 / (scale * scale);
             Ok(Point {
@@ -210,17 +173,15 @@ fn sobolev_points(
         .collect()
 }
 
-/// The plain test room of the `scaled` family, every length times `s`: a
-/// 5 x 4 x 3 box with inward normals (walls 0.8, floor 0.4, ceiling 0.7), a
-/// solid desk (0.4) and one 300 cd point light; five points (floor, desk
-/// top, wall, ceiling, and the floor in the desk's shadow: reflected light only).
-/// Run [`plain_room`] scaled by `s` with `seed` (32768 chains in the quick subset).
+/// Run the plain room ([`BoxRoom::plain`]) scaled by `s` with `seed`
+/// (32768 chains in the quick subset) at its points ([`plain_room_points`]).
 fn run_plain_room(
     ctx: &Ctx,
     s: f64,
     seed: u64,
 ) -> anyhow::Result<(RunResult, Vec<(String, Receiver)>)> {
-    let (scene, pts) = plain_room(s);
+    let scene = BoxRoom::plain(s).scene();
+    let pts = plain_room_points(s);
     let rec: Vec<Receiver> = pts.iter().map(|p| p.1).collect();
     let receivers = Receivers::from_receivers(&scene, &rec).map_err(|e| anyhow::anyhow!("{e}"))?;
     let res = run(
@@ -232,44 +193,11 @@ fn run_plain_room(
     Ok((res, pts))
 }
 
-fn plain_room(s: f64) -> (Scene, Vec<(String, Receiver)>) {
-    let wall = Material::Lambertian { rho: 0.8 };
-    let faces = [
-        wall,
-        wall,
-        wall,
-        wall,
-        Material::Lambertian { rho: 0.4 },
-        Material::Lambertian { rho: 0.7 },
-    ];
-    let scene = Scene::build(
-        vec![
-            SurfaceSpec::Box(
-                "room".into(),
-                AaBox {
-                    lo: DVec3::ZERO,
-                    hi: DVec3::new(5.0, 4.0, 3.0) * s,
-                },
-                Sides::Back,
-                faces,
-            ),
-            SurfaceSpec::Box(
-                "desk".into(),
-                AaBox {
-                    lo: DVec3::new(1.0, 1.0, 0.0) * s,
-                    hi: DVec3::new(2.6, 1.8, 0.75) * s,
-                },
-                Sides::Front,
-                [Material::Lambertian { rho: 0.4 }; 6],
-            ),
-        ],
-        vec![Light::Point {
-            p: DVec3::new(1.5, 2.0, 2.7) * s,
-            i: 300.0,
-        }],
-    )
-    .expect("a valid programmatic scene");
-    let points = [
+/// The five points of the `scaled` family in the plain room, every length
+/// times `s`: floor, desk top, wall, ceiling, and the floor in the desk's
+/// shadow (reflected light only).
+fn plain_room_points(s: f64) -> Vec<(String, Receiver)> {
+    [
         ("floor", DVec3::new(4.0, 3.0, 0.0), DVec3::Z),
         ("desk top", DVec3::new(1.8, 1.4, 0.75), DVec3::Z),
         ("wall x=5", DVec3::new(5.0, 2.0, 1.5), -DVec3::X),
@@ -282,8 +210,7 @@ fn plain_room(s: f64) -> (Scene, Vec<(String, Receiver)>) {
     ]
     .into_iter()
     .map(|(l, p, n)| (l.to_string(), Receiver::illuminance(p * s, n)))
-    .collect();
-    (scene, points)
+    .collect()
 }
 
 /// The `sobolev` family.
@@ -309,14 +236,14 @@ pub(super) fn family_sobolev(ctx: &mut Ctx) {
                 // `sparse` check must flag (module doc).
                 let at: Vec<(u8, f64)> = radii.iter().map(|&r| (1, r)).collect();
                 let points = sobolev_points(&s, &s, 1.0, &at)?;
-                ctx.against_exact("sobolev", &case, &planes_scene(&s), &points, tuned, false)?;
+                ctx.against_exact("sobolev", &case, &sobolev_scene(&s), &points, tuned, false)?;
                 // The remedy for the far field: `--near-radius auto` (module
                 // doc); in the quick subset for `rho1 rho2 = 0.9` only.
                 if !ctx.opts.quick || prod == 0.9 {
                     let far: Vec<(u8, f64)> = at.iter().copied().filter(|p| p.1 >= 100.0).collect();
                     let points = sobolev_points(&s, &s, 1.0, &far)?;
                     let case = format!("{case} {NEAR_FAR_LABEL}");
-                    ctx.against_exact("sobolev", &case, &planes_scene(&s), &points, tuned, true)?;
+                    ctx.against_exact("sobolev", &case, &sobolev_scene(&s), &points, tuned, true)?;
                 }
                 Ok(())
             });
@@ -483,7 +410,7 @@ pub(super) fn family_near_source(ctx: &mut Ctx) {
         ctx.against_exact(
             "near-source",
             &case,
-            &planes_scene(&s),
+            &sobolev_scene(&s),
             &points,
             65536,
             false,
@@ -514,7 +441,7 @@ pub(super) fn family_scaled(ctx: &mut Ctx) {
                         .push_str(&format!(" [Sobolev at scaled h differs by {d:.1e}]"));
                 }
             }
-            ctx.against_exact("scaled", &case, &planes_scene(&s), &points, 65536, false)
+            ctx.against_exact("scaled", &case, &sobolev_scene(&s), &points, 65536, false)
         });
     }
     // The room: the reference is the unscaled room with another seed.
