@@ -32,6 +32,7 @@
 //! `phi` flux [lm], `i` intensity [cd], `e` illuminance [lx], `l` luminance.
 #![forbid(unsafe_code)]
 
+pub mod cases;
 pub mod chain;
 pub mod commands;
 pub mod estimator;

@@ -38,8 +38,8 @@
 //! on two cores shared with other jobs.
 
 use glam::DVec3;
-use lumest::commands::cases::box_room;
-use lumest::commands::validate::sobolev_case;
+use lumest::cases::box_room::box_room;
+use lumest::cases::sobolev::sobolev_case;
 use lumest::estimator::Receivers;
 use lumest::reference::Sobolev;
 use lumest::run::{RunConfig, RunResult, Stop, run};

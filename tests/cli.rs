@@ -282,7 +282,7 @@ fn sobolev_command_prints_exact_values() {
         .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
         .collect();
     assert_eq!(rows.len(), 3);
-    // Independent 30-digit values (data/reference/sobolev_case_A.csv), r = 0 and r = 1.
+    // Independent 30-digit values (validation/cases/sobolev_case_A/expected.csv), r = 0 and r = 1.
     let want = [
         (0.0, 4.528_129_525_817_337, 0.387_733_898_458_473),
         (1.0, 0.653_442_317_194_388_6, 0.190_058_685_655_628_9),
@@ -334,7 +334,7 @@ fn luminance_views_and_mixed_run() {
     let rows: Vec<Vec<&str>> = lines.map(|x| x.split(',').collect()).collect();
     // The view up meets the Lambertian ceiling (rho = 0.5) at its centre:
     // L = (rho / pi) E with E = 4.528129525817337 lx, the Sobolev value at
-    // r = 0 (data/reference/sobolev_case_A.csv; both planes alike by
+    // r = 0 (validation/cases/sobolev_case_A/expected.csv; both planes alike by
     // symmetry), so L = 0.72068...; first order (rho / pi) I / h^2 exactly.
     let rho_pi = 0.5 / std::f64::consts::PI;
     let num = |r: &[&str], c: &str| r[col(c)].parse::<f64>().unwrap();

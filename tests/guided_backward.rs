@@ -7,8 +7,8 @@
 mod common;
 use common::{chains_cfg, z, zcheck};
 use glam::DVec3;
+use lumest::cases::sobolev::sobolev_case;
 use lumest::chain::ChainParams;
-use lumest::commands::validate::sobolev_case;
 use lumest::estimator::Receivers;
 use lumest::reference::Sobolev;
 use lumest::run::{RunConfig, run};

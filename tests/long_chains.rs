@@ -57,7 +57,7 @@ fn integrating_sphere_analog_chains_have_length_one_over_one_minus_rho() {
     // In a closed sphere every ray meets the wall: with the analog game the
     // number of collisions is geometric with mean 1/(1 - rho); with the
     // default roulette the estimate at rho = 0.99 stays exact (no truncation).
-    use lumest::commands::cases::sphere_case;
+    use lumest::cases::integrating_sphere::sphere_case;
     use lumest::estimator::Receivers;
     use lumest::run::run;
     let rhos = [0.5, 0.9, 0.99];

@@ -4,7 +4,7 @@
 mod common;
 use common::{chains_cfg, max_abs_z, z, zcheck};
 use glam::DVec3;
-use lumest::commands::validate::{sobolev_case, sobolev_receivers};
+use lumest::cases::sobolev::{sobolev_case, sobolev_receivers};
 use lumest::estimator::{Receivers, ViewTarget, view_target};
 use lumest::reference::Sobolev;
 use lumest::run::{RunConfig, Stop, run};

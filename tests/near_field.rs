@@ -9,7 +9,7 @@ mod common;
 use common::chains_cfg;
 use gauss_quad::legendre::GaussLegendre;
 use glam::DVec3;
-use lumest::commands::validate::sobolev_case;
+use lumest::cases::sobolev::sobolev_case;
 use lumest::estimator::Receivers;
 use lumest::reference::Sobolev;
 use lumest::run::{RunConfig, run};

@@ -13,7 +13,7 @@
 //!   has no poles in `0 < arg k < π/4`), panels graded by 1.2 in `t`, 24
 //!   nodes, 32 digits; for `r ≥ 10⁴` and `r/H = 5·10⁴` 48 nodes, ratio 1.08,
 //!   45 digits (at 32 digits the ray lost ~5e-14·(r/10⁴H) on the Poisson
-//!   kernel). Both methods reproduced data/reference/sobolev_case_A.csv
+//!   kernel). Both methods reproduced validation/cases/sobolev_case_A/expected.csv
 //!   (r = 0.7, 20, 100) to all 17 printed digits.
 //!
 //! Measured agreement: ≤ 3e-15 relative on every row (before computing

@@ -34,14 +34,14 @@ const CONFIGS: [(f64, f64, f64, f64); 4] = [
     (1.0, 0.01, 0.2, 0.8),
 ];
 
-/// data/reference/sobolev_case_A.csv: 30-digit values, h1 = h2 = 0.5, rho = 0.5.
+/// validation/cases/sobolev_case_A/expected.csv: 30-digit values, h1 = h2 = 0.5, rho = 0.5.
 #[test]
 fn case_a_csv() {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/data/reference/sobolev_case_A.csv"
+        "/validation/cases/sobolev_case_A/expected.csv"
     );
-    let text = std::fs::read_to_string(path).expect("reading sobolev_case_A.csv");
+    let text = std::fs::read_to_string(path).expect("reading sobolev_case_A/expected.csv");
     let mut rows = 0;
     let mut worst = 0f64;
     for line in text
@@ -76,6 +76,58 @@ fn case_a_csv() {
     assert_eq!(rows, 72);
     eprintln!("case A: worst relative error {worst:e}");
     assert!(worst < 1e-12, "worst {worst:e}");
+}
+
+/// The case as data (validation/cases/sobolev_case_A/): `scene.toml` is the
+/// problem of `expected.csv` (reflectances, source) and row `k` of
+/// `points.csv` is the point of row `k` of `expected.csv` on its plane,
+/// facing the source: the direct illuminance of the scene's light there
+/// equals the table's `E_direct` (to 1e-12).
+#[test]
+fn case_a_files_agree() {
+    let dir = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/validation/cases/sobolev_case_A"
+    );
+    let scene = lumest::scene::load(std::path::Path::new(&format!("{dir}/scene.toml")))
+        .expect("loading scene.toml");
+    let points = lumest::io::csvio::read_points(&format!("{dir}/points.csv"))
+        .expect("reading points.csv")
+        .points;
+    let text = std::fs::read_to_string(format!("{dir}/expected.csv")).expect("expected.csv");
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("h1"))
+        .map(|l| l.split(',').map(|x| x.trim().parse().unwrap()).collect())
+        .collect();
+    assert_eq!(points.len(), rows.len());
+    assert_eq!(scene.surfaces.len(), 2);
+    for (k, (&(p, n), v)) in points.iter().zip(&rows).enumerate() {
+        let s = Sobolev::new(v[0], v[1], v[2], v[3], 1.0).unwrap();
+        for (surface, rho) in scene.surfaces.iter().zip([s.rho1, s.rho2]) {
+            assert_eq!(
+                surface.material,
+                lumest::material::Material::Lambertian { rho },
+                "row {k}"
+            );
+        }
+        let (plane, r) = (v[4] as u8, v[5]);
+        assert_eq!(
+            (p, n),
+            lumest::cases::sobolev::plane_point(&s, plane, r, 0.0),
+            "row {k}"
+        );
+        let direct: f64 = scene
+            .lights
+            .iter()
+            .map(|l| l.direct_illuminance(p, n))
+            .sum();
+        assert!(
+            rel(direct, v[7]) <= 1e-12,
+            "row {k}: {direct} against {}",
+            v[7]
+        );
+    }
 }
 
 // ∫_0^∞ E_refl(r) 2π r dr: Gauss–Legendre on [0, H/4] and ratio-2 panels up to

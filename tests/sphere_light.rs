@@ -5,7 +5,7 @@
 
 mod common;
 use glam::DVec3;
-use lumest::commands::validate::sobolev_receivers;
+use lumest::cases::sobolev::sobolev_receivers;
 use lumest::estimator::{Receivers, emitted_luminance};
 use lumest::geometry::Plane;
 use lumest::light::Light;

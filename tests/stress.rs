@@ -5,7 +5,7 @@
 //! rows are bit-identical for any thread count and the pinned lists below
 //! are exact (they change only when the solver's results change).
 
-use lumest::commands::stress::{
+use lumest::cases::stress::{
     Budget, MIN_BATCH_CHAINS, StressOptions, StressRow, Verdict, stress_rows,
 };
 use lumest::run::MIN_BATCHES;

@@ -10,7 +10,8 @@
 //! their errors from the two measured figures of merit.
 
 use super::sobolev::parse_list;
-use super::validate::{checkpoint, sobolev_case};
+use crate::cases::report::checkpoint;
+use crate::cases::sobolev::sobolev_case;
 use crate::estimator::Receivers;
 use crate::reference::Sobolev;
 use crate::run::{RunConfig, run};
@@ -43,7 +44,7 @@ pub struct BenchArgs {
 /// (one point when the count is 1), on the Sobolev case with exact answers.
 pub fn compare(a: &BenchArgs, counts: &[usize], times: &[f64]) -> anyhow::Result<()> {
     use super::illuminance::EstimatorKind;
-    use super::validate::sobolev_receivers;
+    use crate::cases::sobolev::sobolev_receivers;
     let problem = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).map_err(|e| anyhow::anyhow!("{e}"))?;
     println!(
         "{:>7} {:>9} {:>7} {:>12} {:>11} {:>11} {:>10} {:>11}",

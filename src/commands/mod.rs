@@ -2,12 +2,10 @@
 //! arguments and maps errors to exit codes).
 
 pub mod bench;
-pub mod cases;
 pub mod illuminance;
 pub mod render;
 pub mod shfit;
 pub mod sobolev;
-pub mod stress;
 pub mod validate;
 
 use crate::chain::ChainParams;

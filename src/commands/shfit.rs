@@ -8,7 +8,7 @@
 //! vertex density. The error is then measured on an independent spiral
 //! four times denser: radial distance between the mesh and the expansion.
 
-use super::cases::spiral;
+use crate::cases::integrating_sphere::spiral;
 use crate::estimator::{Receiver, Receivers};
 use crate::geometry::Plane;
 use crate::geometry::mesh::Mesh;

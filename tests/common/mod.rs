@@ -3,7 +3,7 @@
 
 pub mod direct;
 
-use lumest::commands::validate::{SobolevCase, sobolev_case};
+use lumest::cases::sobolev::{SobolevCase, sobolev_case};
 use lumest::estimator::Receivers;
 use lumest::reference::Sobolev;
 use lumest::run::{RunConfig, RunResult, Stop, run};

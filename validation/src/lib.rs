@@ -4,7 +4,7 @@
 //! the heavy cases here run with
 //! `cargo test --release -p lumest-validation -- --ignored`.
 
-use lumest::commands::validate::sobolev_case;
+use lumest::cases::sobolev::sobolev_case;
 use lumest::estimator::Receivers;
 use lumest::reference::Sobolev;
 use lumest::run::{RunConfig, Stop, run};
