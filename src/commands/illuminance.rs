@@ -500,6 +500,9 @@ pub(crate) fn measure_with(
         scene_path.display(),
         scene.summary()
     );
+    for note in &scene.notes {
+        eprintln!("lumest: {note}");
+    }
     let result = run_job(&scene, &job, &cfg, estimator, run_args.quiet);
     if let (Some((_, out)), Some(csv)) = (points, job.points_csv(&result, cfg.orders)) {
         write_atomic(out, &csv).with_context(|| format!("writing {out}"))?;

@@ -12,9 +12,9 @@
 pub mod goniometric;
 
 use crate::math::quadrature::panel;
-pub use goniometric::Goniometric;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
 use glam::DVec3;
+pub use goniometric::Goniometric;
 use std::f64::consts::PI;
 
 /// A light source (closed set).
@@ -60,12 +60,20 @@ impl LuminaireFrame {
     /// world `+y` axis when `aim` is along `x`), then rotated.
     pub fn aimed(aim: DVec3, rotate: f64) -> Self {
         let z = -aim.normalize();
-        let seed = if z.x.abs() > 0.999_999 { DVec3::Y } else { DVec3::X };
+        let seed = if z.x.abs() > 0.999_999 {
+            DVec3::Y
+        } else {
+            DVec3::X
+        };
         let x0 = (seed - z * seed.dot(z)).normalize();
         let y0 = z.cross(x0);
         let (s, c) = rotate.sin_cos();
         let x = x0 * c + y0 * s;
-        Self { x, y: z.cross(x), z }
+        Self {
+            x,
+            y: z.cross(x),
+            z,
+        }
     }
 
     /// A world direction in the luminaire's frame.
@@ -150,9 +158,9 @@ impl Light {
     #[inline]
     pub fn photon(&self, u: [f64; 2], u2: f64) -> DVec3 {
         match self {
-            Light::Gonio { frame, dist, .. } => dist
-                .sample(u, u2)
-                .map_or(DVec3::Z, |s| frame.to_world(s.d)),
+            Light::Gonio { frame, dist, .. } => {
+                dist.sample(u, u2).map_or(DVec3::Z, |s| frame.to_world(s.d))
+            }
             _ => sample_uniform_sphere(u).w,
         }
     }

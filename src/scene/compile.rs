@@ -132,7 +132,7 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
         .iter()
         .map(|l| light(l, ctx, &planes, only_planes))
         .collect::<Result<Vec<_>, _>>()?;
-    let names = desc
+    let names: Vec<String> = desc
         .light
         .iter()
         .enumerate()
@@ -145,8 +145,30 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
         .collect();
     // Every value was checked above with its line; what `build` checks again
     // cannot fail here.
-    let scene =
+    let mut scene =
         Scene::build(surfaces, lights).map_err(|e| ctx.invalid(0..0, "light", e.to_string()))?;
+    for (k, l) in desc.light.iter().enumerate() {
+        if let (Some(f), crate::light::Light::Gonio { dist, .. }) =
+            (&l.get_ref().file, &scene.lights[k])
+        {
+            // Read again for the file's own figures (cheap, at compile time only).
+            if let Ok(ph) = crate::io::photometry::read(&ctx.relative(f.get_ref())) {
+                let table = crate::light::Goniometric::new(&ph, 1.0).power();
+                let lamps = ph.lamp_lumens.map_or_else(
+                    || "absolute photometry".to_string(),
+                    |lm| format!("{:.4} x the file's {lm} lamp lumens", table / lm),
+                );
+                scene.notes.push(format!(
+                    "{}: {} `{}`: table flux {table:.6e} lm ({lamps}); emitting {:.6e} lm, max {:.6e} cd",
+                    names[k],
+                    ph.format,
+                    f.get_ref(),
+                    dist.power(),
+                    dist.max_intensity()
+                ));
+            }
+        }
+    }
     Ok(scene.with_light_names(names))
 }
 
@@ -640,7 +662,10 @@ fn goniometric(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<Light, SceneEr
         return Err(ctx.invalid(
             fs.span(),
             "file",
-            format!("a `{kind}` luminaire needs a .{kind} file, got `{}`", fs.get_ref()),
+            format!(
+                "a `{kind}` luminaire needs a .{kind} file, got `{}`",
+                fs.get_ref()
+            ),
         ));
     }
     let photometry = crate::io::photometry::read(&path)
@@ -658,12 +683,20 @@ fn goniometric(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<Light, SceneEr
     let unscaled = Goniometric::new(&photometry, 1.0);
     let scale = match (&d.flux, &d.multiplier) {
         (Some(_), Some(m)) => {
-            return Err(ctx.invalid(m.span(), "multiplier", "give either `flux` [lm] or `multiplier`, not both"));
+            return Err(ctx.invalid(
+                m.span(),
+                "multiplier",
+                "give either `flux` [lm] or `multiplier`, not both",
+            ));
         }
         (Some(f), None) => {
             let f = ctx.nonneg(f, "flux")?;
             if unscaled.power() <= 0.0 {
-                return Err(ctx.invalid(fs.span(), "file", "the table emits nothing: it cannot be scaled to a flux"));
+                return Err(ctx.invalid(
+                    fs.span(),
+                    "file",
+                    "the table emits nothing: it cannot be scaled to a flux",
+                ));
             }
             f / unscaled.power()
         }

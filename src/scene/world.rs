@@ -209,6 +209,9 @@ pub struct Scene {
     /// The lights' names, for messages and summaries (the scene file's
     /// `name`, else `light #k`, 1-based).
     pub light_names: Vec<String>,
+    /// What compiling the scene found worth telling the user (for example
+    /// a luminaire table's flux against its file's lamp lumens).
+    pub notes: Vec<String>,
     /// Cumulative power fractions for picking a light (last entry 1).
     light_cdf: Vec<f64>,
     /// Total emitted flux [lm].
@@ -325,6 +328,7 @@ impl Scene {
             shs: Vec::new(),
             lights: Vec::new(),
             light_names: Vec::new(),
+            notes: Vec::new(),
             light_cdf: Vec::new(),
             total_power: 0.0,
         };
