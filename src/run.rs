@@ -278,6 +278,15 @@ pub trait BatchWork: Sync {
     ) -> Batch;
 }
 
+/// A default batch size `bs` capped so that a run of `chains` chains (if
+/// given) still has at least [`MIN_BATCHES`] batches.
+pub fn cap_batch_size(bs: u64, chains: Option<u64>) -> u64 {
+    match chains {
+        Some(c) => bs.min(c.div_ceil(MIN_BATCHES)).max(1),
+        None => bs,
+    }
+}
+
 /// Batches of the `--rel-error` pilot (see the module docs).
 pub const PILOT_BATCHES: u64 = 32;
 

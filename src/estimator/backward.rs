@@ -23,7 +23,7 @@ use crate::estimator::{Receiver, Receivers, Response};
 use crate::geometry::{Hit, Ray};
 use crate::light::Light;
 use crate::material::Material;
-use crate::run::{Batch, BatchWork, Checks, MIN_BATCHES, Progress, RunConfig, RunResult, drive};
+use crate::run::{Batch, BatchWork, Checks, Progress, RunConfig, RunResult, cap_batch_size, drive};
 use crate::sampling::Philox4x32;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
 use crate::scene::Scene;
@@ -146,11 +146,8 @@ impl BatchWork for BackwardWork<'_> {
             }
         }
         let per_path = 1 + vertices / (PILOT * n) * (1 + self.scene.lights.len() as u64);
-        let mut bs = ((1u64 << 18) / (n * per_path)).clamp(1, 1 << 14);
-        if let Some(c) = chains {
-            bs = bs.min(c.div_ceil(MIN_BATCHES)).max(1);
-        }
-        bs
+        let bs = ((1u64 << 18) / (n * per_path)).clamp(1, 1 << 14);
+        cap_batch_size(bs, chains)
     }
 
     fn run_batch(

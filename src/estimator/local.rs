@@ -5,7 +5,7 @@
 use super::Receivers;
 use crate::backward::{self, PathSetup, Pool};
 use crate::chain;
-use crate::run::{Batch, BatchWork, Checks, MIN_BATCHES, Progress, RunConfig, RunResult, drive};
+use crate::run::{Batch, BatchWork, Checks, Progress, RunConfig, RunResult, cap_batch_size, drive};
 use crate::sampling::Philox4x32;
 use crate::sampling::qmc::{DigitalShift, shifted_sobol_2d, shifted_sobol_34};
 use crate::scene::Scene;
@@ -99,13 +99,10 @@ impl BatchWork for LocalWork<'_> {
         // At least 256 chains a batch: batch means of fewer chains are too
         // skewed for the checks that assume near-normal batch means (the
         // `tail` check fired on most points of the office with 32).
-        let mut bs = ((1u64 << 20) / per_chain)
+        let bs = ((1u64 << 20) / per_chain)
             .clamp(256, 1 << 16)
             .next_power_of_two();
-        if let Some(c) = chains {
-            bs = bs.min(c.div_ceil(MIN_BATCHES)).max(1);
-        }
-        bs
+        cap_batch_size(bs, chains)
     }
     fn run_batch(
         &self,

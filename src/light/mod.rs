@@ -285,17 +285,7 @@ impl Light {
     /// horizon cuts it.
     pub fn direct_illuminance(&self, x: DVec3, n: DVec3) -> f64 {
         match *self {
-            Light::Point { p, i } => {
-                let d = p - x;
-                let d2 = d.length_squared();
-                let c = n.dot(d);
-                if c <= 0.0 || d2 == 0.0 {
-                    0.0
-                } else {
-                    i * c / (d2 * d2.sqrt())
-                }
-            }
-            Light::Gonio { p, .. } => {
+            Light::Point { p, .. } | Light::Gonio { p, .. } => {
                 let d = p - x;
                 let d2 = d.length_squared();
                 let c = n.dot(d);
