@@ -256,9 +256,10 @@ pub(crate) struct Walk {
     pub(crate) vertices: u64,
     /// Vertices inside some light's neighbourhood ([`PathSetup::reach`]).
     pub(crate) reached: u64,
-    /// With a pool: vertices whose path region (within [`split_radius`])
-    /// meets some light's neighbourhood, whose light the path must then
-    /// fetch itself (see [`crate::tally::Diagnostics::near_reach`]).
+    /// With a pool: vertices whose split radius is the receiver's radius
+    /// (not `d / 2`) and whose path region (within it) meets some light's
+    /// neighbourhood, whose light the path must then fetch itself (see
+    /// [`crate::tally::Diagnostics::near_reach`]).
     pub(crate) exposed: u64,
 }
 
@@ -402,9 +403,12 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                     k: order,
                 };
                 join_pool(scene, pool, &at, radius, cfg.chain.max_order, rng, &mut add);
-                if reach
-                    .iter()
-                    .any(|&(c, r2)| (h.p - c).length() < radius + r2.sqrt())
+                // Exposed: the receiver's radius, not `d / 2`, sets the split
+                // here and a light's core lies within it.
+                if radius == first_max
+                    && reach
+                        .iter()
+                        .any(|&(c, r2)| (h.p - c).length() < radius + r2.sqrt())
                 {
                     exposed += 1;
                 }

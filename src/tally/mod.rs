@@ -53,9 +53,12 @@
 //!   For the near part of the near/far split the counted events are its
 //!   path vertices within a light's *core* (the ball of radius the median
 //!   distance from the light to the first surface, 16 probes), and the
-//!   check applies once some vertex was *exposed* to a core (the core met
-//!   the region within the vertex's split radius, whose light the path
-//!   must fetch itself instead of the pool). Near a point source the light
+//!   check applies once some vertex was *exposed* to a core (the split
+//!   radius there was the receiver's radius `R`, not `d / 2`, and the core
+//!   met the region within it, whose light the path must fetch itself
+//!   instead of the pool; with `d / 2` the recursion halves its way to the
+//!   core and the light-guided connection fetches the core's first
+//!   bounce, as at `r = 1e4`). Near a point source the light
 //!   the path fetches grows like `1/d^3` down to that scale, so paths that
 //!   never enter a core miss it: at `r = 100 m` between planes with
 //!   `rho1 rho2 = 0.99` and `--near-radius 50`, 42 % of `E` comes from
@@ -289,8 +292,9 @@ pub struct Diagnostics {
     pub near_hits: Option<u64>,
     /// Near part of the near/far split: its path vertices inside a light's
     /// neighbourhood over the run, when some vertex was *exposed* to one
-    /// (the neighbourhood met the region within the vertex's split radius,
-    /// whose light the path must fetch itself rather than the pool); `None`
+    /// (the receiver's radius, not `d / 2`, set the vertex's split radius
+    /// and the neighbourhood met the region within it, whose light the path
+    /// must fetch itself rather than the pool); `None`
     /// when no vertex was or there is no near part. Fewer than
     /// [`SPARSE_HITS`] flags `sparse`.
     pub near_reach: Option<u64>,
