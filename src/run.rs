@@ -224,7 +224,11 @@ pub struct Batch {
     /// Receiver scores evaluated in the batch.
     pub scores: u64,
     /// Per receiver: events counted for the `sparse` check
-    /// ([`crate::tally::Diagnostics::near_hits`]); empty when it does not apply.
+    /// ([`crate::tally::Diagnostics::near_hits`]); empty when it does not
+    /// apply. Length `3 n` when some receiver has [`Checks::near_reach`]:
+    /// then `near_hits[n + j]` and `near_hits[2 n + j]` are the near part's
+    /// exposed and reached path vertices at receiver `j`
+    /// ([`crate::tally::Diagnostics::near_reach`]).
     pub near_hits: Vec<u64>,
 }
 
@@ -236,6 +240,9 @@ pub struct Checks {
     pub watched: Vec<bool>,
     /// Whether the `near` check flags the receiver.
     pub near_plain: Vec<bool>,
+    /// Whether the receiver has a near part whose reach is counted
+    /// ([`crate::tally::Diagnostics::near_reach`]).
+    pub near_reach: Vec<bool>,
 }
 
 /// A source of independent batches: a work item that turns a batch index
@@ -262,6 +269,7 @@ pub trait BatchWork: Sync {
         Checks {
             watched: vec![false; self.len()],
             near_plain: vec![false; self.len()],
+            near_reach: vec![false; self.len()],
         }
     }
     /// Default batch size for an optional chain count; must not depend on
@@ -436,6 +444,7 @@ fn drive_batches(
     let checks = work.checks();
     tallies.watched = checks.watched;
     tallies.near_plain = checks.near_plain;
+    tallies.near_reach = checks.near_reach;
     let direct = work.direct().to_vec();
     let mut result = RunResult {
         direct: Vec::new(),

@@ -117,6 +117,7 @@ impl BatchWork for BackwardWork<'_> {
         Checks {
             watched: vec![watched; self.len()],
             near_plain: vec![false; self.len()],
+            near_reach: vec![false; self.len()],
         }
     }
 
@@ -252,6 +253,11 @@ pub(crate) struct Walk {
     pub(crate) vertices: u64,
     /// Vertices inside some light's neighbourhood ([`PathSetup::reach`]).
     pub(crate) reached: u64,
+    /// With a pool: vertices whose split radius is the receiver's radius
+    /// (not `d / 2`) and whose path region (within it) meets some light's
+    /// neighbourhood, whose light the path must then fetch itself (see
+    /// [`crate::tally::Diagnostics::near_reach`]).
+    pub(crate) exposed: u64,
 }
 
 /// Trace one path from receiver `rec`; `add(order, value)` receives each
@@ -309,6 +315,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         reach,
     } = *path;
     let mut reached = 0;
+    let mut exposed = 0;
     let guide = cfg.chain.guide && !scene.lights.is_empty() && scene.total_power() > 0.0;
     if guide {
         // The receiver's transfer towards world direction `w`: its response
@@ -342,6 +349,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                 return Walk {
                     vertices: 0,
                     reached: 0,
+                    exposed: 0,
                 };
             }
             (s.w, material.eval(s.w, wo) * s.w.z / s.pdf, s.pdf)
@@ -392,6 +400,15 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                     k: order,
                 };
                 join_pool(scene, pool, &at, radius, cfg.chain.max_order, rng, &mut add);
+                // Exposed: the receiver's radius, not `d / 2`, sets the split
+                // here and a light's core lies within it.
+                if radius == first_max
+                    && reach
+                        .iter()
+                        .any(|&(c, r2)| (h.p - c).length() < radius + r2.sqrt())
+                {
+                    exposed += 1;
+                }
                 radius
             }
             None => f64::INFINITY,
@@ -429,7 +446,11 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
             .intersect(&Ray { o: h.p, d }, from)
             .filter(|h| h.t < seg_max);
     }
-    Walk { vertices, reached }
+    Walk {
+        vertices,
+        reached,
+        exposed,
+    }
 }
 
 /// Split radius [m] at a path vertex `x` of the near part:

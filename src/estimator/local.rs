@@ -10,6 +10,7 @@ use crate::sampling::Philox4x32;
 use crate::sampling::qmc::{DigitalShift, shifted_sobol_2d, shifted_sobol_34};
 use crate::scene::Scene;
 use crate::tally::bucket;
+use glam::DVec3;
 
 /// The chains whose index is a multiple of this count, for the `sparse`
 /// check, also count the collisions they score from each point's watched
@@ -33,22 +34,50 @@ pub fn run(
         } else {
             receivers.clone().with_auto_near_field(cfg.near.1)
         };
-        return drive(
-            &LocalWork {
-                scene,
-                receivers: &near,
-            },
-            cfg,
-            observe,
-        );
+        return drive(&LocalWork::new(scene, &near), cfg, observe);
     }
-    drive(&LocalWork { scene, receivers }, cfg, observe)
+    drive(&LocalWork::new(scene, receivers), cfg, observe)
 }
 
 /// The local estimator as batch work.
 struct LocalWork<'a> {
     scene: &'a Scene,
     receivers: &'a Receivers,
+    /// With the near/far split: each light's core, centre [m] and squared
+    /// radius [m^2], the radius being the median distance from the light to
+    /// the first surface (a tenth of [`backward::light_reach`]), for the
+    /// near part's reach count ([`crate::tally::Diagnostics::near_reach`]);
+    /// empty without the split.
+    reach: Vec<(DVec3, f64)>,
+}
+
+impl<'a> LocalWork<'a> {
+    fn new(scene: &'a Scene, receivers: &'a Receivers) -> Self {
+        let reach = if receivers.near_field().0 > 0 {
+            scene
+                .lights
+                .iter()
+                .map(|l| {
+                    (
+                        l.position(),
+                        (backward::light_reach(scene, l) / 10.0).powi(2),
+                    )
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Self {
+            scene,
+            receivers,
+            reach,
+        }
+    }
+
+    /// Whether receiver `j` has a near part whose reach is counted.
+    fn near_reach(&self, j: usize) -> bool {
+        !self.reach.is_empty() && self.receivers.near_field().1[j] > 0.0
+    }
 }
 
 impl BatchWork for LocalWork<'_> {
@@ -70,6 +99,7 @@ impl BatchWork for LocalWork<'_> {
         Checks {
             watched: (0..n).map(|j| self.receivers.watched(j)).collect(),
             near_plain: (0..n).map(|j| self.receivers.near_plain(j)).collect(),
+            near_reach: (0..n).map(|j| self.near_reach(j)).collect(),
         }
     }
     /// Chains per batch when not given: about 2^20 receiver scores per
@@ -156,6 +186,13 @@ impl BatchWork for LocalWork<'_> {
         }
         let mut near_hits = vec![0.0; n];
         receivers.reduce(&acc[buckets * len..], &mut near_hits);
+        let mut near_hits: Vec<u64> = near_hits.into_iter().map(|c| c as u64).collect();
+        // With a near part: its paths' exposed and reached vertices after
+        // the collision counts (see `Batch::near_hits`).
+        let reach_counts = !self.reach.is_empty();
+        if reach_counts {
+            near_hits.resize(3 * n, 0);
+        }
         // Near part of the near/far split: backward paths whose first surface
         // lies within the radius, weighted to a per-chain sum over the batch.
         if paths > 0 {
@@ -177,11 +214,16 @@ impl BatchWork for LocalWork<'_> {
                     let path = PathSetup {
                         first_max: radius,
                         pool: pool.as_ref(),
-                        reach: &[],
+                        reach: &self.reach,
                     };
-                    backward::trace(scene, rec, frame, cfg, &mut rng, &path, |order, v| {
-                        sums[bucket(order, cfg.orders) * n + j] += v * w;
-                    });
+                    let walk =
+                        backward::trace(scene, rec, frame, cfg, &mut rng, &path, |order, v| {
+                            sums[bucket(order, cfg.orders) * n + j] += v * w;
+                        });
+                    if reach_counts {
+                        near_hits[n + j] += walk.exposed;
+                        near_hits[2 * n + j] += walk.reached;
+                    }
                 }
             }
         }
@@ -191,7 +233,7 @@ impl BatchWork for LocalWork<'_> {
             sums,
             collisions,
             scores,
-            near_hits: near_hits.into_iter().map(|c| c as u64).collect(),
+            near_hits,
         }
     }
 }

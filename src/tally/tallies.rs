@@ -21,6 +21,11 @@ pub struct Tallies {
     /// Per receiver: whether the `near` check flags it (a surface much
     /// closer than the nearest light, on the plain local estimate).
     pub near_plain: Vec<bool>,
+    /// Per receiver: whether its near part's reach is counted.
+    pub near_reach: Vec<bool>,
+    /// Per receiver: the near part's exposed and reached path vertices over
+    /// the run (see [`crate::tally::Diagnostics::near_reach`]).
+    pub near_vertices: Vec<[u64; 2]>,
 }
 
 /// The order bucket of light reflected `order >= 1` times when `orders`
@@ -51,12 +56,16 @@ impl Tallies {
             near_hits: vec![0; n],
             watched: vec![false; n],
             near_plain: vec![false; n],
+            near_reach: vec![false; n],
+            near_vertices: vec![[0; 2]; n],
         }
     }
 
     /// Fold one batch: `sums[k * n + j]` is the batch's sum over its `chains`
     /// chains of bucket `k` at receiver `j`; `near_hits` the batch's counts
-    /// for the `sparse` check (may be empty). `means` is scratch of the
+    /// for the `sparse` check (may be empty; with `3 n` entries, the near
+    /// part's exposed and reached vertices follow the `n` collision counts,
+    /// see [`crate::run::Batch::near_hits`]). `means` is scratch of the
     /// length of `sums`.
     pub fn fold(&mut self, sums: &[f64], chains: u64, near_hits: &[u64], means: &mut [f64]) {
         let n = self.indirect.len();
@@ -71,6 +80,12 @@ impl Tallies {
         }
         for (t, h) in self.near_hits.iter_mut().zip(near_hits) {
             *t += h;
+        }
+        if near_hits.len() == 3 * n {
+            for (j, v) in self.near_vertices.iter_mut().enumerate() {
+                v[0] += near_hits[n + j];
+                v[1] += near_hits[2 * n + j];
+            }
         }
         for (k, bucket) in self.orders.iter_mut().enumerate() {
             for (j, w) in bucket.iter_mut().enumerate() {
@@ -108,6 +123,9 @@ impl Tallies {
             .unwrap_or(false)
             .then(|| self.near_hits[j]);
         d.near = self.near_plain.get(j).copied().unwrap_or(false);
+        d.near_reach = (self.near_reach.get(j).copied().unwrap_or(false)
+            && self.near_vertices[j][0] > 0)
+            .then(|| self.near_vertices[j][1]);
         d
     }
 
