@@ -46,7 +46,6 @@
 //! error with `B - 1` degrees of freedom.
 
 use crate::chain::ChainParams;
-pub use crate::estimator::local::run;
 pub use crate::tally::Tallies;
 use crate::tally::bucket_count;
 use std::collections::BTreeMap;

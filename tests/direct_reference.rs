@@ -345,7 +345,7 @@ fn point_lights_behind_every_kind_of_occluder_match_the_brute_force_reference() 
         pairs.len()
     );
     // The runners hand the same first order on (a few chains suffice).
-    let fwd = lumest::run::run(&scene, &rec, &chains_cfg(256, 1, 0), &mut |_| true);
+    let fwd = lumest::estimator::local::run(&scene, &rec, &chains_cfg(256, 1, 0), &mut |_| true);
     let bwd = lumest::backward::run(&scene, &rec, &chains_cfg(32, 1, 0), &mut |_| true);
     for (j, &want) in reference.iter().enumerate() {
         assert!(close(fwd.direct[j], want, 1e-9), "forward {j}");
@@ -571,7 +571,7 @@ fn sphere_lights_cut_by_the_horizon_match_quadrature_over_the_visible_cone() {
     let recs: Vec<Receiver> = pairs.iter().map(|p| p.rec).collect();
     let rec = Receivers::from_receivers(&scene, &recs).unwrap();
     // What the runners report (a few chains suffice for the first order).
-    let fwd = lumest::run::run(&scene, &rec, &chains_cfg(256, 1, 0), &mut |_| true);
+    let fwd = lumest::estimator::local::run(&scene, &rec, &chains_cfg(256, 1, 0), &mut |_| true);
     let bwd = lumest::backward::run(&scene, &rec, &chains_cfg(32, 1, 0), &mut |_| true);
     let mut cut = 0;
     let mut worst: f64 = 0.0;

@@ -6,8 +6,9 @@
 mod common;
 use common::direct::{Occluder, RefLight, RefResponse, first_order};
 use glam::DVec3;
+use lumest::estimator::local::run;
 use lumest::estimator::{Receiver, Receivers, ViewTarget, view_target};
-use lumest::run::{RunConfig, Stop, run};
+use lumest::run::{RunConfig, Stop};
 use lumest::tally::sidak_bound;
 
 #[test]

@@ -13,8 +13,9 @@ use lumest::cases::case::Case;
 use lumest::cases::flux_balance::flux_balance;
 use lumest::cases::integrating_sphere::sphere_case;
 use lumest::cases::plate::plate_case;
+use lumest::estimator::local::run;
 use lumest::estimator::{Receiver, Receivers};
-use lumest::run::{RunResult, run};
+use lumest::run::RunResult;
 use lumest::tally::sidak_bound;
 
 fn run_case(case: &Case, chains: u64, seed: u64) -> RunResult {

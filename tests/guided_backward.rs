@@ -10,8 +10,9 @@ use glam::DVec3;
 use lumest::cases::sobolev::sobolev_case;
 use lumest::chain::ChainParams;
 use lumest::estimator::Receivers;
+use lumest::estimator::local::run;
 use lumest::reference::Sobolev;
-use lumest::run::{RunConfig, run};
+use lumest::run::RunConfig;
 use lumest::tally::sidak_bound;
 
 fn guided(on: bool, paths: u64) -> RunConfig {

@@ -4,8 +4,9 @@
 
 use glam::DVec3;
 use lumest::estimator::Receivers;
+use lumest::estimator::local::run;
 use lumest::reference::Sobolev;
-use lumest::run::{RunConfig, Stop, run};
+use lumest::run::{RunConfig, Stop};
 use lumest::tally::sidak_bound;
 use std::f64::consts::PI;
 

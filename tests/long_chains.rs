@@ -59,7 +59,7 @@ fn integrating_sphere_analog_chains_have_length_one_over_one_minus_rho() {
     // default roulette the estimate at rho = 0.99 stays exact (no truncation).
     use lumest::cases::integrating_sphere::sphere_case;
     use lumest::estimator::Receivers;
-    use lumest::run::run;
+    use lumest::estimator::local::run;
     let rhos = [0.5, 0.9, 0.99];
     let bound = sidak_bound(1e-3, rhos.len(), None);
     for (k, rho) in rhos.into_iter().enumerate() {

@@ -7,9 +7,9 @@ use common::{chains_cfg, z};
 use glam::DVec3;
 use lumest::cases::sobolev::sobolev_case;
 use lumest::estimator::Receivers;
+use lumest::estimator::local::run;
 use lumest::light::Light;
 use lumest::reference::Sobolev;
-use lumest::run::run;
 use lumest::scene::Scene;
 use lumest::tally::sidak_bound;
 

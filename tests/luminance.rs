@@ -5,9 +5,10 @@ mod common;
 use common::{chains_cfg, max_abs_z, z, zcheck};
 use glam::DVec3;
 use lumest::cases::sobolev::{sobolev_case, sobolev_receivers};
+use lumest::estimator::local::run;
 use lumest::estimator::{Receivers, ViewTarget, view_target};
 use lumest::reference::Sobolev;
-use lumest::run::{RunConfig, Stop, run};
+use lumest::run::{RunConfig, Stop};
 use lumest::tally::sidak_bound;
 
 #[test]

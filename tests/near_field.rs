@@ -11,8 +11,9 @@ use gauss_quad::legendre::GaussLegendre;
 use glam::DVec3;
 use lumest::cases::sobolev::sobolev_case;
 use lumest::estimator::Receivers;
+use lumest::estimator::local::run;
 use lumest::reference::Sobolev;
-use lumest::run::{RunConfig, run};
+use lumest::run::RunConfig;
 use lumest::tally::sidak_bound;
 
 /// Reflected illuminance [lx] at height `dz` above the source's foot on the

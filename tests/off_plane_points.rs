@@ -7,8 +7,9 @@ use gauss_quad::legendre::GaussLegendre;
 use glam::DVec3;
 use lumest::cases::sobolev::sobolev_case;
 use lumest::estimator::Receivers;
+use lumest::estimator::local::run;
 use lumest::reference::Sobolev;
-use lumest::run::{RunConfig, Stop, run};
+use lumest::run::{RunConfig, Stop};
 use lumest::tally::sidak_bound;
 
 /// Reflected illuminance at height `dz` [m] straight above (or below) the foot

@@ -7,9 +7,10 @@ mod common;
 
 use assert_cmd::Command;
 use glam::DVec3;
+use lumest::estimator::local::run;
 use lumest::estimator::{Receiver, Receivers};
 use lumest::geometry::mesh::star_blob;
-use lumest::run::{RunConfig, Stop, run};
+use lumest::run::{RunConfig, Stop};
 use lumest::scene;
 use std::path::Path;
 

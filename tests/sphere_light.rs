@@ -6,12 +6,13 @@
 mod common;
 use glam::DVec3;
 use lumest::cases::sobolev::sobolev_receivers;
+use lumest::estimator::local::run;
 use lumest::estimator::{Receivers, emitted_luminance};
 use lumest::geometry::Plane;
 use lumest::light::Light;
 use lumest::material::Material;
 use lumest::reference::Sobolev;
-use lumest::run::{RunConfig, Stop, run};
+use lumest::run::{RunConfig, Stop};
 use lumest::scene::Scene;
 use lumest::tally::sidak_bound;
 

@@ -3,10 +3,11 @@
 
 use crate::commands::{progress_bar, tick};
 use crate::estimator::Receivers;
+use crate::estimator::local::run;
 use crate::io::csvio::to_csv;
 use crate::io::plot::{Series, loglog_svg};
 use crate::io::{format_number, write_atomic};
-use crate::run::{MIN_BATCHES, Progress, RunConfig, RunResult, run};
+use crate::run::{MIN_BATCHES, Progress, RunConfig, RunResult};
 use crate::scene::Scene;
 use crate::tally::{figure_of_merit, relative_error, zcheck};
 use anyhow::Context;

@@ -13,8 +13,9 @@ use super::sobolev::parse_list;
 use crate::cases::report::checkpoint;
 use crate::cases::sobolev::sobolev_case;
 use crate::estimator::Receivers;
+use crate::estimator::local::run;
 use crate::reference::Sobolev;
-use crate::run::{RunConfig, run};
+use crate::run::RunConfig;
 use clap::Args;
 
 /// Arguments of `lumest bench`.

@@ -6,10 +6,11 @@
 //! with the same chains.
 
 use super::{RunArgs, progress_bar, tick};
+use crate::estimator::local::run;
 use crate::estimator::{Receiver, Receivers, ViewTarget, emitted_luminance, view_target};
 use crate::io::csvio::to_csv;
 use crate::io::{PointTable, ViewTable, format_number, read_points, read_views, write_atomic};
-use crate::run::{RunConfig, RunResult, run};
+use crate::run::{RunConfig, RunResult};
 use crate::scene::{self, Scene};
 use crate::tally::{figure_of_merit, relative_error, t_factor};
 use anyhow::Context;

@@ -9,13 +9,14 @@
 //! four times denser: radial distance between the mesh and the expansion.
 
 use crate::cases::integrating_sphere::spiral;
+use crate::estimator::local::run;
 use crate::estimator::{Receiver, Receivers};
 use crate::geometry::Plane;
 use crate::geometry::mesh::Mesh;
 use crate::geometry::sh::{ShSurface, fit, write_coefficients};
 use crate::light::Light;
 use crate::material::Material;
-use crate::run::{RunConfig, run};
+use crate::run::RunConfig;
 use crate::scene::{Scene, Sides, SurfaceSpec};
 use crate::tally::zcheck;
 use anyhow::Context;

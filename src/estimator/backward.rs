@@ -42,7 +42,7 @@ struct BackwardWork<'a> {
 }
 
 /// Run the backward estimator on `receivers` (same statistics, stopping
-/// rules and output as [`crate::run::run`]; "chains" count paths).
+/// rules and output as [`crate::estimator::local::run`]; "chains" count paths).
 ///
 /// Its `sparse` check ([`crate::tally::Diagnostics`]) counts, per receiver,
 /// the path vertices that land in some light's neighbourhood

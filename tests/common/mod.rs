@@ -5,8 +5,9 @@ pub mod direct;
 
 use lumest::cases::sobolev::{SobolevCase, sobolev_case};
 use lumest::estimator::Receivers;
+use lumest::estimator::local::run;
 use lumest::reference::Sobolev;
-use lumest::run::{RunConfig, RunResult, Stop, run};
+use lumest::run::{RunConfig, RunResult, Stop};
 pub use lumest::tally::zcheck;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 

@@ -6,8 +6,9 @@
 
 use lumest::cases::sobolev::sobolev_case;
 use lumest::estimator::Receivers;
+use lumest::estimator::local::run;
 use lumest::reference::Sobolev;
-use lumest::run::{RunConfig, Stop, run};
+use lumest::run::{RunConfig, Stop};
 use lumest::tally::sidak_bound;
 
 /// Outcome of one Sobolev configuration.
