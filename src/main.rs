@@ -1,7 +1,7 @@
 //! The `lumest` command line: arguments in, library calls, exit code out.
 
 use clap::{Parser, Subcommand};
-use lumest::commands::{bench, illuminance, render, shfit, sobolev, validate};
+use lumest::commands::{bench, illuminance, photometry, render, shfit, sobolev, validate};
 use std::process::ExitCode;
 
 /// Monte Carlo illumination by local estimation, with exact references.
@@ -30,6 +30,8 @@ enum Command {
     /// Fit a star-shaped OBJ mesh by spherical harmonics (least squares); compare them.
     #[command(name = "sh-fit")]
     ShFit(shfit::ShFitArgs),
+    /// Summary and polar candela plot of an IES or EULUMDAT file.
+    Photometry(photometry::PhotometryArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +44,7 @@ fn main() -> ExitCode {
         Command::Validate(c) => validate::validate(c),
         Command::Bench(a) => bench::bench(a),
         Command::ShFit(a) => shfit::sh_fit(a),
+        Command::Photometry(a) => photometry::photometry(a),
     };
     match res {
         Ok(()) => ExitCode::SUCCESS,

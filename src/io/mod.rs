@@ -5,7 +5,7 @@ pub mod image;
 pub mod photometry;
 pub mod plot;
 pub mod sh_coeffs;
-mod text;
+pub(crate) mod text;
 
 pub use csvio::{
     InputError, PointTable, ViewTable, format_number, read_points, read_views, write_atomic,
