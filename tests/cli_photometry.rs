@@ -9,7 +9,12 @@ fn pendant_summary_plot_and_errors() {
     let svg = dir.path().join("polar.svg");
     let out = Command::cargo_bin("lumest")
         .unwrap()
-        .args(["photometry", "data/pendant.ies", "--plot", svg.to_str().unwrap()])
+        .args([
+            "photometry",
+            "data/pendant.ies",
+            "--plot",
+            svg.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert!(out.status.success());
@@ -37,5 +42,8 @@ fn pendant_summary_plot_and_errors() {
         .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("cut.ies:") && err.contains("candela value"), "{err}");
+    assert!(
+        err.contains("cut.ies:") && err.contains("candela value"),
+        "{err}"
+    );
 }
