@@ -25,7 +25,7 @@
 //! `TILT=INCLUDE`. A `TILT=<file>` reference is refused: the data must be
 //! included. A negative width is a round opening of that diameter (LM-63-2002).
 
-use super::{Opening, PhotometricType, Photometry, PhotometryError, check_angles};
+use super::{Opening, PhotometricType, Photometry, PhotometryError, check_angles, whole};
 
 /// Most angles per axis and values in a table (larger files are refused
 /// before anything is allocated for them).
@@ -75,14 +75,7 @@ impl<'a> Tokens<'a> {
     /// The next number, which must be a whole number in `lo..=hi`.
     fn count(&mut self, field: &str, lo: i64, hi: i64) -> Result<i64, PhotometryError> {
         let (v, line) = self.number(field)?;
-        if v.fract() != 0.0 || v < lo as f64 || v > hi as f64 {
-            return Err(self.err(
-                line,
-                field,
-                format!("must be a whole number in [{lo}, {hi}], got {v}"),
-            ));
-        }
-        Ok(v as i64)
+        whole(v, lo, hi).map_err(|m| self.err(line, field, m))
     }
 
     /// `n` numbers, checked to be available before allocating.

@@ -29,7 +29,7 @@
 //! refers; the others are alternatives and are listed only). Decimal commas
 //! are accepted.
 
-use super::{Opening, PhotometricType, Photometry, PhotometryError, check_angles};
+use super::{Opening, PhotometricType, Photometry, PhotometryError, check_angles, whole};
 
 /// Most C-planes and gamma angles per plane.
 const MAX_ANGLES: usize = 100_000;
@@ -73,14 +73,7 @@ impl Lines<'_> {
     /// The next line as a whole number in `lo..=hi`.
     fn count(&mut self, field: &str, lo: i64, hi: i64) -> Result<i64, PhotometryError> {
         let v = self.number(field)?;
-        if v.fract() != 0.0 || v < lo as f64 || v > hi as f64 {
-            return Err(self.err(
-                self.next,
-                field,
-                format!("must be a whole number in [{lo}, {hi}], got {v}"),
-            ));
-        }
-        Ok(v as i64)
+        whole(v, lo, hi).map_err(|m| self.err(self.next, field, m))
     }
 
     /// `n` numbers, one per line, checked to be available before allocating.

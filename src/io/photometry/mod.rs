@@ -177,3 +177,12 @@ pub(crate) fn check_angles(
     }
     Ok(())
 }
+
+/// `v` as a whole number in `lo..=hi`, or the message saying why not.
+pub(crate) fn whole(v: f64, lo: i64, hi: i64) -> Result<i64, String> {
+    if v.fract() != 0.0 || v < lo as f64 || v > hi as f64 {
+        Err(format!("must be a whole number in [{lo}, {hi}], got {v}"))
+    } else {
+        Ok(v as i64)
+    }
+}
