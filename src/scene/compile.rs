@@ -127,11 +127,13 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
         })
         .collect();
     let only_planes = planes.len() == surfaces.len();
-    let lights = desc
+    let (lights, notes): (Vec<Light>, Vec<Option<String>>) = desc
         .light
         .iter()
         .map(|l| light(l, ctx, &planes, only_planes))
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .unzip();
     let names: Vec<String> = desc
         .light
         .iter()
@@ -147,28 +149,11 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
     // cannot fail here.
     let mut scene =
         Scene::build(surfaces, lights).map_err(|e| ctx.invalid(0..0, "light", e.to_string()))?;
-    for (k, l) in desc.light.iter().enumerate() {
-        if let (Some(f), crate::light::Light::Gonio { dist, .. }) =
-            (&l.get_ref().file, &scene.lights[k])
-        {
-            // Read again for the file's own figures (cheap, at compile time only).
-            if let Ok(ph) = crate::io::photometry::read(&ctx.relative(f.get_ref())) {
-                let table = crate::light::Goniometric::new(&ph, 1.0).power();
-                let lamps = ph.lamp_lumens.map_or_else(
-                    || "absolute photometry".to_string(),
-                    |lm| format!("{:.4} x the file's {lm} lamp lumens", table / lm),
-                );
-                scene.notes.push(format!(
-                    "{}: {} `{}`: table flux {table:.6e} lm ({lamps}); emitting {:.6e} lm, max {:.6e} cd",
-                    names[k],
-                    ph.format,
-                    f.get_ref(),
-                    dist.power(),
-                    dist.max_intensity()
-                ));
-            }
-        }
-    }
+    scene.notes = names
+        .iter()
+        .zip(notes)
+        .filter_map(|(name, note)| note.map(|n| format!("{name}: {n}")))
+        .collect();
     Ok(scene.with_light_names(names))
 }
 
@@ -516,7 +501,7 @@ fn light(
     ctx: &SourceCtx,
     planes: &[Plane],
     only_planes: bool,
-) -> Result<Light, SceneError> {
+) -> Result<(Light, Option<String>), SceneError> {
     let d = l.get_ref();
     // Fields that belong to the other kind of light are rejected.
     let not_for = |kind: &str, fields: &[(&str, Option<Range<usize>>)]| -> Result<(), SceneError> {
@@ -585,7 +570,7 @@ fn light(
                 ],
             )?;
             let p = ctx.finite_vec(ctx.required(&d.position, l.span(), "position")?, "position")?;
-            Ok(Light::Point { p, i })
+            Ok((Light::Point { p, i }, None))
         }
         "sphere" => {
             not_for(
@@ -622,7 +607,7 @@ fn light(
                     format!("the sphere light cuts plane surface #{} (it must lie wholly on one side of every plane)", k + 1),
                 ));
             }
-            Ok(Light::Sphere { c, r, i })
+            Ok((Light::Sphere { c, r, i }, None))
         }
         other => Err(ctx.invalid(
             d.kind.span(),
@@ -634,8 +619,12 @@ fn light(
 
 /// A goniometric luminaire (`type = "ies"` or `"ldt"`): the photometric
 /// file, its placement and orientation, and an optional `flux` [lm] or
-/// `multiplier` on its candela values.
-fn goniometric(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<Light, SceneError> {
+/// `multiplier` on its candela values; with a note for the run summary
+/// (the table's flux against the file's lamp lumens).
+fn goniometric(
+    l: &Spanned<LightDesc>,
+    ctx: &SourceCtx,
+) -> Result<(Light, Option<String>), SceneError> {
     use crate::light::{Goniometric, LuminaireFrame};
     let d = l.get_ref();
     let kind = d.kind.get_ref().as_str();
@@ -707,9 +696,24 @@ fn goniometric(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<Light, SceneEr
     if !(dist.power().is_finite() && dist.max_intensity() <= 1e250) {
         return Err(ctx.invalid(fs.span(), "file", "intensities too large: at most 1e250 cd"));
     }
-    Ok(Light::Gonio {
-        p,
-        frame: LuminaireFrame::aimed(aim, rotate),
-        dist: std::sync::Arc::new(dist),
-    })
+    let lamps = photometry.lamp_lumens.map_or_else(
+        || "absolute photometry".to_string(),
+        |lm| format!("{:.4} x the file's {lm} lamp lumens", unscaled.power() / lm),
+    );
+    let note = format!(
+        "{} `{}`: table flux {:.6e} lm ({lamps}); emitting {:.6e} lm, max {:.6e} cd",
+        photometry.format,
+        fs.get_ref(),
+        unscaled.power(),
+        dist.power(),
+        dist.max_intensity()
+    );
+    Ok((
+        Light::Gonio {
+            p,
+            frame: LuminaireFrame::aimed(aim, rotate),
+            dist: std::sync::Arc::new(dist),
+        },
+        Some(note),
+    ))
 }
