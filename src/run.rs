@@ -352,7 +352,7 @@ fn no_light(direct: &[f64], cfg: &RunConfig) -> RunResult {
     let mut tallies = Tallies::new(direct.len(), cfg.orders);
     for _ in 0..MIN_BATCHES {
         for w in tallies
-            .indirect
+            .estimated
             .iter_mut()
             .chain(tallies.orders.iter_mut().flatten())
         {

@@ -85,7 +85,7 @@ fn library_default_is_the_command_lines() {
 fn estimates(r: &RunResult) -> Vec<(f64, f64)> {
     (0..r.direct.len())
         .map(|j| {
-            let w = &r.tallies.indirect[j];
+            let w = &r.tallies.estimated[j];
             (r.direct[j] + w.mean(), w.std_error())
         })
         .collect()

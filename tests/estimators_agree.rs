@@ -93,7 +93,7 @@ fn local_and_backward_agree_on_a_phong_scene() {
             );
         }
         // Totals: each estimator's reflected part on the reference's first order.
-        let (a, c) = (&local.tallies.indirect[j], &back.tallies.indirect[j]);
+        let (a, c) = (&local.tallies.estimated[j], &back.tallies.estimated[j]);
         assert!(a.mean() > 0.0);
         let (ta, tc) = (dj + a.mean(), dj + c.mean());
         let z = (ta - tc) / a.std_error().hypot(c.std_error());

@@ -30,8 +30,8 @@ fn run_case(case: &Case, chains: u64, seed: u64) -> RunResult {
 fn max_z(case: &Case, r: &RunResult) -> f64 {
     let mut m: f64 = 0.0;
     for (j, &ex) in case.exact.iter().enumerate() {
-        if r.tallies.indirect[j].std_error() == 0.0 {
-            let e = r.direct[j] + r.tallies.indirect[j].mean();
+        if r.tallies.estimated[j].std_error() == 0.0 {
+            let e = r.direct[j] + r.tallies.estimated[j].mean();
             assert!(
                 (e - ex).abs() <= 1e-12 * ex.abs(),
                 "point {j}: {e} vs exact {ex}"
@@ -81,7 +81,7 @@ fn plate_matches_its_quadrature_reference_with_occlusion_underneath() {
     // The last receiver lies in the plate's shadow: exactly zero.
     let last = case.exact.len() - 1;
     assert_eq!(case.exact[last], 0.0);
-    assert_eq!(r.direct[last] + r.tallies.indirect[last].mean(), 0.0);
+    assert_eq!(r.direct[last] + r.tallies.estimated[last].mean(), 0.0);
 }
 
 #[test]
@@ -109,8 +109,8 @@ fn plate_answers_follow_the_scale_law_from_millimetres_to_ten_kilometres() {
         assert!(m < bound, "scale {s}: max |z| {m} >= {bound}");
         // Same chains, scaled geometry: the estimates agree up to s^2 to rounding.
         for j in 0..case.exact.len() {
-            let e1 = r1.direct[j] + r1.tallies.indirect[j].mean();
-            let es = (r.direct[j] + r.tallies.indirect[j].mean()) * s * s;
+            let e1 = r1.direct[j] + r1.tallies.estimated[j].mean();
+            let es = (r.direct[j] + r.tallies.estimated[j].mean()) * s * s;
             let ex = (case.exact[j] * s * s - base.exact[j]).abs() / base.exact[j].max(1e-300);
             assert!(
                 ex < 1e-11 || base.exact[j] == 0.0,
@@ -183,7 +183,7 @@ fn forward_and_backward_agree_in_the_furnished_box() {
             );
         }
         // Totals: each estimator's indirect part on the reference's direct part.
-        let (a, b) = (&fwd.tallies.indirect[j], &bwd.tallies.indirect[j]);
+        let (a, b) = (&fwd.tallies.estimated[j], &bwd.tallies.estimated[j]);
         let (ea, eb) = (direct + a.mean(), direct + b.mean());
         let zz = (ea - eb) / a.std_error().hypot(b.std_error());
         assert!(
@@ -361,16 +361,16 @@ fn every_shape_gives_the_same_answers_from_millimetres_to_ten_kilometres() {
                 r.direct[j],
                 want
             );
-            let e = (r.direct[j] + r.tallies.indirect[j].mean()) * s * s;
+            let e = (r.direct[j] + r.tallies.estimated[j].mean()) * s * s;
             assert!(e.is_finite() && e > 0.0, "scale {s}, point {j}: {e}");
         }
         match &base {
             None => base = Some(r),
             Some(b) => {
                 for j in 0..recs.len() {
-                    let e1 = b.direct[j] + b.tallies.indirect[j].mean();
-                    let es = (r.direct[j] + r.tallies.indirect[j].mean()) * s * s;
-                    let se = b.tallies.indirect[j].std_error();
+                    let e1 = b.direct[j] + b.tallies.estimated[j].mean();
+                    let es = (r.direct[j] + r.tallies.estimated[j].mean()) * s * s;
+                    let se = b.tallies.estimated[j].std_error();
                     eprintln!(
                         "scale {s} point {j}: rel diff {:.3e} (R {:.3e})",
                         (es - e1) / e1,
@@ -411,7 +411,7 @@ fn forward_and_backward_agree_among_meshes_sh_objects_spheres_and_discs() {
                 "point {j}: {name} direct {got} vs reference {dj}"
             );
         }
-        let (a, b) = (&fwd.tallies.indirect[j], &bwd.tallies.indirect[j]);
+        let (a, b) = (&fwd.tallies.estimated[j], &bwd.tallies.estimated[j]);
         let (ea, eb) = (dj + a.mean(), dj + b.mean());
         let zz = (ea - eb) / a.std_error().hypot(b.std_error());
         let flag = fwd.tallies.diagnostics(j, fwd.direct[j]).flag();
@@ -465,7 +465,7 @@ fn near_field_split_fixes_the_corner_point() {
     };
     let fwd = run(&scene, &rec, &cfg, &mut |_| true);
     let bwd = lumest::backward::run(&scene, &rec, &chains_cfg(16_000, 32, 0), &mut |_| true);
-    let (a, b) = (&fwd.tallies.indirect[0], &bwd.tallies.indirect[0]);
+    let (a, b) = (&fwd.tallies.estimated[0], &bwd.tallies.estimated[0]);
     let zz = (a.mean() - b.mean()) / a.std_error().hypot(b.std_error());
     eprintln!(
         "corner: split {} +- {} backward {} +- {}",

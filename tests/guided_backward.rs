@@ -52,8 +52,8 @@ fn guided_backward_paths_agree_with_the_exact_solution_next_to_the_source() {
         let exact = s.illuminance(plane, r).e;
         let zj = z(&on, j, exact);
         let (se_on, se_off) = (
-            on.tallies.indirect[j].std_error(),
-            off.tallies.indirect[j].std_error(),
+            on.tallies.estimated[j].std_error(),
+            off.tallies.estimated[j].std_error(),
         );
         eprintln!(
             "plane {plane} r = {r}: exact {exact:.6}, guided z = {zj:.2} (se {se_on:.3e}), plain NEE se {se_off:.3e}"
@@ -125,8 +125,8 @@ fn recursive_near_part_recovers_the_far_field() {
     let (j, x) = (1, 1e4);
     let exact = s.illuminance(1, x).e;
     let zj = z(&r, j, exact);
-    let est = r.direct[j] + r.tallies.indirect[j].mean();
-    let rel = r.tallies.indirect[j].std_error() / est;
+    let est = r.direct[j] + r.tallies.estimated[j].mean();
+    let rel = r.tallies.estimated[j].std_error() / est;
     let flag = r.tallies.diagnostics(j, r.direct[j]).flag();
     eprintln!("r = {x}: {est:.6e} against {exact:.6e}, z = {zj:.2}, R = {rel:.2e}, {flag}");
     let bound = sidak_bound(1e-3, 1, Some(r.tallies.batches()));
@@ -228,8 +228,8 @@ fn far_field_at_100_m_is_precise_and_unflagged() {
             ..chains_cfg(8192, seed, 0)
         };
         let r = run(&case.scene, &rec, &cfg, &mut |_| true);
-        let est = r.direct[0] + r.tallies.indirect[0].mean();
-        let rel = r.tallies.indirect[0].std_error() / est;
+        let est = r.direct[0] + r.tallies.estimated[0].mean();
+        let rel = r.tallies.estimated[0].std_error() / est;
         let zj = z(&r, 0, exact);
         let flag = r.tallies.diagnostics(0, r.direct[0]).flag();
         let line = format!(

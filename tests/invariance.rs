@@ -66,7 +66,7 @@ fn rotated_scaled_two_light_scene_matches_superposed_exact_solution() {
         let r = run(&scene, &rec, &cfg, &mut |_| true);
         batches = batches.min(r.tallies.batches());
         for (j, &e) in exact.iter().enumerate() {
-            let w = &r.tallies.indirect[j];
+            let w = &r.tallies.estimated[j];
             let z = (r.direct[j] + w.mean() - e) / w.std_error();
             assert!(z.is_finite(), "scale {scale}, point {j}");
             worst = worst.max(z.abs());

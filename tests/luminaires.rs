@@ -151,7 +151,7 @@ fn an_asymmetric_luminaire_agrees_between_the_estimators() {
     let bwd = lumest::backward::run(&scene, &rec, &chains_cfg(2_000, 8, 0), &mut |_| true);
     let bound = sidak_bound(1e-3, case.points.len(), None);
     for j in 0..case.points.len() {
-        let (a, b) = (&fwd.tallies.indirect[j], &bwd.tallies.indirect[j]);
+        let (a, b) = (&fwd.tallies.estimated[j], &bwd.tallies.estimated[j]);
         assert_eq!(fwd.direct[j], bwd.direct[j]);
         let zz = (a.mean() - b.mean()) / a.std_error().hypot(b.std_error());
         assert!(

@@ -74,8 +74,8 @@ fn backward_estimator_matches_exact_values() {
     );
     for j in 0..exact.len() {
         assert_eq!(
-            r1.tallies.indirect[j].mean().to_bits(),
-            r2.tallies.indirect[j].mean().to_bits()
+            r1.tallies.estimated[j].mean().to_bits(),
+            r2.tallies.estimated[j].mean().to_bits()
         );
     }
 }

@@ -61,7 +61,7 @@ fn near_field_split_tames_the_singular_kernel_next_to_a_lit_floor() {
     let split = run(&case.scene, &rec, &near_cfg, &mut |_| true);
     let bound = sidak_bound(1e-3, 2, None);
     for (name, r) in [("plain", &plain), ("split", &split)] {
-        let w = &r.tallies.indirect[0];
+        let w = &r.tallies.estimated[0];
         eprintln!(
             "{name}: E = {} +- {} (exact {}), R {:.2e}, VOV {:.3}, flag {}, {:.2} s, FOM {:.3e}",
             w.mean(),
@@ -80,7 +80,7 @@ fn near_field_split_tames_the_singular_kernel_next_to_a_lit_floor() {
     assert!(!plain.tallies.diagnostics(1, 0.0).flag().contains("near"));
     // The split is right, within its honest error bar, and passes every check.
     for (j, &ex) in exact.iter().enumerate() {
-        let w = &split.tallies.indirect[j];
+        let w = &split.tallies.estimated[j];
         let z = (w.mean() - ex) / w.std_error();
         assert!(
             z.abs() < bound,
@@ -92,7 +92,7 @@ fn near_field_split_tames_the_singular_kernel_next_to_a_lit_floor() {
         assert_eq!(split.tallies.diagnostics(j, 0.0).flag(), "ok", "point {j}");
     }
     // The ordinary point is unaffected by the split beyond noise.
-    let (a, b) = (&plain.tallies.indirect[1], &split.tallies.indirect[1]);
+    let (a, b) = (&plain.tallies.estimated[1], &split.tallies.estimated[1]);
     assert!(((a.mean() - b.mean()) / a.std_error().hypot(b.std_error())).abs() < bound);
 }
 
@@ -107,7 +107,7 @@ fn near_field_split_is_reproducible_for_any_thread_count() {
             near: (0.02, 8),
             ..chains_cfg(20_000, 9, t)
         };
-        run(&case.scene, &rec, &cfg, &mut |_| true).tallies.indirect[0].mean()
+        run(&case.scene, &rec, &cfg, &mut |_| true).tallies.estimated[0].mean()
     };
     assert_eq!(go(1).to_bits(), go(2).to_bits());
 }
@@ -135,10 +135,10 @@ fn automatic_near_field_splits_only_where_a_surface_is_close() {
     let plain = run(&case.scene, &rec, &cfg, &mut |_| true);
     let split = run(&case.scene, &auto, &cfg, &mut |_| true);
     let exact = from_floor(0.5, 1e-3, |x| s.illuminance(1, x).e);
-    let w = &split.tallies.indirect[0];
+    let w = &split.tallies.estimated[0];
     assert!(((w.mean() - exact) / w.std_error()).abs() < sidak_bound(1e-3, 1, None));
     assert_eq!(
-        plain.tallies.indirect[1].mean().to_bits(),
-        split.tallies.indirect[1].mean().to_bits()
+        plain.tallies.estimated[1].mean().to_bits(),
+        split.tallies.estimated[1].mean().to_bits()
     );
 }

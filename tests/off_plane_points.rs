@@ -61,7 +61,7 @@ fn points_between_and_behind_the_planes() {
     let bound = sidak_bound(1e-3, 2, Some(r.tallies.batches()));
     assert!(up > 0.1 && down > 0.1, "{up} {down}");
     for (j, want) in [(0, up), (1, down)] {
-        let w = &r.tallies.indirect[j];
+        let w = &r.tallies.estimated[j];
         let z = (w.mean() - want) / w.std_error();
         assert!(
             z.abs() < bound,
@@ -72,7 +72,7 @@ fn points_between_and_behind_the_planes() {
     }
     for j in [2, 3] {
         assert_eq!(r.direct[j], 0.0);
-        assert_eq!(r.tallies.indirect[j].mean(), 0.0);
-        assert_eq!(r.tallies.indirect[j].std_error(), 0.0);
+        assert_eq!(r.tallies.estimated[j].mean(), 0.0);
+        assert_eq!(r.tallies.estimated[j].std_error(), 0.0);
     }
 }

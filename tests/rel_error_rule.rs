@@ -106,7 +106,7 @@ fn pilot_rule_is_unbiased_and_calibrated_on_skewed_batch_means() {
             let pilot = res.pilot.expect("a --rel-error run has a pilot");
             assert_eq!(pilot.batches, 32);
             assert_eq!(res.tallies.batches(), pilot.planned);
-            let w = &res.tallies.indirect[0];
+            let w = &res.tallies.estimated[0];
             (w.mean(), w.std_error(), w.count())
         })
         .collect();

@@ -7,7 +7,7 @@ use lumest::run::{RunConfig, Stop};
 fn bits(r: &lumest::run::RunResult) -> Vec<u64> {
     let mut v: Vec<u64> = r
         .tallies
-        .indirect
+        .estimated
         .iter()
         .flat_map(|w| [w.mean().to_bits(), w.std_error().to_bits()])
         .collect();

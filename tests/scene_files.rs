@@ -190,7 +190,7 @@ fn inline_degree_zero_sh_sphere_gives_the_analytic_spheres_answers() {
         let direct = i * p.n.dot(d) / d.length().powi(3);
         assert!((a.direct[j] - direct).abs() <= 1e-12 * direct, "point {j}");
         assert_eq!(a.direct[j], b.direct[j]);
-        let w = &a.tallies.indirect[j];
+        let w = &a.tallies.estimated[j];
         assert!(w.std_error() < 0.02 * reflected, "point {j}: {w:?}");
         let z = (w.mean() - reflected) / w.std_error();
         assert!(
@@ -200,7 +200,7 @@ fn inline_degree_zero_sh_sphere_gives_the_analytic_spheres_answers() {
             w.std_error()
         );
         // Same chains through the same sphere: equal to rounding.
-        let (ea, eb) = (a.tallies.indirect[j].mean(), b.tallies.indirect[j].mean());
+        let (ea, eb) = (a.tallies.estimated[j].mean(), b.tallies.estimated[j].mean());
         assert!((ea - eb).abs() <= 1e-9 * ea, "{ea} vs {eb}");
     }
 }

@@ -58,7 +58,7 @@ fn orders_agree_with_neumann_terms() {
         }
         // The buckets add up to the indirect total.
         let sum: f64 = r.tallies.orders.iter().map(|b| b[j].mean()).sum();
-        let ind = r.tallies.indirect[j].mean();
+        let ind = r.tallies.estimated[j].mean();
         assert!((sum - ind).abs() <= 1e-12 * ind, "{sum} vs {ind}");
     }
     let bound = sidak_bound(ALPHA, 3 * n, Some(r.tallies.batches()));

@@ -66,7 +66,7 @@ fn sphere_source_matches_the_exact_sobolev_solution() {
     for r in [&local, &back] {
         let bound = sidak_bound(1e-3, 2 * exact.len(), Some(r.tallies.batches()));
         for (j, &e) in exact.iter().enumerate() {
-            let w = &r.tallies.indirect[j];
+            let w = &r.tallies.estimated[j];
             let z = (r.direct[j] + w.mean() - e) / w.std_error();
             assert!(z.abs() < bound, "receiver {j}: z = {z}");
         }

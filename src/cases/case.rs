@@ -85,7 +85,7 @@ pub fn run_case(name: &str, title: &str, case: &Case, a: &CaseArgs) -> anyhow::R
     let cells: Vec<Vec<String>> = (0..n)
         .map(|j| {
             let r = &case.receivers[j];
-            let w = &result.tallies.indirect[j];
+            let w = &result.tallies.estimated[j];
             let e = result.direct[j] + w.mean();
             let z = z_against_exact(e, w.std_error(), result.direct[j], case.exact[j]);
             max_z = zcheck::max_abs(max_z, z);

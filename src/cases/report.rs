@@ -57,7 +57,7 @@ pub fn checkpoint(p: &Progress, exact: &[f64], range: Range<usize>) -> Checkpoin
     let (mut se2, mut emax, mut r2, mut zmax) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for j in range {
         let ex = exact[j];
-        let w = &p.tallies.indirect[j];
+        let w = &p.tallies.estimated[j];
         let e = p.direct[j] + w.mean();
         let err = (e - ex).abs() / ex;
         se2 += err * err;

@@ -254,7 +254,7 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
         .collect();
     let cells: Vec<Vec<String>> = (0..exact.len())
         .map(|j| {
-            let w = &result.tallies.indirect[j];
+            let w = &result.tallies.estimated[j];
             let e = result.direct[j] + w.mean();
             let (kind, plane, r) = if j < np {
                 ("E", case.plane[j].to_string(), format_number(case.r[j]))

@@ -136,7 +136,7 @@ pub fn result_cells(r: &RunResult, j: usize) -> Vec<String> {
 /// Result cells of receiver `j`, with an exact term `extra` (emitted
 /// luminance seen straight on) added to the total and to the direct part.
 pub fn result_cells_plus(r: &RunResult, j: usize, extra: f64) -> Vec<String> {
-    let w = &r.tallies.indirect[j];
+    let w = &r.tallies.estimated[j];
     let direct = r.direct[j] + extra;
     let e = direct + w.mean();
     let se = w.std_error();
@@ -530,14 +530,14 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
         return None;
     }
     let e: Vec<f64> = (0..n)
-        .map(|j| r.direct[j] + r.tallies.indirect[j].mean())
+        .map(|j| r.direct[j] + r.tallies.estimated[j].mean())
         .collect();
     // Batch means of the average are the average of the batch means, so its
     // error is that of the per-point errors combined with their correlation;
     // bounded above by the mean of the per-point errors (full correlation).
     let avg = e.iter().sum::<f64>() / n as f64;
     let se_bound = (0..n)
-        .map(|j| r.tallies.indirect[j].std_error())
+        .map(|j| r.tallies.estimated[j].std_error())
         .sum::<f64>()
         / n as f64;
     let min = e.iter().copied().fold(f64::INFINITY, f64::min);
@@ -612,7 +612,7 @@ fn fan_plot(job: &Job, r: &RunResult, path: &str, part: PlotPart) -> anyhow::Res
         .map(|(k, row)| {
             let theta: f64 = row[0].parse().unwrap_or(0.0);
             let phi: f64 = row[1].parse().unwrap_or(0.0);
-            let indirect = job.view_receiver[k].map_or(0.0, |j| r.tallies.indirect[j].mean());
+            let indirect = job.view_receiver[k].map_or(0.0, |j| r.tallies.estimated[j].mean());
             let l = match part {
                 PlotPart::Indirect => indirect,
                 PlotPart::Total => {

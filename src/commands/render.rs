@@ -212,8 +212,8 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<()> {
     let view = |k: usize| {
         let (l, se) = job.view_receiver[k].map_or((0.0, 0.0), |j| {
             (
-                r.direct[j] + r.tallies.indirect[j].mean(),
-                r.tallies.indirect[j].std_error(),
+                r.direct[j] + r.tallies.estimated[j].mean(),
+                r.tallies.estimated[j].std_error(),
             )
         });
         ((l + job.emitted[k]).max(0.0), se)

@@ -256,11 +256,11 @@ fn compare(mesh: Mesh, sh: ShSurface, center: DVec3, r: f64, t: f64, threads: us
     let mut dmax: f64 = 0.0;
     for j in 0..a.direct.len() {
         let (ea, eb) = (
-            a.direct[j] + a.tallies.indirect[j].mean(),
-            b.direct[j] + b.tallies.indirect[j].mean(),
+            a.direct[j] + a.tallies.estimated[j].mean(),
+            b.direct[j] + b.tallies.estimated[j].mean(),
         );
-        let se = (a.tallies.indirect[j].std_error().powi(2)
-            + b.tallies.indirect[j].std_error().powi(2))
+        let se = (a.tallies.estimated[j].std_error().powi(2)
+            + b.tallies.estimated[j].std_error().powi(2))
         .sqrt();
         dmax = zcheck::max_abs(dmax, (ea - eb) / ea.abs().max(1e-300));
         zmax = zcheck::max_abs(zmax, zcheck::z_score(ea, se, eb));

@@ -8,7 +8,7 @@ use super::{Diagnostics, Welford, relative_error};
 #[derive(Clone, Debug)]
 pub struct Tallies {
     /// The estimated part (all reflection orders >= 1) per receiver.
-    pub indirect: Vec<Welford>,
+    pub estimated: Vec<Welford>,
     /// `orders[k][j]`: order `k+1` for `k < K`, and all orders above `K` for `k = K`.
     pub orders: Vec<Vec<Welford>>,
     /// `R^2 B` of each receiver's total at batch counts 32, 64, 128, ... (for the FOM check).
@@ -50,7 +50,7 @@ impl Tallies {
     pub fn new(n: usize, orders: u32) -> Self {
         let buckets = if orders == 0 { 0 } else { orders as usize + 1 };
         Self {
-            indirect: vec![Welford::new(); n],
+            estimated: vec![Welford::new(); n],
             orders: vec![vec![Welford::new(); n]; buckets],
             snapshots: Vec::new(),
             near_hits: vec![0; n],
@@ -68,7 +68,7 @@ impl Tallies {
     /// see [`crate::run::Batch::near_hits`]). `means` is scratch of the
     /// length of `sums`.
     pub fn fold(&mut self, sums: &[f64], chains: u64, near_hits: &[u64], means: &mut [f64]) {
-        let n = self.indirect.len();
+        let n = self.estimated.len();
         let buckets = sums.len() / n.max(1);
         let inv = 1.0 / chains as f64;
         for (m, s) in means.iter_mut().zip(sums) {
@@ -76,7 +76,7 @@ impl Tallies {
         }
         for j in 0..n {
             let total: f64 = (0..buckets).map(|k| means[k * n + j]).sum();
-            self.indirect[j].push(total);
+            self.estimated[j].push(total);
         }
         for (t, h) in self.near_hits.iter_mut().zip(near_hits) {
             *t += h;
@@ -98,7 +98,7 @@ impl Tallies {
     pub fn snapshot(&mut self, direct: &[f64]) {
         let b = self.batches();
         let v = self
-            .indirect
+            .estimated
             .iter()
             .zip(direct)
             .map(|(w, d)| relative_error(d + w.mean(), w.std_error()).powi(2) * b as f64)
@@ -115,7 +115,7 @@ impl Tallies {
             .rev()
             .find(|(n, _)| 2 * n <= b)
             .map(|(_, v)| v[j]);
-        let mut d = Diagnostics::of(&self.indirect[j], direct, half);
+        let mut d = Diagnostics::of(&self.estimated[j], direct, half);
         d.near_hits = self
             .watched
             .get(j)
@@ -131,12 +131,12 @@ impl Tallies {
 
     /// Number of batches folded in.
     pub fn batches(&self) -> u64 {
-        self.indirect.first().map_or(0, Welford::count)
+        self.estimated.first().map_or(0, Welford::count)
     }
 
     /// Relative standard error of the total `E = direct + estimated part` per receiver.
     pub fn rel_errors<'a>(&'a self, direct: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
-        self.indirect
+        self.estimated
             .iter()
             .zip(direct)
             .map(|(w, d)| relative_error(d + w.mean(), w.std_error()))
@@ -151,7 +151,7 @@ impl Tallies {
 
     /// Root mean square of the relative standard error of the total over the receivers.
     pub fn rms_rel_error(&self, direct: &[f64]) -> f64 {
-        let n = self.indirect.len().max(1) as f64;
+        let n = self.estimated.len().max(1) as f64;
         let s: f64 = self.rel_errors(direct).map(|r| r * r).sum();
         (s / n).sqrt()
     }

@@ -43,7 +43,7 @@ pub fn chains_cfg(chains: u64, seed: u64, threads: usize) -> RunConfig {
 /// 0 only when the estimate is exact (otherwise infinite), so that it fails
 /// any bound.
 pub fn z(r: &RunResult, j: usize, exact: f64) -> f64 {
-    let w = &r.tallies.indirect[j];
+    let w = &r.tallies.estimated[j];
     zcheck::z_score(r.direct[j] + w.mean(), w.std_error(), exact)
 }
 

@@ -46,7 +46,7 @@ pub fn check_sobolev(
     let r = run(&case.scene, &rec, &cfg, &mut |_| true);
     let z = (0..points)
         .map(|j| {
-            let w = &r.tallies.indirect[j];
+            let w = &r.tallies.estimated[j];
             (r.direct[j] + w.mean() - case.exact[j].e) / w.std_error()
         })
         .collect();

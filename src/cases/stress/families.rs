@@ -352,7 +352,7 @@ pub(super) fn family_near_wall(ctx: &mut Ctx) {
         bcfg.batch_size = bcfg.batch_size.or(Some(512));
         let back = crate::backward::run(&scene, &receivers, &bcfg, &mut |_| true);
         for (j, &(label, _, _, wall_in_view)) in pts.iter().enumerate() {
-            let w = &back.tallies.indirect[j];
+            let w = &back.tallies.estimated[j];
             let r = Reference {
                 kind: "backward",
                 parts: None,
@@ -376,8 +376,8 @@ pub(super) fn family_near_wall(ctx: &mut Ctx) {
                 };
                 // The split must change the estimate where a wall is in view
                 // (a split run equal to the plain one bit for bit did not split).
-                let same = split.tallies.indirect[j].mean().to_bits()
-                    == local.tallies.indirect[j].mean().to_bits();
+                let same = split.tallies.estimated[j].mean().to_bits()
+                    == local.tallies.estimated[j].mean().to_bits();
                 if wall_in_view && same && !std::ptr::eq(res, &local) {
                     row.verdict = Verdict::Fail;
                     row.note = format!(
@@ -462,7 +462,7 @@ pub(super) fn family_scaled(ctx: &mut Ctx) {
             let (res, pts) = run_plain_room(ctx, sc, ctx.opts.seed)?;
             let k = 1.0 / (sc * sc);
             for (j, (label, _)) in pts.iter().enumerate() {
-                let w = &unscaled.tallies.indirect[j];
+                let w = &unscaled.tallies.estimated[j];
                 let r = Reference {
                     kind: "unscaled run / s^2",
                     parts: None,

@@ -94,7 +94,7 @@ pub(super) fn make_row(
     j: usize,
     r: Reference,
 ) -> StressRow {
-    let w = &res.tallies.indirect[j];
+    let w = &res.tallies.estimated[j];
     let estimate = res.direct[j] + w.mean();
     let se = w.std_error();
     let mut flag = res.tallies.diagnostics(j, res.direct[j]).flag();
