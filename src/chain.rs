@@ -114,8 +114,18 @@ pub fn trace_ex<F: FnMut(&Collision)>(
     let rr = params.rr_weight * q0;
     let mut order = 0;
     let mut end = ChainEnd::Absorbed;
+    // A ray leaving an area source starts on its emitting surface, which may
+    // lie in another surface's plane (a panel set into the ceiling): like
+    // an observer's, it meets no flat surface through its origin.
+    let mut from_emitter = matches!(light, crate::light::Light::Area(_));
     while q > 0.0 {
-        let Some(hit) = scene.intersect(&ray, skip) else {
+        let next = if from_emitter {
+            from_emitter = false;
+            scene.first_hit_from(ray.o, ray.d)
+        } else {
+            scene.intersect(&ray, skip)
+        };
+        let Some(hit) = next else {
             end = ChainEnd::Escaped;
             break;
         };

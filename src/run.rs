@@ -222,6 +222,10 @@ pub struct Batch {
     pub collisions: u64,
     /// Receiver scores evaluated in the batch.
     pub scores: u64,
+    /// Per receiver: the batch's sampled direct light times its chains
+    /// (summed like `sums`; see [`crate::estimator::Receivers::sampled_direct`]);
+    /// empty when no receiver has any.
+    pub direct_sums: Vec<f64>,
     /// Per receiver: events counted for the `sparse` check
     /// ([`crate::tally::Diagnostics::near_hits`]); empty when it does not
     /// apply. Length `3 n` when some receiver has [`Checks::near_reach`]:
@@ -512,7 +516,7 @@ fn drive_batches(
                     folded += 1;
                     continue;
                 }
-                tallies.fold(&b.sums, bs, &b.near_hits, &mut batch_means);
+                tallies.fold(&b.sums, &b.direct_sums, bs, &b.near_hits, &mut batch_means);
                 let folded_batches = tallies.batches();
                 if folded_batches >= 32 && folded_batches.is_power_of_two() {
                     tallies.snapshot(&direct);

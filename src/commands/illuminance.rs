@@ -137,7 +137,10 @@ pub fn result_cells(r: &RunResult, j: usize) -> Vec<String> {
 /// luminance seen straight on) added to the total and to the direct part.
 pub fn result_cells_plus(r: &RunResult, j: usize, extra: f64) -> Vec<String> {
     let w = &r.tallies.estimated[j];
+    // The exact part, and the direct light of sampled sources (which the
+    // estimated part holds) shown with the direct column.
     let direct = r.direct[j] + extra;
+    let sampled = r.tallies.sampled_direct_mean(j);
     let e = direct + w.mean();
     let se = w.std_error();
     let ci = if se > 0.0 {
@@ -148,8 +151,8 @@ pub fn result_cells_plus(r: &RunResult, j: usize, extra: f64) -> Vec<String> {
     let mut c = vec![
         format_number(e),
         format_number(se),
-        format_number(direct),
-        format_number(w.mean()),
+        format_number(direct + sampled),
+        format_number(w.mean() - sampled),
         format_number(relative_error(e, se)),
         format_number(ci),
     ];
@@ -612,11 +615,15 @@ fn fan_plot(job: &Job, r: &RunResult, path: &str, part: PlotPart) -> anyhow::Res
         .map(|(k, row)| {
             let theta: f64 = row[0].parse().unwrap_or(0.0);
             let phi: f64 = row[1].parse().unwrap_or(0.0);
-            let indirect = job.view_receiver[k].map_or(0.0, |j| r.tallies.estimated[j].mean());
+            let indirect = job.view_receiver[k].map_or(0.0, |j| {
+                r.tallies.estimated[j].mean() - r.tallies.sampled_direct_mean(j)
+            });
             let l = match part {
                 PlotPart::Indirect => indirect,
                 PlotPart::Total => {
-                    job.view_receiver[k].map_or(0.0, |j| r.direct[j]) + indirect + job.emitted[k]
+                    job.view_receiver[k].map_or(0.0, |j| {
+                        r.direct[j] + r.tallies.estimated[j].mean()
+                    }) + job.emitted[k]
                 }
             };
             (theta.to_radians(), phi.to_radians(), l.max(0.0))

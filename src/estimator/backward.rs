@@ -180,6 +180,14 @@ impl BatchWork for BackwardWork<'_> {
                 near_hits[j] += walk.reached;
             }
         }
+        // The sampled direct light, as sums over the batch's `bs` paths per
+        // receiver (the runner folds every batch by its batch size).
+        let mut direct_sums = Vec::new();
+        if self.receivers.has_sampled_direct() {
+            direct_sums = vec![0.0; n];
+            self.receivers
+                .sampled_direct(self.scene, cfg.seed, b, bs, &mut direct_sums);
+        }
         Batch {
             index: b,
             chains: bs * n as u64,
@@ -187,6 +195,7 @@ impl BatchWork for BackwardWork<'_> {
             collisions: vertices,
             scores: vertices,
             near_hits,
+            direct_sums,
         }
     }
 }
@@ -316,7 +325,12 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     } = *path;
     let mut reached = 0;
     let mut exposed = 0;
-    let guide = cfg.chain.guide && !scene.lights.is_empty() && scene.total_power() > 0.0;
+    // Light-guided connections start photons at a light's centre; area
+    // sources have no such centre, so scenes with them are traced unguided.
+    let guide = cfg.chain.guide
+        && !scene.lights.is_empty()
+        && scene.total_power() > 0.0
+        && !scene.lights.iter().any(|l| matches!(l, Light::Area(_)));
     if guide {
         // The receiver's transfer towards world direction `w`: its response
         // times `cos` (the integrand of `E = int L cos dw`, or of the
@@ -559,16 +573,33 @@ fn next_event(
     let total = scene.total_power();
     let (mut nee, mut p_b) = (0.0, 0.0);
     for l in &scene.lights {
-        if !scene.side_mask(l.position()).sees(hm)
-            || (!scene.planes_only() && scene.blocked_by_shapes(h.p, from, l.position(), 0))
-        {
+        // Whether the light's centre sees `h`: the photons of strategy B
+        // leave from there, and a point source is lit through it.
+        let center_seen = || {
+            scene.side_mask(l.position()).sees(hm)
+                && (scene.planes_only() || !scene.blocked_by_shapes(h.p, from, l.position(), 0))
+        };
+        if let Light::Area(a) = l {
+            // One point drawn on the emitter (area sampling).
+            let pt = a.sample_point(rng.next_2d());
+            let v = pt.y - h.p;
+            let t2 = v.length_squared();
+            if t2 <= 0.0 || pt.pdf_a <= 0.0 {
+                continue;
+            }
+            let wi = v / t2.sqrt();
+            let (cos_x, cos_y) = (h.n.dot(wi), a.normal().dot(wi).abs());
+            let le = a.emitted(pt.y, -wi);
+            if cos_x > 0.0 && le > 0.0 && scene.visible(h.p, from, pt.y) {
+                nee += m.eval(f_frame.to_local(wi), wo) * le * cos_x * cos_y / (t2 * pt.pdf_a);
+            }
             continue;
         }
         let to_c = l.position() - h.p;
         let dist2 = to_c.length_squared();
         let dist = dist2.sqrt();
         let cos_l = h.n.dot(to_c) / dist;
-        if guide && cos_l > 0.0 {
+        if guide && cos_l > 0.0 && center_seen() {
             p_b += match l {
                 // The photon's direction density towards `h`, per solid angle.
                 Light::Gonio { .. } => {
@@ -579,12 +610,18 @@ fn next_event(
         }
         match *l {
             Light::Point { .. } | Light::Gonio { .. } => {
+                if !center_seen() {
+                    continue;
+                }
                 let e = l.direct_illuminance(h.p, h.n);
                 if e > 0.0 {
                     nee += m.eval(f_frame.to_local(to_c / dist), wo) * e;
                 }
             }
             Light::Sphere { r, .. } => {
+                if dist <= r {
+                    continue;
+                }
                 let cos_a = (1.0 - (r / dist).powi(2)).max(0.0).sqrt();
                 let u = rng.next_2d();
                 let ct = 1.0 - u[0] * (1.0 - cos_a);
@@ -592,11 +629,21 @@ fn next_event(
                 let (sp, cp) = crate::sampling::warp::sin_cos_turns(u[1]);
                 let wi = Frame::from_normal(to_c / dist).to_world(DVec3::new(st * cp, st * sp, ct));
                 let cos_n = wi.dot(h.n);
-                if cos_n > 0.0 {
+                // In a scene of planes the sphere lies on one side of each,
+                // so its centre decides; elsewhere the sampled direction's
+                // own segment to the sphere (partial occlusion).
+                let seen = if scene.planes_only() {
+                    center_seen()
+                } else {
+                    l.hit(h.p, wi, f64::INFINITY)
+                        .is_some_and(|t| scene.visible(h.p, from, h.p + wi * t))
+                };
+                if cos_n > 0.0 && seen {
                     let solid_angle = 2.0 * PI * (1.0 - cos_a);
                     nee += m.eval(f_frame.to_local(wi), wo) * l.luminance() * cos_n * solid_angle;
                 }
             }
+            Light::Area(_) => unreachable!("handled above"),
         }
     }
     (nee, p_b)

@@ -227,6 +227,11 @@ impl BatchWork for LocalWork<'_> {
                 }
             }
         }
+        let mut direct_sums = Vec::new();
+        if receivers.has_sampled_direct() {
+            direct_sums = vec![0.0; n];
+            receivers.sampled_direct(scene, cfg.seed, b, bs, &mut direct_sums);
+        }
         Batch {
             index: b,
             chains: bs,
@@ -234,6 +239,7 @@ impl BatchWork for LocalWork<'_> {
             collisions,
             scores,
             near_hits,
+            direct_sums,
         }
     }
 }

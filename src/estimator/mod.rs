@@ -23,14 +23,18 @@
 //! are *receivers*: a point, a normal and a response (`1` for illuminance,
 //! `f'(wi', wo')` [1/sr] for luminance). Every collision scores into every
 //! receiver at once. The first order (light straight from the sources) is
-//! computed exactly and separately ([`Receivers::direct`]); point sources
-//! are never seen directly, so a view adds no emitted luminance.
+//! computed exactly and separately ([`Receivers::direct`]) where a closed
+//! form exists, and sampled per batch elsewhere ([`direct`]); point sources
+//! are never seen directly, while a view that meets an emitting surface or
+//! sphere adds its luminance ([`emitted_luminance`]).
 
 pub mod backward;
+pub mod direct;
 pub mod local;
 
 use crate::chain::Collision;
 use crate::geometry::SideMask;
+use crate::light::Light;
 use crate::material::Material;
 use crate::sampling::warp::Frame;
 use crate::scene::{Scene, ShapeRef};
@@ -141,16 +145,73 @@ impl ViewTarget {
     }
 }
 
-/// Luminance [cd/m^2] of the sphere lights that the ray `o + t d` (unit `d`)
-/// enters before `t_max` [m]: seen straight on, an emitting surface adds its
-/// luminance (sphere lights do not block what lies behind them).
+/// Sampled direct-light estimates per receiver in a batch of `bs` chains:
+/// 4 for every 256 chains (at least 4), so that the sampled part's error
+/// shrinks with the chains'.
+pub fn direct_samples(bs: u64) -> u64 {
+    4 * bs.div_ceil(256).max(1)
+}
+
+/// Whether light `k`'s direct light is exact at every receiver (a closed
+/// form, occluded only by planes, which side masks decide): point sources
+/// always; a sphere in a scene of infinite planes alone; a uniform area
+/// source where the only other finite shapes are emitters in its own plane
+/// and it lies wholly on one side of (or in) every plane.
+pub fn exact_direct(scene: &Scene, k: usize) -> bool {
+    let l = &scene.lights[k];
+    match l {
+        Light::Point { .. } | Light::Gonio { .. } => true,
+        Light::Sphere { .. } => scene.planes_only(),
+        Light::Area(a) => {
+            if !a.is_uniform() {
+                return false;
+            }
+            let (p, m) = (a.center(), a.normal());
+            let alone = scene.surfaces.iter().all(|s| match s.emitter {
+                Some(e) => match &scene.lights[e as usize] {
+                    Light::Area(b) => {
+                        let (lo, hi) = b.extent_along(p, m);
+                        let tol = 1e-9 * (1.0 + p.abs().max_element() + b.bounding_radius());
+                        lo.abs() <= tol && hi.abs() <= tol
+                    }
+                    _ => false,
+                },
+                None => matches!(s.shape, ShapeRef::Plane(_)),
+            });
+            alone
+                && scene.planes().iter().all(|pl| {
+                    let (lo, hi) = a.extent_along(pl.p, pl.n);
+                    let tol = 1e-9 * (1.0 + pl.p.abs().max_element() + a.bounding_radius());
+                    lo >= -tol || hi <= tol
+                })
+        }
+    }
+}
+
+/// Emitted luminance [cd/m^2] seen along the ray `o + t d` (unit `d`) from
+/// an observer at `o`: that of the sphere lights it enters before `t_max`
+/// [m] (they do not block what lies behind them), plus that of an area
+/// source whose emitting side is the first surface it meets (within
+/// `t_max`).
 pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
     // A fold from +0 (an empty f64 sum is -0, which would print as "-0").
-    scene
+    let spheres = scene
         .lights
         .iter()
         .filter(|l| l.hit(o, d, t_max).is_some())
-        .fold(0.0, |a, l| a + l.luminance())
+        .fold(0.0, |a, l| a + l.luminance());
+    let area = scene
+        .first_hit_from(o, d)
+        .filter(|h| h.t <= t_max)
+        .and_then(|h| {
+            let k = scene.surfaces[h.surface as usize].emitter?;
+            match &scene.lights[k as usize] {
+                Light::Area(a) => Some(a.emitted(h.p, -d)),
+                _ => None,
+            }
+        })
+        .unwrap_or(0.0);
+    spheres + area
 }
 
 /// Trace the view ray from observer `o` [m] looking along unit `d` to its sub-point.
@@ -236,6 +297,12 @@ pub struct Receivers {
     lists: Vec<ReceiverList>,
     total_len: usize,
     direct: Vec<f64>,
+    /// The sets of sources whose direct light is sampled ([`direct`]).
+    direct_sets: Vec<direct::LightSet>,
+    /// Per receiver: its set in `direct_sets`, if any source is sampled there.
+    direct_set: Vec<Option<u8>>,
+    /// How the sampled direct light is drawn.
+    direct_strategy: direct::Strategy,
 }
 
 impl Receivers {
@@ -258,6 +325,9 @@ impl Receivers {
         let inside: Vec<u64> = receivers.iter().map(|r| scene.inside_mask(r.p)).collect();
         let frames: Vec<Frame> = receivers.iter().map(|r| Frame::from_normal(r.n)).collect();
         let mut direct = vec![0.0; receivers.len()];
+        let exact: Vec<bool> = (0..scene.lights.len())
+            .map(|k| exact_direct(scene, k))
+            .collect();
         for (j, rec) in receivers.iter().enumerate() {
             let (p, n) = (rec.p, rec.n);
             if !(p.is_finite() && n.is_finite() && (n.length() - 1.0).abs() < 1e-9) {
@@ -278,21 +348,45 @@ impl Receivers {
                         ),
                     });
                 }
-                // A sphere light lies wholly on one side of every plane (and
-                // exists only in planes-only scenes), so its centre decides
-                // its visibility.
+                if !exact[k] || (!l.is_point_like() && rec.constant_weight().is_none()) {
+                    continue; // sampled, see below
+                }
+                // What `exact` admits lies wholly on one side of every plane
+                // (or in it) and nothing else can hide it, so its centre
+                // decides its visibility.
                 let seen = scene.side_mask(l.position()).sees(masks[j])
                     && (scene.planes_only() || !scene.blocked_by_shapes(l.position(), None, p, 0));
                 if seen {
-                    direct[j] += match rec.response {
-                        Response::Illuminance => l.direct_illuminance(p, n),
-                        Response::Luminance { .. } => {
+                    direct[j] += match (rec.response, l) {
+                        (Response::Illuminance, _) => l.direct_illuminance(p, n),
+                        (_, Light::Area(_)) => {
+                            l.direct_illuminance(p, n) * rec.constant_weight().unwrap_or(f64::NAN)
+                        }
+                        (Response::Luminance { .. }, _) => {
                             l.direct_weighted(p, n, &|wi| rec.weight(&frames[j], wi))
                         }
                     };
                 }
             }
         }
+        // Sources sampled per batch: those without an exact form anywhere,
+        // and every non-point source at a receiver whose response varies.
+        let non_point = |k: &usize| !scene.lights[*k].is_point_like();
+        let sets_of = [
+            (0..scene.lights.len()).filter(|&k| !exact[k]).collect::<Vec<_>>(),
+            (0..scene.lights.len()).filter(non_point).collect(),
+        ];
+        let direct_sets: Vec<direct::LightSet> = sets_of
+            .iter()
+            .map(|ks| direct::LightSet::new(scene, ks.iter().map(|&k| k as u32).collect()))
+            .collect();
+        let direct_set = receivers
+            .iter()
+            .map(|rec| {
+                let s = if rec.constant_weight().is_some() { 0 } else { 1 };
+                (!direct_sets[s].is_empty()).then_some(s as u8)
+            })
+            .collect();
         let mut lists = Vec::with_capacity(scene.surfaces.len());
         let mut offset = 0;
         for s in 0..scene.surfaces.len() {
@@ -375,6 +469,9 @@ impl Receivers {
             lists,
             total_len: offset,
             direct,
+            direct_sets,
+            direct_set,
+            direct_strategy: direct::Strategy::Balance,
         };
         r.refresh_watch();
         Ok(r)
@@ -425,9 +522,51 @@ impl Receivers {
     }
 
     /// Exact first order at each receiver: illuminance [lx] straight from the
-    /// sources, or the luminance [cd/m^2] of light reflected once at the sub-point.
+    /// sources, or the luminance [cd/m^2] of light reflected once at the
+    /// sub-point; without the sources that are sampled there
+    /// ([`Self::sampled_direct`]).
     pub fn direct(&self) -> &[f64] {
         &self.direct
+    }
+
+    /// The sources whose direct light is sampled at receiver `j`, if any.
+    pub fn direct_set(&self, j: usize) -> Option<&direct::LightSet> {
+        self.direct_set[j].map(|s| &self.direct_sets[s as usize])
+    }
+
+    /// Whether some receiver has sampled direct light.
+    pub fn has_sampled_direct(&self) -> bool {
+        self.direct_set.iter().any(Option::is_some)
+    }
+
+    /// Draw the sampled direct light with `strategy` (default: the balance
+    /// heuristic), e.g. to compare the strategies' variances.
+    pub fn with_direct_strategy(mut self, strategy: direct::Strategy) -> Self {
+        self.direct_strategy = strategy;
+        self
+    }
+
+    /// Sampled direct light of batch `b` with `bs` chains: for each receiver
+    /// with sampled sources, the mean of `samples` estimates
+    /// ([`direct::sample`]) times `bs` is added to `out[j]` (so that the
+    /// per-chain mean of the batch holds it); each estimate draws from its
+    /// own stream of `seed`, so the result does not depend on threads.
+    pub fn sampled_direct(&self, scene: &Scene, seed: u64, b: u64, bs: u64, out: &mut [f64]) {
+        const DIRECT_KEY: u64 = 0x6469_7265_6374; // "direct"
+        let samples = direct_samples(bs);
+        let n = self.all.len() as u64;
+        for (j, rec) in self.all.iter().enumerate() {
+            let Some(set) = self.direct_set(j) else {
+                continue;
+            };
+            let mut sum = 0.0;
+            for s in 0..samples {
+                let stream = (b * samples + s) * n + j as u64;
+                let mut rng = crate::sampling::Philox4x32::new(seed ^ DIRECT_KEY, stream);
+                sum += direct::sample(scene, set, rec, &self.frames[j], self.direct_strategy, &mut rng);
+            }
+            out[j] += sum / samples as f64 * bs as f64;
+        }
     }
 
     /// The near/far split: collisions closer than `radius` [m] to a

@@ -1,7 +1,10 @@
 //! Light sources: emission sampling, direct illuminance and power [lm].
 //!
-//! Two sources:
+//! The sources:
 //! - an isotropic **point** of intensity `I` [cd];
+//! - a **goniometric** point luminaire from a photometric file ([`Goniometric`]);
+//! - a Lambertian **area** source, rectangle or disc, opaque, with a uniform
+//!   or radial luminance profile ([`AreaLight`]);
 //! - a **sphere** of radius `R` [m] whose surface emits as a Lambertian
 //!   emitter of uniform luminance `L = I / (pi R^2)` [cd/m^2], so its
 //!   intensity is `I` in every direction and its flux `4 pi I`. The sphere
@@ -9,11 +12,15 @@
 //!   globe; for a small luminaire the difference from an opaque body is
 //!   negligible). Seen from outside it has luminance `L`.
 
+pub mod area;
 pub mod goniometric;
+pub mod lambert;
+pub mod radial_profile;
 
 use crate::math::quadrature::panel;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
 use glam::DVec3;
+pub use area::{AreaLight, AreaShape};
 pub use goniometric::Goniometric;
 use std::f64::consts::PI;
 
@@ -32,6 +39,8 @@ pub enum Light {
         frame: LuminaireFrame,
         dist: std::sync::Arc<Goniometric>,
     },
+    /// Lambertian area source (also an opaque surface of the scene).
+    Area(std::sync::Arc<AreaLight>),
 }
 
 /// A luminaire's orientation: the world directions of its local axes
@@ -124,12 +133,19 @@ pub struct EmissionSample {
 }
 
 impl Light {
-    /// Total emitted luminous flux [lm]: `4 pi I` for both kinds.
+    /// Total emitted luminous flux [lm]: `4 pi I` for points and spheres.
     pub fn power(&self) -> f64 {
         match self {
             Light::Point { i, .. } | Light::Sphere { i, .. } => 4.0 * PI * i,
             Light::Gonio { dist, .. } => dist.power(),
+            Light::Area(a) => a.power(),
         }
+    }
+
+    /// Whether the light is a point (its direct light is exact at every
+    /// visible receiver).
+    pub fn is_point_like(&self) -> bool {
+        matches!(self, Light::Point { .. } | Light::Gonio { .. })
     }
 
     /// Intensity [cd] of a point-like light towards unit world direction
@@ -138,7 +154,7 @@ impl Light {
     pub fn intensity(&self, w: DVec3) -> f64 {
         match self {
             Light::Point { i, .. } => *i,
-            Light::Sphere { .. } => 0.0,
+            Light::Sphere { .. } | Light::Area(_) => 0.0,
             Light::Gonio { frame, dist, .. } => dist.intensity(frame.to_local(w)),
         }
     }
@@ -167,10 +183,12 @@ impl Light {
 
     /// Sample an emitted ray: `u_dir` for the direction, `u_pos` for the
     /// point on a sphere's surface (uniform by area; direction cosine-weighted
-    /// about the outward normal, which is the Lambertian emission exactly).
+    /// about the outward normal, which is the Lambertian emission exactly)
+    /// or on an area source ([`AreaLight::sample_emission`]).
     #[inline]
     pub fn sample_emission(&self, u_dir: [f64; 2], u_pos: [f64; 2]) -> EmissionSample {
         match *self {
+            Light::Area(ref a) => a.sample_emission(u_dir, u_pos),
             Light::Gonio {
                 p,
                 ref frame,
@@ -233,25 +251,31 @@ impl Light {
         }
     }
 
-    /// Position of a point light, centre of a sphere [m] (for visibility tests).
+    /// Position of a point light, centre of a sphere or an area source [m].
     pub fn position(&self) -> DVec3 {
         match *self {
             Light::Point { p, .. } | Light::Gonio { p, .. } => p,
             Light::Sphere { c, .. } => c,
+            Light::Area(ref a) => a.center(),
         }
     }
 
-    /// Luminance of the emitting surface [cd/m^2] (0 for a point).
+    /// Luminance of a sphere's emitting surface [cd/m^2] (0 for a point; 0
+    /// for an area source, whose luminance is met on its surface:
+    /// [`AreaLight::emitted`]).
     pub fn luminance(&self) -> f64 {
         match *self {
-            Light::Point { .. } | Light::Gonio { .. } => 0.0,
+            Light::Point { .. } | Light::Gonio { .. } | Light::Area(_) => 0.0,
             Light::Sphere { r, i, .. } => i / (PI * r * r),
         }
     }
 
-    /// Whether `x` [m] is inside (or on) a sphere source, or on a point source.
+    /// Whether `x` [m] is inside (or on) a sphere source, or on a point
+    /// source (never for an area source: a point on it has a finite
+    /// illuminance).
     pub fn contains(&self, x: DVec3) -> bool {
         match *self {
+            Light::Area(_) => false,
             Light::Point { p, .. } | Light::Gonio { p, .. } => {
                 (p - x).length() <= 1e-12 * p.abs().max_element().max(x.abs().max_element())
             }
@@ -260,10 +284,11 @@ impl Light {
     }
 
     /// Distance along the ray `o + t d` (unit `d`) at which it enters a sphere
-    /// source, if it does so before `t_max`; `None` for a point.
+    /// source, if it does so before `t_max`; `None` for a point and for an
+    /// area source (a surface of the scene, met by the scene's intersection).
     pub fn hit(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<f64> {
         match *self {
-            Light::Point { .. } | Light::Gonio { .. } => None,
+            Light::Point { .. } | Light::Gonio { .. } | Light::Area(_) => None,
             Light::Sphere { c, r, .. } => {
                 let oc = o - c;
                 let b = oc.dot(d);
@@ -282,9 +307,13 @@ impl Light {
     /// `L int_cone max(0, n . w) dw` over the cone the sphere subtends, which
     /// is `I cos(beta) / D^2` when the sphere lies wholly above the receiver's
     /// horizon and is integrated exactly (see [`sphere_cone_integral`]) when the
-    /// horizon cuts it.
+    /// horizon cuts it; for a uniform area source Lambert's contour integral
+    /// ([`AreaLight::direct_exact`]). A non-uniform area source has no
+    /// closed form: NaN (callers sample it, see
+    /// [`crate::estimator::direct`]).
     pub fn direct_illuminance(&self, x: DVec3, n: DVec3) -> f64 {
         match *self {
+            Light::Area(ref a) => a.direct_exact(x, n).unwrap_or(f64::NAN),
             Light::Point { p, .. } | Light::Gonio { p, .. } => {
                 let d = p - x;
                 let d2 = d.length_squared();
@@ -312,9 +341,11 @@ impl Light {
     /// for a point; `L int_cone w(wi) max(0, n . wi) dwi` for a sphere, by a
     /// 32 x 32 Gauss-Legendre rule over the visible part of the cone (each
     /// ring of the cone is cut exactly at the horizon). With `w = 1` this is
-    /// [`Self::direct_illuminance`].
+    /// [`Self::direct_illuminance`]. An area source has no closed form for
+    /// a general response: NaN (callers sample it).
     pub fn direct_weighted(&self, x: DVec3, n: DVec3, w: &dyn Fn(DVec3) -> f64) -> f64 {
         match *self {
+            Light::Area(_) => f64::NAN,
             Light::Point { p, .. } | Light::Gonio { p, .. } => {
                 let wi = (p - x).normalize();
                 self.direct_illuminance(x, n) * w(wi)

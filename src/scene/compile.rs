@@ -126,11 +126,10 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
             _ => None,
         })
         .collect();
-    let only_planes = planes.len() == surfaces.len();
     let (lights, notes): (Vec<Light>, Vec<Option<String>>) = desc
         .light
         .iter()
-        .map(|l| light(l, ctx, &planes, only_planes))
+        .map(|l| light(l, ctx, &planes))
         .collect::<Result<Vec<_>, _>>()?
         .into_iter()
         .unzip();
@@ -500,7 +499,6 @@ fn light(
     l: &Spanned<LightDesc>,
     ctx: &SourceCtx,
     planes: &[Plane],
-    only_planes: bool,
 ) -> Result<(Light, Option<String>), SceneError> {
     let d = l.get_ref();
     // Fields that belong to the other kind of light are rejected.
@@ -515,6 +513,20 @@ fn light(
         }
     };
     let kind = d.kind.get_ref().as_str();
+    if kind == "rectangle" || kind == "disc" {
+        return area(l, ctx);
+    }
+    let area_only = [
+        ("corner", d.corner.as_ref().map(Spanned::span)),
+        ("edge1", d.edge1.as_ref().map(Spanned::span)),
+        ("edge2", d.edge2.as_ref().map(Spanned::span)),
+        ("normal", d.normal.as_ref().map(Spanned::span)),
+        ("luminance", d.luminance.as_ref().map(Spanned::span)),
+        ("sides", d.sides.as_ref().map(Spanned::span)),
+        ("profile", d.profile.as_ref().map(Spanned::span)),
+        ("material", d.material.as_ref().map(Spanned::span)),
+    ];
+    not_for(kind, &area_only)?;
     if kind == "ies" || kind == "ldt" {
         return goniometric(l, ctx);
     }
@@ -588,15 +600,6 @@ fn light(
                     format!("must be finite and > 0, got {r}"),
                 ));
             }
-            if !only_planes {
-                return Err(ctx.invalid(
-                    d.kind.span(),
-                    "type",
-                    "sphere lights are supported only in scenes of infinite planes \
-                     (their partial occlusion by finite shapes is not implemented); \
-                     use a point light",
-                ));
-            }
             if let Some(k) = planes
                 .iter()
                 .position(|pl| pl.signed_distance(c).abs() <= r)
@@ -612,9 +615,152 @@ fn light(
         other => Err(ctx.invalid(
             d.kind.span(),
             "type",
-            format!("unknown light type `{other}` (this version knows: point, sphere, ies, ldt)"),
+            format!(
+                "unknown light type `{other}` (this version knows: point, sphere, ies, ldt, rectangle, disc)"
+            ),
         )),
     }
+}
+
+/// A Lambertian area source (`type = "rectangle"` or `"disc"`): its shape
+/// (`corner`, `edge1`, `edge2`, emitting towards `edge1 x edge2`; or
+/// `center`, `normal` = the emitting side, `radius`), `luminance` [cd/m^2]
+/// at the profile's peak or `flux` [lm], `sides` (`"front"` or `"both"`),
+/// a disc's radial `profile` and the surface's `material` (default black).
+fn area(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String>), SceneError> {
+    use crate::light::radial_profile::RadialProfile;
+    use crate::light::{AreaLight, AreaShape};
+    let d = l.get_ref();
+    let kind = d.kind.get_ref().as_str();
+    let rect = kind == "rectangle";
+    let foreign = [
+        ("position", d.position.as_ref().map(Spanned::span)),
+        ("intensity", d.intensity.as_ref().map(Spanned::span)),
+        ("file", d.file.as_ref().map(Spanned::span)),
+        ("aim", d.aim.as_ref().map(Spanned::span)),
+        ("rotate", d.rotate.as_ref().map(Spanned::span)),
+        ("multiplier", d.multiplier.as_ref().map(Spanned::span)),
+    ];
+    let by_shape = if rect {
+        [
+            ("center", d.center.as_ref().map(Spanned::span)),
+            ("normal", d.normal.as_ref().map(Spanned::span)),
+            ("radius", d.radius.as_ref().map(Spanned::span)),
+            ("profile", d.profile.as_ref().map(Spanned::span)),
+        ]
+    } else {
+        [
+            ("corner", d.corner.as_ref().map(Spanned::span)),
+            ("edge1", d.edge1.as_ref().map(Spanned::span)),
+            ("edge2", d.edge2.as_ref().map(Spanned::span)),
+            ("position", None),
+        ]
+    };
+    for (name, span) in foreign.into_iter().chain(by_shape) {
+        if let Some(span) = span {
+            return Err(ctx.invalid(
+                span,
+                name,
+                format!("not allowed for a `{kind}` light"),
+            ));
+        }
+    }
+    let vec = |v: &Option<Spanned<[f64; 3]>>, field: &str| {
+        ctx.finite_vec(ctx.required(v, l.span(), field)?, field)
+    };
+    let shape = if rect {
+        let corner = vec(&d.corner, "corner")?;
+        let e1 = vec(&d.edge1, "edge1")?;
+        let e2 = vec(&d.edge2, "edge2")?;
+        if Rect::new(corner, e1, e2).is_none() {
+            return Err(ctx.invalid(
+                d.edge2.as_ref().map_or(l.span(), Spanned::span),
+                "edge2",
+                "the edges must be non-zero and not parallel",
+            ));
+        }
+        AreaShape::Rect { corner, e1, e2 }
+    } else {
+        let center = vec(&d.center, "center")?;
+        let normal = ctx.unit_vec(ctx.required(&d.normal, l.span(), "normal")?, "normal")?;
+        let radius = positive(ctx.required(&d.radius, l.span(), "radius")?, "radius", ctx)?;
+        let profile = match &d.profile {
+            Some(p) => RadialProfile::parse(p.get_ref(), radius)
+                .map_err(|m| ctx.invalid(p.span(), "profile", m))?,
+            None => RadialProfile::uniform(radius),
+        };
+        AreaShape::Disc {
+            center,
+            normal,
+            radius,
+            profile,
+        }
+    };
+    let two_sided = match &d.sides {
+        None => false,
+        Some(s) if s.get_ref() == "front" => false,
+        Some(s) if s.get_ref() == "both" => true,
+        Some(s) => {
+            return Err(ctx.invalid(
+                s.span(),
+                "sides",
+                format!("must be `front` or `both`, got `{}`", s.get_ref()),
+            ));
+        }
+    };
+    let material = match &d.material {
+        Some(m) => material(m, ctx)?,
+        None => Material::Lambertian { rho: 0.0 },
+    };
+    let mut light = AreaLight {
+        shape,
+        l0: 1.0,
+        two_sided,
+        material,
+        surface: u32::MAX,
+    };
+    // The flux of a unit peak luminance.
+    let unit = light.power();
+    light.l0 = match (&d.luminance, &d.flux) {
+        (Some(v), None) => ctx.nonneg(v, "luminance")?,
+        (None, Some(f)) => {
+            let f = ctx.nonneg(f, "flux")?;
+            if !(unit > 0.0 && unit.is_finite()) {
+                return Err(ctx.invalid(
+                    f_span(d, l),
+                    "flux",
+                    format!("the source's emitting area weighted by its profile is {unit:e} m^2: it cannot carry a flux"),
+                ));
+            }
+            f / unit
+        }
+        (Some(_), Some(f)) => {
+            return Err(ctx.invalid(
+                f.span(),
+                "flux",
+                "give either `luminance` [cd/m^2] or `flux` [lm], not both",
+            ));
+        }
+        (None, None) => {
+            return Err(ctx.invalid(
+                l.span(),
+                "luminance",
+                "missing field (give `luminance` [cd/m^2] or `flux` [lm])",
+            ));
+        }
+    };
+    if !(light.power().is_finite() && light.l0 <= 1e250) {
+        return Err(ctx.invalid(
+            d.luminance.as_ref().map_or_else(|| f_span(d, l), Spanned::span),
+            if d.luminance.is_some() { "luminance" } else { "flux" },
+            "too large: the flux must stay finite (luminance at most 1e250 cd/m^2)",
+        ));
+    }
+    Ok((Light::Area(std::sync::Arc::new(light)), None))
+}
+
+fn f_span(d: &LightDesc, l: &Spanned<LightDesc>) -> Range<usize> {
+    d.flux.as_ref().map_or(l.span(), Spanned::span)
 }
 
 /// A goniometric luminaire (`type = "ies"` or `"ldt"`): the photometric

@@ -138,4 +138,22 @@ pub struct LightDesc {
     pub rotate: Option<Spanned<f64>>,
     /// Factor on a goniometric luminaire's candela values; default 1.
     pub multiplier: Option<Spanned<f64>>,
+    /// Corner of a rectangle source [m].
+    pub corner: Option<Spanned<[f64; 3]>>,
+    /// First edge of a rectangle source [m].
+    pub edge1: Option<Spanned<[f64; 3]>>,
+    /// Second edge of a rectangle source [m]; it emits towards `edge1 x edge2`.
+    pub edge2: Option<Spanned<[f64; 3]>>,
+    /// Emitting side's normal of a disc source.
+    pub normal: Option<Spanned<[f64; 3]>>,
+    /// Luminance of an area source [cd/m^2] (at its profile's peak).
+    /// Exclusive with `flux`.
+    pub luminance: Option<Spanned<f64>>,
+    /// Emitting sides of an area source: `"front"` (default) or `"both"`.
+    pub sides: Option<Spanned<String>>,
+    /// Radial luminance profile of a disc source (a name or a table; see
+    /// [`crate::light::radial_profile`]); default uniform.
+    pub profile: Option<Spanned<toml::Value>>,
+    /// How an area source's surface reflects; default black.
+    pub material: Option<Spanned<MaterialDesc>>,
 }

@@ -21,6 +21,10 @@ use crate::light::Light;
 use crate::material::Material;
 use glam::DVec3;
 
+/// Relative tolerance within which an emitter's hit wins a tie with a
+/// coplanar surface ([`Scene::first_hit_from`], [`Scene::intersect`]).
+const EMITTER_TIE: f64 = 1e-9;
+
 /// Which side(s) of a surface reflect, relative to its geometric normal.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Sides {
@@ -82,6 +86,9 @@ pub struct Surface {
     pub shape: ShapeRef,
     /// Which side(s) reflect.
     pub sides: Sides,
+    /// The area light (index into [`Scene::lights`]) whose emitting
+    /// surface this is, if any.
+    pub emitter: Option<u32>,
 }
 
 /// A surface as handed to [`Scene::build`]: name, shape, sides, material(s).
@@ -262,8 +269,9 @@ impl Scene {
     /// Build a scene from surfaces and lights, checking what the compiled
     /// scene relies on: at most [`MAX_PLANES`] infinite planes; lights with a
     /// finite position, a finite intensity `>= 0` [cd] (a power that does not
-    /// overflow) and a finite radius `> 0`; sphere lights only in scenes of
-    /// infinite planes and wholly on one side of each. A scene file passes
+    /// overflow) and a finite radius `> 0`; sphere lights wholly on one side
+    /// of each infinite plane; area sources with a finite luminance `>= 0`.
+    /// An area source adds its emitting surface. A scene file passes
     /// these checks at compile time with its line and field
     /// ([`crate::scene::load`]); this is the library's own guard.
     pub fn build(specs: Vec<SurfaceSpec>, lights: Vec<Light>) -> Result<Self, BuildError> {
@@ -274,7 +282,6 @@ impl Scene {
         if planes > MAX_PLANES {
             return Err(BuildError::TooManyPlanes(planes));
         }
-        let only_planes = planes == specs.len();
         for (k, l) in lights.iter().enumerate() {
             let bad = |message: String| BuildError::Light { index: k, message };
             let (pos, i) = match *l {
@@ -284,11 +291,6 @@ impl Scene {
                     if !(r.is_finite() && r > 0.0) {
                         return Err(bad(format!("radius must be finite and > 0 [m], got {r}")));
                     }
-                    if !only_planes {
-                        return Err(bad(
-                            "sphere lights are supported only in scenes of infinite planes".into(),
-                        ));
-                    }
                     for spec in &specs {
                         if let SurfaceSpec::Plane(name, pl, _) = spec
                             && pl.signed_distance(c).abs() <= r
@@ -297,6 +299,36 @@ impl Scene {
                         }
                     }
                     (c, i)
+                }
+                Light::Area(ref a) => {
+                    let shape_ok = match a.shape {
+                        crate::light::AreaShape::Rect { corner, e1, e2 } => {
+                            corner.is_finite() && Rect::new(corner, e1, e2).is_some()
+                        }
+                        crate::light::AreaShape::Disc {
+                            center,
+                            normal,
+                            radius,
+                            ..
+                        } => {
+                            center.is_finite()
+                                && (normal.length() - 1.0).abs() < 1e-9
+                                && radius.is_finite()
+                                && radius > 0.0
+                        }
+                    };
+                    if !shape_ok {
+                        return Err(bad(
+                            "an area source needs finite, non-parallel edges (a rectangle) or a unit normal and a finite radius > 0 (a disc)".into(),
+                        ));
+                    }
+                    if !(a.l0.is_finite() && a.l0 >= 0.0 && a.power().is_finite()) {
+                        return Err(bad(format!(
+                            "luminance must be finite and >= 0 [cd/m^2] with a finite flux, got {:e}",
+                            a.l0
+                        )));
+                    }
+                    (a.center(), 0.0)
                 }
             };
             if !pos.is_finite() {
@@ -332,14 +364,45 @@ impl Scene {
             light_cdf: Vec::new(),
             total_power: 0.0,
         };
-        for spec in specs {
+        // An area source's emitting surface joins the scene's shapes.
+        let mut lights = lights;
+        let mut specs = specs;
+        let mut emitter_of = vec![None; specs.len()];
+        for (k, l) in lights.iter_mut().enumerate() {
+            if let Light::Area(a) = l {
+                let sides = if a.two_sided { Sides::Both } else { Sides::Front };
+                let name = format!("emitter of light #{}", k + 1);
+                specs.push(match a.shape {
+                    crate::light::AreaShape::Rect { corner, e1, e2 } => {
+                        // Checked by the light's constructor.
+                        let r = Rect::new(corner, e1, e2).expect("a valid parallelogram");
+                        SurfaceSpec::Rect(name, r, sides, a.material)
+                    }
+                    crate::light::AreaShape::Disc {
+                        center,
+                        normal,
+                        radius,
+                        ..
+                    } => SurfaceSpec::Disc(name, Disc::new(center, normal, radius), sides, a.material),
+                });
+                emitter_of.push(Some(k as u32));
+                std::sync::Arc::make_mut(a).surface = u32::MAX;
+            }
+        }
+        for (spec, emitter) in specs.into_iter().zip(emitter_of) {
             let k = scene.surfaces.len() as u32;
+            if let Some(e) = emitter
+                && let Light::Area(a) = &mut lights[e as usize]
+            {
+                std::sync::Arc::make_mut(a).surface = k;
+            }
             let mut push = |name: String, material, shape, sides| {
                 scene.surfaces.push(Surface {
                     name,
                     material,
                     shape,
                     sides,
+                    emitter,
                 })
             };
             match spec {
@@ -423,6 +486,11 @@ impl Scene {
         self.lights = lights;
         self.light_cdf = light_cdf;
         self.total_power = total_power;
+    }
+
+    /// The infinite planes (in side-mask bit order).
+    pub fn planes(&self) -> &[Plane] {
+        &self.planes
     }
 
     /// Total emitted flux [lm].
@@ -527,21 +595,41 @@ impl Scene {
                 (best_t, best) = (t, Some((s, 0)));
             }
         }
+        // An emitter set into a surface (a panel in the ceiling's plane) is
+        // met where the two coincide: its hits win ties within a relative
+        // 1e-9, in either order of the lists.
+        let mut best_emitter = false;
+        let t_max = |s: u32, best_t: f64, best_emitter: bool| {
+            if self.surfaces[s as usize].emitter.is_some() {
+                best_t * (1.0 + EMITTER_TIE)
+            } else if best_emitter {
+                best_t * (1.0 - EMITTER_TIE)
+            } else {
+                best_t
+            }
+        };
         for (r, s) in &self.rects {
             if on(*s) || (observer && r.plane.side(ray.o) == 0) {
                 continue;
             }
-            if let Some(t) = r.intersect(ray, best_t) {
+            if let Some(t) = r.intersect(ray, t_max(*s, best_t, best_emitter)) {
                 (best_t, best) = (t, Some((*s, 0)));
+                best_emitter = self.surfaces[*s as usize].emitter.is_some();
             }
         }
         for (dc, s) in &self.discs {
             if on(*s) || (observer && dc.plane.side(ray.o) == 0) {
                 continue;
             }
-            if let Some(t) = dc.intersect(ray, best_t) {
+            if let Some(t) = dc.intersect(ray, t_max(*s, best_t, best_emitter)) {
                 (best_t, best) = (t, Some((*s, 0)));
+                best_emitter = self.surfaces[*s as usize].emitter.is_some();
             }
+        }
+        // Curved shapes and meshes must beat an emitter's hit clearly.
+        let emitter_hit = best_emitter.then_some((best_t, best));
+        if best_emitter {
+            best_t *= 1.0 - EMITTER_TIE;
         }
         for (sp, s) in &self.spheres {
             let leaving = on(*s) || (observer && sp.classify(ray.o) == Inside::On);
@@ -577,6 +665,11 @@ impl Scene {
             if let Some((t, _)) = o.first_hit(ray.o, ray.d, 0.0, best_t) {
                 (best_t, best) = (t, Some((*s, 0)));
             }
+        }
+        if let Some((t, b)) = emitter_hit
+            && b == best
+        {
+            best_t = t;
         }
         let (s, prim) = best?;
         let surf = &self.surfaces[s as usize];

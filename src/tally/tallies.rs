@@ -7,8 +7,12 @@ use super::{Diagnostics, Welford, relative_error};
 /// indirect illuminance [lx], or luminance [cd/m^2], per receiver).
 #[derive(Clone, Debug)]
 pub struct Tallies {
-    /// The estimated part (all reflection orders >= 1) per receiver.
+    /// The estimated part per receiver: all reflection orders >= 1, plus
+    /// the direct light of sources that are sampled rather than exact.
     pub estimated: Vec<Welford>,
+    /// The sampled direct light per receiver (part of `estimated`); empty
+    /// when no source is sampled.
+    pub sampled_direct: Vec<Welford>,
     /// `orders[k][j]`: order `k+1` for `k < K`, and all orders above `K` for `k = K`.
     pub orders: Vec<Vec<Welford>>,
     /// `R^2 B` of each receiver's total at batch counts 32, 64, 128, ... (for the FOM check).
@@ -51,6 +55,7 @@ impl Tallies {
         let buckets = if orders == 0 { 0 } else { orders as usize + 1 };
         Self {
             estimated: vec![Welford::new(); n],
+            sampled_direct: Vec::new(),
             orders: vec![vec![Welford::new(); n]; buckets],
             snapshots: Vec::new(),
             near_hits: vec![0; n],
@@ -62,21 +67,36 @@ impl Tallies {
     }
 
     /// Fold one batch: `sums[k * n + j]` is the batch's sum over its `chains`
-    /// chains of bucket `k` at receiver `j`; `near_hits` the batch's counts
+    /// chains of bucket `k` at receiver `j`; `direct_sums[j]` (empty: none)
+    /// the batch's sampled direct light at `j` times `chains`; `near_hits` the batch's counts
     /// for the `sparse` check (may be empty; with `3 n` entries, the near
     /// part's exposed and reached vertices follow the `n` collision counts,
     /// see [`crate::run::Batch::near_hits`]). `means` is scratch of the
     /// length of `sums`.
-    pub fn fold(&mut self, sums: &[f64], chains: u64, near_hits: &[u64], means: &mut [f64]) {
+    pub fn fold(
+        &mut self,
+        sums: &[f64],
+        direct_sums: &[f64],
+        chains: u64,
+        near_hits: &[u64],
+        means: &mut [f64],
+    ) {
         let n = self.estimated.len();
         let buckets = sums.len() / n.max(1);
         let inv = 1.0 / chains as f64;
         for (m, s) in means.iter_mut().zip(sums) {
             *m = s * inv;
         }
+        if !direct_sums.is_empty() && self.sampled_direct.is_empty() {
+            self.sampled_direct = vec![Welford::new(); n];
+        }
         for j in 0..n {
-            let total: f64 = (0..buckets).map(|k| means[k * n + j]).sum();
+            let d = direct_sums.get(j).map_or(0.0, |s| s * inv);
+            let total: f64 = (0..buckets).map(|k| means[k * n + j]).sum::<f64>() + d;
             self.estimated[j].push(total);
+            if let Some(w) = self.sampled_direct.get_mut(j) {
+                w.push(d);
+            }
         }
         for (t, h) in self.near_hits.iter_mut().zip(near_hits) {
             *t += h;
@@ -127,6 +147,11 @@ impl Tallies {
             && self.near_vertices[j][0] > 0)
             .then(|| self.near_vertices[j][1]);
         d
+    }
+
+    /// Mean sampled direct light at receiver `j` (0 when none is sampled).
+    pub fn sampled_direct_mean(&self, j: usize) -> f64 {
+        self.sampled_direct.get(j).map_or(0.0, Welford::mean)
     }
 
     /// Number of batches folded in.
