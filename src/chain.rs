@@ -105,7 +105,13 @@ pub fn trace_ex<F: FnMut(&Collision)>(
     mut on_collision: F,
 ) -> (u32, ChainEnd) {
     let light = scene.pick_light(rng.next_f64());
-    let e = light.sample_emission(u_first[0], rng.next_2d());
+    let u_pos = rng.next_2d();
+    let u_extra = if light.emits_from_opening() {
+        rng.next_f64()
+    } else {
+        u_pos[0]
+    };
+    let e = light.sample_emission(u_first[0], u_pos, u_extra);
     let q0 = scene.total_power();
     // A light picked with probability power/total carries the total power per chain.
     let mut q = e.phi / light.power() * q0;
@@ -117,7 +123,8 @@ pub fn trace_ex<F: FnMut(&Collision)>(
     // A ray leaving an area source starts on its emitting surface, which may
     // lie in another surface's plane (a panel set into the ceiling): like
     // an observer's, it meets no flat surface through its origin.
-    let mut from_emitter = matches!(light, crate::light::Light::Area(_));
+    let mut from_emitter =
+        matches!(light, crate::light::Light::Area(_)) || light.emits_from_opening();
     while q > 0.0 {
         let next = if from_emitter {
             from_emitter = false;

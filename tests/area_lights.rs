@@ -106,7 +106,11 @@ fn panel_brute(x: DVec3, n: DVec3, z: f64, block: bool, m: usize) -> f64 {
     let mut sum = 0.0;
     for i in 0..m {
         for k in 0..2 * m {
-            let y = DVec3::new(-0.3 + (i as f64 + 0.5) * dx, -0.6 + (k as f64 + 0.5) * dy, z);
+            let y = DVec3::new(
+                -0.3 + (i as f64 + 0.5) * dx,
+                -0.6 + (k as f64 + 0.5) * dy,
+                z,
+            );
             let v = y - x;
             let d2 = v.length_squared();
             let cx = n.dot(v) / d2.sqrt();
@@ -199,9 +203,16 @@ fn mis_beats_brdf_sampling_close_to_the_panel_and_light_sampling_on_a_glossy_rec
         let (_, se) = sample_mean(&s, &rec, 0, st, 20_000, 3);
         se * se * 20_000.0
     };
-    let (vl, vb, vm) = (var(Strategy::Light), var(Strategy::Brdf), var(Strategy::Balance));
+    let (vl, vb, vm) = (
+        var(Strategy::Light),
+        var(Strategy::Brdf),
+        var(Strategy::Balance),
+    );
     assert!(vm < 2.0 * vl.min(vb), "MIS {vm} vs light {vl}, BRDF {vb}");
-    assert!(vl < vb, "a small panel far off: light sampling wins ({vl} vs {vb})");
+    assert!(
+        vl < vb,
+        "a small panel far off: light sampling wins ({vl} vs {vb})"
+    );
 }
 
 #[test]
@@ -220,10 +231,19 @@ fn a_panel_set_into_the_ceiling_plane_equals_one_just_below_it() {
         let rec = Receivers::new(&s, &points).unwrap();
         let r = lumest::estimator::local::run(&s, &rec, &cfg, &mut |_| true);
         res.push(r);
-        let lum = lumest::estimator::emitted_luminance(&s, DVec3::new(0.0, 0.0, 1.0), DVec3::Z, f64::INFINITY);
+        let lum = lumest::estimator::emitted_luminance(
+            &s,
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::Z,
+            f64::INFINITY,
+        );
         assert_eq!(lum, 1000.0, "z = {z}: a view up into the panel");
-        let beside =
-            lumest::estimator::emitted_luminance(&s, DVec3::new(2.0, 0.0, 1.0), DVec3::Z, f64::INFINITY);
+        let beside = lumest::estimator::emitted_luminance(
+            &s,
+            DVec3::new(2.0, 0.0, 1.0),
+            DVec3::Z,
+            f64::INFINITY,
+        );
         assert_eq!(beside, 0.0);
     }
     let bound = sidak(points.len());
@@ -233,7 +253,12 @@ fn a_panel_set_into_the_ceiling_plane_equals_one_just_below_it() {
             + res[1].tallies.estimated[j].std_error().powi(2))
         .sqrt();
         let z = (e(0) - e(1)) / se;
-        assert!(z.abs() < bound, "point {j}: {} vs {} (z = {z:.2})", e(0), e(1));
+        assert!(
+            z.abs() < bound,
+            "point {j}: {} vs {} (z = {z:.2})",
+            e(0),
+            e(1)
+        );
         assert!(e(0) > 0.0);
     }
     // The floor point's direct part against quadrature (plus light reflected
@@ -242,7 +267,10 @@ fn a_panel_set_into_the_ceiling_plane_equals_one_just_below_it() {
     let d = res[0].tallies.sampled_direct_mean(0);
     let sd = res[0].tallies.sampled_direct[0].std_error();
     let exact = panel_brute(points[0].0, points[0].1, 3.0, false, 600);
-    assert!(((d - exact) / sd).abs() < sidak(1), "{d} +- {sd} vs {exact}");
+    assert!(
+        ((d - exact) / sd).abs() < sidak(1),
+        "{d} +- {sd} vs {exact}"
+    );
 }
 
 #[test]
@@ -282,7 +310,10 @@ flux = 2000.0
         let se = (a.tallies.estimated[j].std_error().powi(2)
             + b.tallies.estimated[j].std_error().powi(2))
         .sqrt();
-        assert!(((ea - eb) / se).abs() < bound, "point {j}: local {ea} vs backward {eb} +- {se}");
+        assert!(
+            ((ea - eb) / se).abs() < bound,
+            "point {j}: local {ea} vs backward {eb} +- {se}"
+        );
     }
 }
 
@@ -333,11 +364,17 @@ intensity = 100.0
     let bound = sidak(points.len());
     // Wholly hidden under the blocker: exactly nothing.
     let hidden = Receivers::new(&s, &[(DVec3::new(0.7, 0.0, 0.6), DVec3::Z)]).unwrap();
-    assert_eq!(sample_mean(&s, &hidden, 0, Strategy::Balance, 1000, 1), (0.0, 0.0));
+    assert_eq!(
+        sample_mean(&s, &hidden, 0, Strategy::Balance, 1000, 1),
+        (0.0, 0.0)
+    );
     for (j, &(x, n)) in points.iter().enumerate() {
         let exact = brute(x, n);
         let (m, se) = sample_mean(&s, &rec, j, Strategy::Balance, 100_000, 9);
-        assert!(((m - exact) / se).abs() < bound, "point {j}: {m} +- {se} vs {exact}");
+        assert!(
+            ((m - exact) / se).abs() < bound,
+            "point {j}: {m} +- {se} vs {exact}"
+        );
         assert!(exact > 0.0);
     }
 }
@@ -378,7 +415,11 @@ material = { type = "phong", diffuse = 0.2, specular = 0.5, exponent = 50 }
     let mut exact = 0.0;
     for i in 0..m {
         for k in 0..2 * m {
-            let y = DVec3::new(-0.3 + (i as f64 + 0.5) * dx, -0.6 + (k as f64 + 0.5) * dy, 3.0);
+            let y = DVec3::new(
+                -0.3 + (i as f64 + 0.5) * dx,
+                -0.6 + (k as f64 + 0.5) * dy,
+                3.0,
+            );
             let v = y - sub;
             let d2 = v.length_squared();
             let wi = v / d2.sqrt();
@@ -389,10 +430,16 @@ material = { type = "phong", diffuse = 0.2, specular = 0.5, exponent = 50 }
     let mut vars = Vec::new();
     for st in [Strategy::Light, Strategy::Brdf, Strategy::Balance] {
         let (mean, se) = sample_mean(&s, &rec, 0, st, 100_000, 21);
-        assert!(((mean - exact) / se).abs() < sidak(3), "{st:?}: {mean} +- {se} vs {exact}");
+        assert!(
+            ((mean - exact) / se).abs() < sidak(3),
+            "{st:?}: {mean} +- {se} vs {exact}"
+        );
         vars.push(se);
     }
-    assert!(vars[2] < vars[0].max(vars[1]), "MIS no worse than the worse strategy: {vars:?}");
+    assert!(
+        vars[2] < vars[0].max(vars[1]),
+        "MIS no worse than the worse strategy: {vars:?}"
+    );
 }
 
 #[test]
@@ -436,7 +483,107 @@ flux = 700.0
         };
         let f = lumest::cases::flux_balance::flux_balance(&s, 64_000, 32, 3);
         assert_eq!(f.escaped, 0, "{l}");
-        let z = (f.total.mean() - s.total_power()) / f.total.std_error().max(1e-12 * s.total_power());
-        assert!(z.abs() < 4.0, "{l}: absorbed {} vs {}", f.total.mean(), s.total_power());
+        let z =
+            (f.total.mean() - s.total_power()) / f.total.std_error().max(1e-12 * s.total_power());
+        assert!(
+            z.abs() < 4.0,
+            "{l}: absorbed {} vs {}",
+            f.total.mean(),
+            s.total_power()
+        );
     }
+}
+
+#[test]
+fn a_cosine_luminaire_emitting_from_its_opening_is_the_lambertian_panel() {
+    // An IES table I = I0 cos(gamma) with a 0.6 m (C0, x) by 1.2 m (C90, y)
+    // opening: every element of the opening then emits like a Lambertian
+    // surface of luminance I0 / A, so the luminaire is the panel of the
+    // other tests (I0 = 1000 cd/m^2 x 0.72 m^2). Near it the point
+    // approximation is off; the opening agrees with the panel's quadrature.
+    let dir = std::env::temp_dir().join(format!("lumest-opening-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let gammas: Vec<f64> = (0..=180).map(|k| k as f64 * 0.5).collect();
+    let cd: Vec<String> = gammas
+        .iter()
+        .map(|g: &f64| format!("{:.17e}", 720.0 * g.to_radians().cos()))
+        .collect();
+    let ies = format!(
+        "IESNA:LM-63-2002\n[TEST] cosine panel\nTILT=NONE\n1 -1 1 {} 1 1 2 1.2 0.6 0\n1 1 0\n{}\n0\n{}\n",
+        gammas.len(),
+        gammas
+            .iter()
+            .map(|g| g.to_string())
+            .collect::<Vec<_>>()
+            .join(" "),
+        cd.join(" ")
+    );
+    std::fs::write(dir.join("panel.ies"), ies).unwrap();
+    let with = |opening: bool| {
+        let src = format!(
+            "{FLOOR}{FAR_BOX}\n[[light]]\ntype = \"ies\"\nfile = \"panel.ies\"\nposition = [0.0, 0.0, 3.0]\nopening = {opening}\n"
+        );
+        parse(&src, &dir.join("scene.toml")).unwrap()
+    };
+    let (s_open, s_point) = (with(true), with(false));
+    let points = [
+        (DVec3::new(0.0, 0.0, 2.5), DVec3::Z),
+        (DVec3::new(0.5, 0.2, 2.7), DVec3::Z),
+        (DVec3::new(0.0, 0.0, 0.0), DVec3::Z),
+        (DVec3::new(1.0, -0.4, 2.0), DVec3::new(-1.0, 0.0, 0.0)),
+    ];
+    let rec_open = Receivers::new(&s_open, &points).unwrap();
+    let rec_point = Receivers::new(&s_point, &points).unwrap();
+    let bound = sidak(points.len());
+    for (j, &(x, n)) in points.iter().enumerate() {
+        let exact = panel_brute(x, n, 3.0, false, 600);
+        assert_eq!(rec_open.direct()[j], 0.0, "the opening's light is sampled");
+        let (m, se) = sample_mean(&s_open, &rec_open, j, Strategy::Balance, 100_000, 13);
+        let z = (m - exact) / se;
+        assert!(
+            z.abs() < bound,
+            "point {j}: opening {m} +- {se} vs panel {exact} (z = {z:.2})"
+        );
+        let point = rec_point.direct()[j];
+        if j < 2 {
+            // Half a metre or less from a 1.3 m opening: the point is far off.
+            assert!(
+                ((point - exact) / exact).abs() > 0.05,
+                "point {j}: {point} vs {exact}"
+            );
+            assert!(((m - point) / se).abs() > bound);
+        }
+    }
+    // The chains: light reflected by the floor into points facing down is
+    // the same from the opening as from the panel (emission sampled by
+    // position and direction; nothing else differs below the panel).
+    let down = [
+        (DVec3::new(0.0, 0.0, 1.0), -DVec3::Z),
+        (DVec3::new(1.5, 0.5, 2.0), -DVec3::Z),
+    ];
+    let panel = scene(&format!("{FLOOR}{FAR_BOX}{}", panel(3.0)));
+    let cfg = common::chains_cfg(100_000, 17, 2);
+    let a = lumest::estimator::local::run(
+        &s_open,
+        &Receivers::new(&s_open, &down).unwrap(),
+        &cfg,
+        &mut |_| true,
+    );
+    let b = lumest::estimator::local::run(
+        &panel,
+        &Receivers::new(&panel, &down).unwrap(),
+        &cfg,
+        &mut |_| true,
+    );
+    for j in 0..down.len() {
+        let (ea, eb) = (a.tallies.estimated[j].mean(), b.tallies.estimated[j].mean());
+        let se = (a.tallies.estimated[j].std_error().powi(2)
+            + b.tallies.estimated[j].std_error().powi(2))
+        .sqrt();
+        assert!(
+            ea > 0.0 && ((ea - eb) / se).abs() < sidak(down.len()),
+            "point {j}: opening {ea} vs panel {eb} +- {se}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

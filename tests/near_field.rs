@@ -107,7 +107,10 @@ fn near_field_split_is_reproducible_for_any_thread_count() {
             near: (0.02, 8),
             ..chains_cfg(20_000, 9, t)
         };
-        run(&case.scene, &rec, &cfg, &mut |_| true).tallies.estimated[0].mean()
+        run(&case.scene, &rec, &cfg, &mut |_| true)
+            .tallies
+            .estimated[0]
+            .mean()
     };
     assert_eq!(go(1).to_bits(), go(2).to_bits());
 }

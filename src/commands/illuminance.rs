@@ -621,9 +621,9 @@ fn fan_plot(job: &Job, r: &RunResult, path: &str, part: PlotPart) -> anyhow::Res
             let l = match part {
                 PlotPart::Indirect => indirect,
                 PlotPart::Total => {
-                    job.view_receiver[k].map_or(0.0, |j| {
-                        r.direct[j] + r.tallies.estimated[j].mean()
-                    }) + job.emitted[k]
+                    job.view_receiver[k]
+                        .map_or(0.0, |j| r.direct[j] + r.tallies.estimated[j].mean())
+                        + job.emitted[k]
                 }
             };
             (theta.to_radians(), phi.to_radians(), l.max(0.0))

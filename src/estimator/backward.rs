@@ -326,11 +326,15 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     let mut reached = 0;
     let mut exposed = 0;
     // Light-guided connections start photons at a light's centre; area
-    // sources have no such centre, so scenes with them are traced unguided.
+    // sources and luminous openings have no such centre, so scenes with
+    // them are traced unguided.
     let guide = cfg.chain.guide
         && !scene.lights.is_empty()
         && scene.total_power() > 0.0
-        && !scene.lights.iter().any(|l| matches!(l, Light::Area(_)));
+        && !scene
+            .lights
+            .iter()
+            .any(|l| matches!(l, Light::Area(_)) || l.emits_from_opening());
     if guide {
         // The receiver's transfer towards world direction `w`: its response
         // times `cos` (the integrand of `E = int L cos dw`, or of the
@@ -579,6 +583,24 @@ fn next_event(
             scene.side_mask(l.position()).sees(hm)
                 && (scene.planes_only() || !scene.blocked_by_shapes(h.p, from, l.position(), 0))
         };
+        if let Light::Gonio { frame, dist, .. } = l
+            && let Some((y, _)) = l.opening_point(rng.next_2d())
+        {
+            // One point of the luminous opening (uniform): each element
+            // emits I(w) dA / A, so the estimate is I(w) cos_x / t^2.
+            let v = y - h.p;
+            let t2 = v.length_squared();
+            if t2 <= 0.0 {
+                continue;
+            }
+            let wi = v / t2.sqrt();
+            let cos_x = h.n.dot(wi);
+            if cos_x > 0.0 && scene.visible(h.p, from, y) {
+                let i = dist.intensity(frame.to_local(-wi));
+                nee += m.eval(f_frame.to_local(wi), wo) * i * cos_x / t2;
+            }
+            continue;
+        }
         if let Light::Area(a) = l {
             // One point drawn on the emitter (area sampling).
             let pt = a.sample_point(rng.next_2d());

@@ -97,7 +97,10 @@ impl LightSet {
     }
 
     fn pick(&self, u: f64) -> u32 {
-        let i = self.cdf.partition_point(|&c| c <= u).min(self.lights.len() - 1);
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .min(self.lights.len() - 1);
         self.lights[i]
     }
 }
@@ -155,25 +158,51 @@ fn light_pdf(set: &LightSet, scene: &Scene, k: u32, x: DVec3, wi: DVec3, y: DVec
     }
 }
 
-/// A light sample: `(f, p_L, wi)` with `f = L_e w cos V` towards the sampled
-/// point; `f = 0` when it is hidden, behind the receiver or on a dark side.
+/// A light sample: `(f, p_L, wi, hittable)` with `f = L_e w cos V` towards
+/// the sampled point; `f = 0` when it is hidden, behind the receiver or on a
+/// dark side. A source that no ray can meet (a luminaire's opening) is not
+/// `hittable`: then `f / p_L` is the estimate by itself (BRDF sampling never
+/// finds it, so MIS gives it weight 1), `f` and `p_L` per area.
 fn light_sample(
     scene: &Scene,
     set: &LightSet,
     rec: &Receiver,
     frame: &Frame,
     rng: &mut Philox4x32,
-) -> (f64, f64, DVec3) {
+) -> (f64, f64, DVec3, bool) {
     let k = set.pick(rng.next_f64());
     let u = rng.next_2d();
     let x = rec.p;
-    match &scene.lights[k as usize] {
+    let light = &scene.lights[k as usize];
+    if let (
+        Light::Gonio {
+            frame: lf, dist, ..
+        },
+        Some((y, area)),
+    ) = (light, light.opening_point(u))
+    {
+        // Each element dA of the opening emits I(w) dA / A; y uniform (1/A).
+        let v = y - x;
+        let t2 = v.length_squared();
+        let p_a = set.prob[k as usize] / area;
+        if t2 <= 0.0 {
+            return (0.0, p_a, DVec3::Z, false);
+        }
+        let wi = v / t2.sqrt();
+        let (r, _) = response(rec, frame, wi);
+        if r <= 0.0 || !scene.visible(x, None, y) {
+            return (0.0, p_a, wi, false);
+        }
+        let i = dist.intensity(lf.to_local(-wi));
+        return (i / area * r / t2, p_a, wi, false);
+    }
+    let (f, p, wi) = match light {
         Light::Area(a) => {
             let pt = a.sample_point(u);
             let v = pt.y - x;
             let t2 = v.length_squared();
             if t2 <= 0.0 || pt.pdf_a <= 0.0 {
-                return (0.0, 0.0, DVec3::Z);
+                return (0.0, 0.0, DVec3::Z, true);
             }
             let t = t2.sqrt();
             let wi = v / t;
@@ -181,7 +210,7 @@ fn light_sample(
             let le = a.emitted(pt.y, -wi);
             let (r, _) = response(rec, frame, wi);
             if le <= 0.0 || r <= 0.0 || p_l <= 0.0 || !scene.visible(x, None, pt.y) {
-                return (0.0, p_l, wi);
+                return (0.0, p_l, wi, true);
             }
             (le * r, p_l, wi)
         }
@@ -189,7 +218,7 @@ fn light_sample(
             let to_c = *c - x;
             let dist = to_c.length();
             if dist <= *radius {
-                return (0.0, 0.0, DVec3::Z);
+                return (0.0, 0.0, DVec3::Z, true);
             }
             let (omega, cos_a) = cone(*radius, dist);
             let ct = 1.0 - u[0] * (1.0 - cos_a);
@@ -199,19 +228,20 @@ fn light_sample(
             let p_l = set.prob[k as usize] / omega;
             let (r, _) = response(rec, frame, wi);
             if r <= 0.0 {
-                return (0.0, p_l, wi);
+                return (0.0, p_l, wi, true);
             }
             let light = &scene.lights[k as usize];
             let Some(t) = light.hit(x, wi, f64::INFINITY) else {
-                return (0.0, p_l, wi); // grazing the rim: measure zero
+                return (0.0, p_l, wi, true); // grazing the rim: measure zero
             };
             if !scene.visible(x, None, x + wi * t) {
-                return (0.0, p_l, wi);
+                return (0.0, p_l, wi, true);
             }
             (light.luminance() * r, p_l, wi)
         }
         _ => (0.0, 0.0, DVec3::Z),
-    }
+    };
+    (f, p, wi, true)
 }
 
 /// The set's emitters along the ray from `x` in unit direction `wi`, each
@@ -261,8 +291,10 @@ pub fn sample(
     }
     let mut total = 0.0;
     if strategy != Strategy::Brdf {
-        let (f, p_l, wi) = light_sample(scene, set, rec, frame, rng);
-        if f > 0.0 && p_l > 0.0 {
+        let (f, p_l, wi, hittable) = light_sample(scene, set, rec, frame, rng);
+        if f > 0.0 && p_l > 0.0 && !hittable {
+            total += f / p_l;
+        } else if f > 0.0 && p_l > 0.0 {
             let p_b = response(rec, frame, wi).1;
             total += match strategy {
                 Strategy::Light => f / p_l,

@@ -154,12 +154,15 @@ pub fn direct_samples(bs: u64) -> u64 {
 
 /// Whether light `k`'s direct light is exact at every receiver (a closed
 /// form, occluded only by planes, which side masks decide): point sources
-/// always; a sphere in a scene of infinite planes alone; a uniform area
+/// always (a luminaire emitting from its opening never); a sphere in a scene of infinite planes alone; a uniform area
 /// source where the only other finite shapes are emitters in its own plane
 /// and it lies wholly on one side of (or in) every plane.
 pub fn exact_direct(scene: &Scene, k: usize) -> bool {
     let l = &scene.lights[k];
     match l {
+        Light::Gonio {
+            opening: Some(_), ..
+        } => false,
         Light::Point { .. } | Light::Gonio { .. } => true,
         Light::Sphere { .. } => scene.planes_only(),
         Light::Area(a) => {
@@ -373,7 +376,9 @@ impl Receivers {
         // and every non-point source at a receiver whose response varies.
         let non_point = |k: &usize| !scene.lights[*k].is_point_like();
         let sets_of = [
-            (0..scene.lights.len()).filter(|&k| !exact[k]).collect::<Vec<_>>(),
+            (0..scene.lights.len())
+                .filter(|&k| !exact[k])
+                .collect::<Vec<_>>(),
             (0..scene.lights.len()).filter(non_point).collect(),
         ];
         let direct_sets: Vec<direct::LightSet> = sets_of
@@ -383,7 +388,11 @@ impl Receivers {
         let direct_set = receivers
             .iter()
             .map(|rec| {
-                let s = if rec.constant_weight().is_some() { 0 } else { 1 };
+                let s = if rec.constant_weight().is_some() {
+                    0
+                } else {
+                    1
+                };
                 (!direct_sets[s].is_empty()).then_some(s as u8)
             })
             .collect();
@@ -563,7 +572,14 @@ impl Receivers {
             for s in 0..samples {
                 let stream = (b * samples + s) * n + j as u64;
                 let mut rng = crate::sampling::Philox4x32::new(seed ^ DIRECT_KEY, stream);
-                sum += direct::sample(scene, set, rec, &self.frames[j], self.direct_strategy, &mut rng);
+                sum += direct::sample(
+                    scene,
+                    set,
+                    rec,
+                    &self.frames[j],
+                    self.direct_strategy,
+                    &mut rng,
+                );
             }
             out[j] += sum / samples as f64 * bs as f64;
         }

@@ -249,13 +249,8 @@ impl AreaLight {
     pub fn extent_along(&self, p: DVec3, m: DVec3) -> (f64, f64) {
         match &self.shape {
             AreaShape::Rect { corner, e1, e2 } => {
-                let ds = [
-                    *corner,
-                    *corner + *e1,
-                    *corner + *e2,
-                    *corner + *e1 + *e2,
-                ]
-                .map(|c| (c - p).dot(m));
+                let ds = [*corner, *corner + *e1, *corner + *e2, *corner + *e1 + *e2]
+                    .map(|c| (c - p).dot(m));
                 (
                     ds.iter().copied().fold(f64::INFINITY, f64::min),
                     ds.iter().copied().fold(f64::NEG_INFINITY, f64::max),
@@ -308,7 +303,11 @@ mod tests {
             }
             let sides = if two { 2.0 } else { 1.0 };
             let flux = sides * l.l0 * l.area() * hemi;
-            assert!((l.power() / flux - 1.0).abs() < 1e-5, "{} vs {flux}", l.power());
+            assert!(
+                (l.power() / flux - 1.0).abs() < 1e-5,
+                "{} vs {flux}",
+                l.power()
+            );
         }
         // The emitting normal faces e1 x e2 (here -z: downwards).
         assert!((rect(false).normal() - DVec3::new(0.0, 0.0, -1.0)).length() < 1e-15);

@@ -19,8 +19,8 @@ pub mod radial_profile;
 
 use crate::math::quadrature::panel;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
-use glam::DVec3;
 pub use area::{AreaLight, AreaShape};
+use glam::DVec3;
 pub use goniometric::Goniometric;
 use std::f64::consts::PI;
 
@@ -38,9 +38,75 @@ pub enum Light {
         p: DVec3,
         frame: LuminaireFrame,
         dist: std::sync::Arc<Goniometric>,
+        /// Emit from the luminous opening rather than from the point `p`.
+        opening: Option<LuminousOpening>,
     },
     /// Lambertian area source (also an opaque surface of the scene).
     Area(std::sync::Arc<AreaLight>),
+}
+
+/// The luminous opening of a goniometric luminaire, for near-field
+/// emission: a rectangle `length x width` [m] (length along the C0 axis,
+/// width along C90, as LM-63 and EULUMDAT give them) or a disc of diameter
+/// `width`, centred on the luminaire's position in the plane normal to its
+/// nadir. Every element `dA` of it emits `I(w) dA / A` towards `w`: the
+/// far field is the file's distribution, and near the luminaire the light
+/// comes from the whole opening (the classic rule says the point
+/// approximation is about 1 % off at five times the opening's size). The
+/// height of luminous sides is not modelled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LuminousOpening {
+    /// Half the length along the local `x` (C0) axis [m], or the radius of a disc.
+    pub half_x: f64,
+    /// Half the width along the local `y` (C90) axis [m] (a disc: the radius).
+    pub half_y: f64,
+    /// A disc of radius `half_x`.
+    pub round: bool,
+}
+
+impl LuminousOpening {
+    /// The opening of a photometric file; `None` when it gives none (zero
+    /// width or, for a rectangle, zero length).
+    pub fn of(o: &crate::io::photometry::Opening) -> Option<Self> {
+        let (w, l) = (o.width.abs(), o.length.abs());
+        if o.round {
+            (w > 0.0 && w.is_finite()).then_some(Self {
+                half_x: w / 2.0,
+                half_y: w / 2.0,
+                round: true,
+            })
+        } else {
+            (w > 0.0 && l > 0.0 && w.is_finite() && l.is_finite()).then_some(Self {
+                half_x: l / 2.0,
+                half_y: w / 2.0,
+                round: false,
+            })
+        }
+    }
+
+    /// Area [m^2].
+    pub fn area(&self) -> f64 {
+        if self.round {
+            PI * self.half_x * self.half_x
+        } else {
+            4.0 * self.half_x * self.half_y
+        }
+    }
+
+    /// A point of the opening, uniform by area, in the luminaire's local
+    /// `(x, y)` coordinates [m].
+    pub fn sample(&self, u: [f64; 2]) -> (f64, f64) {
+        if self.round {
+            let r = self.half_x * u[0].sqrt();
+            let (s, c) = crate::sampling::warp::sin_cos_turns(u[1]);
+            (r * c, r * s)
+        } else {
+            (
+                self.half_x * (2.0 * u[0] - 1.0),
+                self.half_y * (2.0 * u[1] - 1.0),
+            )
+        }
+    }
 }
 
 /// A luminaire's orientation: the world directions of its local axes
@@ -145,7 +211,40 @@ impl Light {
     /// Whether the light is a point (its direct light is exact at every
     /// visible receiver).
     pub fn is_point_like(&self) -> bool {
-        matches!(self, Light::Point { .. } | Light::Gonio { .. })
+        matches!(
+            self,
+            Light::Point { .. } | Light::Gonio { opening: None, .. }
+        )
+    }
+
+    /// Whether the light is a goniometric luminaire emitting from its
+    /// luminous opening.
+    pub fn emits_from_opening(&self) -> bool {
+        matches!(
+            self,
+            Light::Gonio {
+                opening: Some(_),
+                ..
+            }
+        )
+    }
+
+    /// A point of a goniometric light's luminous opening [m] (uniform by
+    /// area, density `1 / A`) and the opening's area [m^2]; `None` for every
+    /// other light.
+    pub fn opening_point(&self, u: [f64; 2]) -> Option<(DVec3, f64)> {
+        match self {
+            Light::Gonio {
+                p,
+                frame,
+                opening: Some(o),
+                ..
+            } => {
+                let (a, b) = o.sample(u);
+                Some((*p + frame.x * a + frame.y * b, o.area()))
+            }
+            _ => None,
+        }
     }
 
     /// Intensity [cd] of a point-like light towards unit world direction
@@ -184,16 +283,41 @@ impl Light {
     /// Sample an emitted ray: `u_dir` for the direction, `u_pos` for the
     /// point on a sphere's surface (uniform by area; direction cosine-weighted
     /// about the outward normal, which is the Lambertian emission exactly)
-    /// or on an area source ([`AreaLight::sample_emission`]).
+    /// or on an area source ([`AreaLight::sample_emission`]). `u_extra` is
+    /// the within-cell uniform of a goniometric table: `u_pos[0]` may serve
+    /// for a point luminaire (which has no position to draw), a luminaire
+    /// emitting from its opening needs its own ([`Self::emits_from_opening`]).
     #[inline]
-    pub fn sample_emission(&self, u_dir: [f64; 2], u_pos: [f64; 2]) -> EmissionSample {
+    pub fn sample_emission(
+        &self,
+        u_dir: [f64; 2],
+        u_pos: [f64; 2],
+        u_extra: f64,
+    ) -> EmissionSample {
         match *self {
             Light::Area(ref a) => a.sample_emission(u_dir, u_pos),
             Light::Gonio {
                 p,
                 ref frame,
                 ref dist,
-            } => match dist.sample(u_dir, u_pos[0]) {
+                opening,
+            } => match dist.sample(u_dir, u_extra) {
+                // From the luminous opening: the point uniform on it, `le`
+                // the intensity per area.
+                Some(s) if opening.is_some() => {
+                    let (o, area) = self.opening_point(u_pos).expect("an opening");
+                    EmissionSample {
+                        o,
+                        d: frame.to_world(s.d),
+                        le: s.i / area,
+                        cos: 1.0,
+                        pdf_pos: 1.0 / area,
+                        pdf_dir: s.pdf,
+                        delta_pos: false,
+                        delta_dir: false,
+                        phi: s.i / s.pdf,
+                    }
+                }
                 Some(s) => EmissionSample {
                     o: p,
                     d: frame.to_world(s.d),
@@ -314,6 +438,10 @@ impl Light {
     pub fn direct_illuminance(&self, x: DVec3, n: DVec3) -> f64 {
         match *self {
             Light::Area(ref a) => a.direct_exact(x, n).unwrap_or(f64::NAN),
+            // Emission from an opening has no closed form: sampled.
+            Light::Gonio {
+                opening: Some(_), ..
+            } => f64::NAN,
             Light::Point { p, .. } | Light::Gonio { p, .. } => {
                 let d = p - x;
                 let d2 = d.length_squared();
@@ -345,7 +473,10 @@ impl Light {
     /// a general response: NaN (callers sample it).
     pub fn direct_weighted(&self, x: DVec3, n: DVec3, w: &dyn Fn(DVec3) -> f64) -> f64 {
         match *self {
-            Light::Area(_) => f64::NAN,
+            Light::Area(_)
+            | Light::Gonio {
+                opening: Some(_), ..
+            } => f64::NAN,
             Light::Point { p, .. } | Light::Gonio { p, .. } => {
                 let wi = (p - x).normalize();
                 self.direct_illuminance(x, n) * w(wi)
@@ -530,7 +661,7 @@ mod tests {
         for l in lights {
             for k in 0..64 {
                 let u = [(k as f64 + 0.5) / 64.0, (k * 29 % 64) as f64 / 64.0 + 0.01];
-                let e = l.sample_emission(u, [u[1], u[0]]);
+                let e = l.sample_emission(u, [u[1], u[0]], u[1]);
                 let w = e.le * e.cos / (e.pdf_pos * e.pdf_dir);
                 assert!((w / e.phi - 1.0).abs() < 1e-12, "{l:?}: {w} vs {}", e.phi);
                 assert!((e.phi / l.power() - 1.0).abs() < 1e-12);
@@ -549,7 +680,7 @@ mod tests {
         };
         for k in 0..100 {
             let u = [(k as f64 + 0.5) / 100.0, (k * 37 % 100) as f64 / 100.0];
-            let e = s.sample_emission(u, [u[1], u[0]]);
+            let e = s.sample_emission(u, [u[1], u[0]], u[1]);
             let m = (e.o - DVec3::new(1.0, 2.0, 3.0)) / 0.5;
             assert!((m.length() - 1.0).abs() < 1e-12 && e.d.dot(m) >= 0.0);
             assert_eq!(e.phi, s.power());

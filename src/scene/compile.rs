@@ -535,6 +535,7 @@ fn light(
         ("aim", d.aim.as_ref().map(Spanned::span)),
         ("rotate", d.rotate.as_ref().map(Spanned::span)),
         ("multiplier", d.multiplier.as_ref().map(Spanned::span)),
+        ("opening", d.opening.as_ref().map(Spanned::span)),
     ];
     not_for(kind, &gonio_only)?;
     let i = match (&d.intensity, &d.flux) {
@@ -640,6 +641,7 @@ fn area(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String
         ("aim", d.aim.as_ref().map(Spanned::span)),
         ("rotate", d.rotate.as_ref().map(Spanned::span)),
         ("multiplier", d.multiplier.as_ref().map(Spanned::span)),
+        ("opening", d.opening.as_ref().map(Spanned::span)),
     ];
     let by_shape = if rect {
         [
@@ -658,11 +660,7 @@ fn area(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String
     };
     for (name, span) in foreign.into_iter().chain(by_shape) {
         if let Some(span) = span {
-            return Err(ctx.invalid(
-                span,
-                name,
-                format!("not allowed for a `{kind}` light"),
-            ));
+            return Err(ctx.invalid(span, name, format!("not allowed for a `{kind}` light")));
         }
     }
     let vec = |v: &Option<Spanned<[f64; 3]>>, field: &str| {
@@ -751,8 +749,14 @@ fn area(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String
     };
     if !(light.power().is_finite() && light.l0 <= 1e250) {
         return Err(ctx.invalid(
-            d.luminance.as_ref().map_or_else(|| f_span(d, l), Spanned::span),
-            if d.luminance.is_some() { "luminance" } else { "flux" },
+            d.luminance
+                .as_ref()
+                .map_or_else(|| f_span(d, l), Spanned::span),
+            if d.luminance.is_some() {
+                "luminance"
+            } else {
+                "flux"
+            },
             "too large: the flux must stay finite (luminance at most 1e250 cd/m^2)",
         ));
     }
@@ -854,11 +858,39 @@ fn goniometric(
         dist.power(),
         dist.max_intensity()
     );
+    let opening = match &d.opening {
+        Some(o) if *o.get_ref() => Some(
+            crate::light::LuminousOpening::of(&photometry.opening).ok_or_else(|| {
+                ctx.invalid(
+                    o.span(),
+                    "opening",
+                    format!(
+                        "`{}` gives no luminous opening (its width and length are zero): it can only be a point",
+                        fs.get_ref()
+                    ),
+                )
+            })?,
+        ),
+        _ => None,
+    };
+    let note = match &opening {
+        Some(o) if o.round => format!(
+            "{note}; emitting from its opening, a disc of diameter {} m",
+            2.0 * o.half_x
+        ),
+        Some(o) => format!(
+            "{note}; emitting from its opening, {} m (C0) x {} m (C90)",
+            2.0 * o.half_x,
+            2.0 * o.half_y
+        ),
+        None => note,
+    };
     Ok((
         Light::Gonio {
             p,
             frame: LuminaireFrame::aimed(aim, rotate),
             dist: std::sync::Arc::new(dist),
+            opening,
         },
         Some(note),
     ))

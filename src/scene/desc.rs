@@ -138,6 +138,10 @@ pub struct LightDesc {
     pub rotate: Option<Spanned<f64>>,
     /// Factor on a goniometric luminaire's candela values; default 1.
     pub multiplier: Option<Spanned<f64>>,
+    /// Emit a goniometric luminaire's light from the luminous opening its
+    /// file gives (near-field accuracy) instead of from its position alone;
+    /// default false.
+    pub opening: Option<Spanned<bool>>,
     /// Corner of a rectangle source [m].
     pub corner: Option<Spanned<[f64; 3]>>,
     /// First edge of a rectangle source [m].

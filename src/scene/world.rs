@@ -133,6 +133,9 @@ pub struct SceneSummary {
     pub sphere_lights: usize,
     /// Number of goniometric luminaires (IES, LDT).
     pub goniometric_lights: usize,
+    /// Number of area sources (their emitting surfaces are counted with
+    /// the rectangles and discs).
+    pub area_lights: usize,
     /// Whether an acceleration structure (BVH) was built.
     pub bvh: bool,
     /// Whether the spherical-harmonic machinery was built.
@@ -155,11 +158,14 @@ impl std::fmt::Display for SceneSummary {
             .filter(|k| k.0 > 0)
             .map(|k| format!("{} {}", k.0, k.1))
             .collect();
-        let gonio = if self.goniometric_lights > 0 {
+        let mut gonio = if self.goniometric_lights > 0 {
             format!(", {} goniometric luminaire(s)", self.goniometric_lights)
         } else {
             String::new()
         };
+        if self.area_lights > 0 {
+            gonio.push_str(&format!(", {} area source(s)", self.area_lights));
+        }
         write!(
             f,
             "{}, {} point light(s), {} sphere light(s){gonio}, BVH: {}, SH: {}",
@@ -370,7 +376,11 @@ impl Scene {
         let mut emitter_of = vec![None; specs.len()];
         for (k, l) in lights.iter_mut().enumerate() {
             if let Light::Area(a) = l {
-                let sides = if a.two_sided { Sides::Both } else { Sides::Front };
+                let sides = if a.two_sided {
+                    Sides::Both
+                } else {
+                    Sides::Front
+                };
                 let name = format!("emitter of light #{}", k + 1);
                 specs.push(match a.shape {
                     crate::light::AreaShape::Rect { corner, e1, e2 } => {
@@ -383,7 +393,12 @@ impl Scene {
                         normal,
                         radius,
                         ..
-                    } => SurfaceSpec::Disc(name, Disc::new(center, normal, radius), sides, a.material),
+                    } => SurfaceSpec::Disc(
+                        name,
+                        Disc::new(center, normal, radius),
+                        sides,
+                        a.material,
+                    ),
                 });
                 emitter_of.push(Some(k as u32));
                 std::sync::Arc::make_mut(a).surface = u32::MAX;
@@ -530,6 +545,7 @@ impl Scene {
             point_lights: count(|l| matches!(l, Light::Point { .. })),
             goniometric_lights: count(|l| matches!(l, Light::Gonio { .. })),
             sphere_lights: count(|l| matches!(l, Light::Sphere { .. })),
+            area_lights: count(|l| matches!(l, Light::Area(_))),
             bvh: !self.meshes.is_empty(),
             sh: !self.shs.is_empty(),
         }
