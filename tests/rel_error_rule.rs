@@ -55,6 +55,7 @@ impl BatchWork for Skewed {
             collisions: 0,
             scores: 0,
             near_hits: Vec::new(),
+            direct_sums: Vec::new(),
         }
     }
 }

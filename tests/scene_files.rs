@@ -134,17 +134,21 @@ faces = {{ z_min = {{ type = "lambertian", reflectance = 0.1 }} }}
         let e = parse(&text).unwrap_err();
         assert!(e.contains(at) && e.contains(what), "{body}: {e}");
     }
-    // Sphere lights need the exact horizon cut of planes-only scenes.
-    let e = parse(
+    // Sphere lights are allowed among finite shapes (their partial
+    // occlusion is sampled); one that cuts a plane is still refused.
+    parse(
         "[[surface]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 5\nsides = \"inside\"\n\
          material = { type = \"lambertian\", reflectance = 0.5 }\n\
          [[light]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 0.1\nintensity = 1\n",
     )
+    .unwrap();
+    let e = parse(
+        "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+         material = { type = \"lambertian\", reflectance = 0.5 }\n\
+         [[light]]\ntype = \"sphere\"\ncenter = [0, 0, 0.05]\nradius = 0.1\nintensity = 1\n",
+    )
     .unwrap_err();
-    assert!(
-        e.contains("test.toml:8") && e.contains("point light"),
-        "{e}"
-    );
+    assert!(e.contains("radius") && e.contains("cuts plane"), "{e}");
 }
 
 #[test]

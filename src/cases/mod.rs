@@ -8,6 +8,7 @@ pub mod box_room;
 pub mod case;
 pub mod flux_balance;
 pub mod integrating_sphere;
+pub mod luminaires;
 pub mod plate;
 pub mod report;
 pub mod sobolev;

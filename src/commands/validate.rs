@@ -2,6 +2,7 @@
 
 use crate::cases::box_room::{BoxArgs, validate_box};
 use crate::cases::integrating_sphere::{SphereArgs, validate_sphere};
+use crate::cases::luminaires::{LuminairesArgs, validate_luminaires};
 use crate::cases::plate::{PlateArgs, validate_plate};
 use crate::cases::sobolev::{ValidateSobolevArgs, validate_sobolev};
 use crate::cases::stress::{StressArgs, validate_stress};
@@ -23,6 +24,9 @@ pub enum ValidateCase {
     BoxFlux(BoxArgs),
     /// Stress matrix: extreme reflectances, distances, scales; points touching walls and sources.
     Stress(StressArgs),
+    /// Every light kind against references: closed forms, sampled direct light (error against
+    /// time), flux balance in a black box, and the variance of the direct-light strategies.
+    Luminaires(LuminairesArgs),
 }
 
 /// Run a validation case.
@@ -33,5 +37,6 @@ pub fn validate(case: &ValidateCase) -> anyhow::Result<()> {
         ValidateCase::Plate(a) => validate_plate(a),
         ValidateCase::BoxFlux(a) => validate_box(a),
         ValidateCase::Stress(a) => validate_stress(a),
+        ValidateCase::Luminaires(a) => validate_luminaires(a),
     }
 }

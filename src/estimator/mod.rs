@@ -351,7 +351,7 @@ impl Receivers {
                         ),
                     });
                 }
-                if !exact[k] || (!l.is_point_like() && rec.constant_weight().is_none()) {
+                if !exact[k] || (matches!(l, Light::Area(_)) && rec.constant_weight().is_none()) {
                     continue; // sampled, see below
                 }
                 // What `exact` admits lies wholly on one side of every plane
