@@ -15,7 +15,7 @@
 //! cap unless `max_order` is set, which truncates (biases) on purpose for
 //! order-resolved studies.
 
-use crate::geometry::Ray;
+use crate::geometry::{Hit, Ray};
 use crate::sampling::Philox4x32;
 use crate::sampling::warp::Frame;
 use crate::scene::Scene;
@@ -104,7 +104,8 @@ pub fn trace_ex<F: FnMut(&Collision)>(
     u_first: [[f64; 2]; 2],
     mut on_collision: F,
 ) -> (u32, ChainEnd) {
-    let light = scene.pick_light(rng.next_f64());
+    let k_light = scene.pick_light_index(rng.next_f64());
+    let light = &scene.lights[k_light];
     let u_pos = rng.next_2d();
     let u_extra = if light.emits_from_opening() {
         rng.next_f64()
@@ -125,10 +126,25 @@ pub fn trace_ex<F: FnMut(&Collision)>(
     // an observer's, it meets no flat surface through its origin.
     let mut from_emitter =
         matches!(light, crate::light::Light::Area(_)) || light.emits_from_opening();
+    // A point light on a surface stands on its reflecting side
+    // ([`Scene::light_surface`]): a ray into the surface meets it at once.
+    let mut on_surface = scene.light_surface(k_light);
     while q > 0.0 {
         let next = if from_emitter {
             from_emitter = false;
             scene.first_hit_from(ray.o, ray.d)
+        } else if let Some((s, n)) = on_surface.take() {
+            if ray.d.dot(n) < 0.0 {
+                Some(Hit {
+                    t: 0.0,
+                    p: ray.o,
+                    n,
+                    surface: s,
+                    prim: 0,
+                })
+            } else {
+                scene.intersect(&ray, Some((s, 0)))
+            }
         } else {
             scene.intersect(&ray, skip)
         };

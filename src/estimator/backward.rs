@@ -576,11 +576,12 @@ fn next_event(
     let from = Some((h.surface, h.prim));
     let total = scene.total_power();
     let (mut nee, mut p_b) = (0.0, 0.0);
-    for l in &scene.lights {
+    for (k, l) in scene.lights.iter().enumerate() {
         // Whether the light's centre sees `h`: the photons of strategy B
         // leave from there, and a point source is lit through it.
         let center_seen = || {
             scene.side_mask(l.position()).sees(hm)
+                && !scene.behind_light_surface(k, h.p)
                 && (scene.planes_only() || !scene.blocked_by_shapes(h.p, from, l.position(), 0))
         };
         if let Light::Gonio { frame, dist, .. } = l
@@ -686,7 +687,8 @@ fn connect(
     rng: &mut Philox4x32,
     transfer: impl Fn(DVec3) -> (f64, f64),
 ) -> f64 {
-    let light = scene.pick_light(rng.next_f64());
+    let k = scene.pick_light_index(rng.next_f64());
+    let light = &scene.lights[k];
     // Isotropic from points and spheres; a goniometric light's photons
     // follow its emission (so that p_B stays positive where it emits).
     let dir = match light {
@@ -697,7 +699,14 @@ fn connect(
         o: light.position(),
         d: dir,
     };
-    let Some(y) = scene.intersect(&ray, None) else {
+    // A light on a surface: photons into it meet it at the light (no
+    // vertex of a path lies there), the others leave it.
+    let leave = match scene.light_surface(k) {
+        Some((_, n)) if dir.dot(n) < 0.0 => return 0.0,
+        Some((s, _)) => Some((s, 0)),
+        None => None,
+    };
+    let Some(y) = scene.intersect(&ray, leave) else {
         return 0.0;
     };
     if dir.dot(y.n) >= 0.0 {

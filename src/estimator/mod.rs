@@ -358,6 +358,7 @@ impl Receivers {
                 // (or in it) and nothing else can hide it, so its centre
                 // decides its visibility.
                 let seen = scene.side_mask(l.position()).sees(masks[j])
+                    && !scene.behind_light_surface(k, p)
                     && (scene.planes_only() || !scene.blocked_by_shapes(l.position(), None, p, 0));
                 if seen {
                     direct[j] += match (rec.response, l) {

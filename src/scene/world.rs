@@ -229,6 +229,9 @@ pub struct Scene {
     light_cdf: Vec<f64>,
     /// Total emitted flux [lm].
     total_power: f64,
+    /// Per light: the surface a point-like light lies on, if any, and the
+    /// unit normal of the side it belongs to (see [`Scene::light_surface`]).
+    light_surface: Vec<Option<(u32, DVec3)>>,
 }
 
 /// Why [`Scene::build`] refused its input.
@@ -369,6 +372,7 @@ impl Scene {
             notes: Vec::new(),
             light_cdf: Vec::new(),
             total_power: 0.0,
+            light_surface: Vec::new(),
         };
         // An area source's emitting surface joins the scene's shapes.
         let mut lights = lights;
@@ -498,6 +502,16 @@ impl Scene {
         if let Some(last) = light_cdf.last_mut() {
             *last = 1.0;
         }
+        self.light_surface = lights
+            .iter()
+            .map(|l| {
+                if l.is_point_like() {
+                    self.surface_at(l.position())
+                } else {
+                    None
+                }
+            })
+            .collect();
         self.lights = lights;
         self.light_cdf = light_cdf;
         self.total_power = total_power;
@@ -506,6 +520,74 @@ impl Scene {
     /// The infinite planes (in side-mask bit order).
     pub fn planes(&self) -> &[Plane] {
         &self.planes
+    }
+
+    /// The surface that point `p` lies on (within the shapes' on-surface
+    /// tolerance; flat shapes, spheres and boxes), with the unit normal of
+    /// its reflecting side (the geometric normal when both sides reflect).
+    fn surface_at(&self, p: DVec3) -> Option<(u32, DVec3)> {
+        let side = |s: u32, ng: DVec3| {
+            let n = match self.surfaces[s as usize].sides {
+                Sides::Back => -ng,
+                Sides::Front | Sides::Both => ng,
+            };
+            (s, n)
+        };
+        for (i, pl) in self.planes.iter().enumerate() {
+            if pl.side(p) == 0 {
+                return Some(side(self.plane_surface[i], pl.n));
+            }
+        }
+        for (r, s) in &self.rects {
+            if r.plane.side(p) == 0 && r.contains_planar(p) {
+                return Some(side(*s, r.plane.n));
+            }
+        }
+        for (d, s) in &self.discs {
+            if d.plane.side(p) == 0 && d.contains_planar(p) {
+                return Some(side(*s, d.plane.n));
+            }
+        }
+        for (sp, s) in &self.spheres {
+            if sp.classify(p) == Inside::On {
+                return Some(side(*s, (p - sp.c).normalize()));
+            }
+        }
+        for (b, s0) in &self.boxes {
+            if b.classify(p) == Inside::On
+                && let Some(f) = (0..6).find(|&f| b.face_plane(f).side(p) == 0)
+            {
+                return Some(side(s0 + f as u32, AaBox::outward_normal(f)));
+            }
+        }
+        None
+    }
+
+    /// The surface point-like light `k` lies on, if any, and the unit
+    /// normal of the side the light belongs to. **Rule**: a light exactly on
+    /// a surface belongs to its reflecting side (the geometric normal's side
+    /// when both reflect), as if it stood just in front of it: light it
+    /// emits into the surface meets the surface at once, at the light's
+    /// position, and points behind the surface do not see it. The answer is
+    /// thus continuous as the light approaches the surface from that side.
+    pub fn light_surface(&self, k: usize) -> Option<(u32, DVec3)> {
+        self.light_surface.get(k).copied().flatten()
+    }
+
+    /// Whether `x` lies behind the surface that point-like light `k`
+    /// stands on (see [`Self::light_surface`]): the light cannot reach it.
+    #[inline]
+    pub fn behind_light_surface(&self, k: usize, x: DVec3) -> bool {
+        self.light_surface(k)
+            .is_some_and(|(_, n)| n.dot(x - self.lights[k].position()) < 0.0)
+    }
+
+    /// Index of a light picked with probability proportional to its power.
+    #[inline]
+    pub fn pick_light_index(&self, u: f64) -> usize {
+        self.light_cdf
+            .partition_point(|&c| c <= u)
+            .min(self.lights.len() - 1)
     }
 
     /// Total emitted flux [lm].
@@ -554,11 +636,7 @@ impl Scene {
     /// Pick a light with probability proportional to its power.
     #[inline]
     pub fn pick_light(&self, u: f64) -> &Light {
-        let k = self
-            .light_cdf
-            .partition_point(|&c| c <= u)
-            .min(self.lights.len() - 1);
-        &self.lights[k]
+        &self.lights[self.pick_light_index(u)]
     }
 
     /// The plane a flat surface lies in, with its normal turned to the
