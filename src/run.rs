@@ -246,6 +246,8 @@ pub struct Checks {
     /// Whether the receiver has a near part whose reach is counted
     /// ([`crate::tally::Diagnostics::near_reach`]).
     pub near_reach: Vec<bool>,
+    /// Whether the receiver is enclosed (flag `enclosed`; empty: none is).
+    pub enclosed: Vec<bool>,
 }
 
 /// A source of independent batches: a work item that turns a batch index
@@ -273,6 +275,7 @@ pub trait BatchWork: Sync {
             watched: vec![false; self.len()],
             near_plain: vec![false; self.len()],
             near_reach: vec![false; self.len()],
+            enclosed: Vec::new(),
         }
     }
     /// Default batch size for an optional chain count; must not depend on
@@ -448,6 +451,7 @@ fn drive_batches(
     tallies.watched = checks.watched;
     tallies.near_plain = checks.near_plain;
     tallies.near_reach = checks.near_reach;
+    tallies.enclosed = checks.enclosed;
     let direct = work.direct().to_vec();
     let mut result = RunResult {
         direct: Vec::new(),

@@ -208,6 +208,11 @@ pub fn summary(r: &RunResult) -> String {
              whatever the error bar says (local estimate far from the sources: use \
              --near-radius auto, the default)";
         }
+        if counts.contains_key("enclosed") {
+            sparse += "; `enclosed`: those points see the back of a surface in most directions \
+             (inside a solid, behind a wall, outside a closed room): check their position and \
+             normal; they are left out of the grid figures";
+        }
         if counts.contains_key("near") {
             sparse += "; `near`: a surface lies closer to those points than a tenth of their \
              distance to the nearest light while the near/far split is off there, so the \
@@ -215,9 +220,7 @@ pub fn summary(r: &RunResult) -> String {
              --near-radius auto, the default)";
         }
         format!(
-            "statistical checks FAILED for some receivers ({}); see the _flag column \
-             (points close to a lit surface: --near-radius auto, the default, or a larger \
-             radius){sparse}",
+            "statistical checks FAILED or points flagged ({}); see the _flag column{sparse}",
             list.join(", ")
         )
     };
@@ -239,6 +242,10 @@ pub fn summary(r: &RunResult) -> String {
         max,
         if rms > 0.0 && r.wall > 0.0 {
             format!("{:.4e} 1/s", figure_of_merit(rms, r.wall))
+        } else if (0..r.direct.len()).all(|j| r.direct[j] + r.tallies.estimated[j].mean() == 0.0) {
+            "undefined\nWARNING: no light reaches any point (a light sealed inside a solid, \
+             points behind walls, or lights facing away): every result is 0"
+                .to_string()
         } else {
             "undefined (zero error: every estimate is exact)".to_string()
         },
@@ -532,22 +539,41 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
     if n == 0 {
         return None;
     }
-    let e: Vec<f64> = (0..n)
-        .map(|j| r.direct[j] + r.tallies.estimated[j].mean())
+    // Enclosed points (inside a solid, behind a wall) are left out of the
+    // figures, and said so.
+    let kept: Vec<usize> = (0..n)
+        .filter(|&j| !r.tallies.enclosed.get(j).copied().unwrap_or(false))
+        .collect();
+    let left_out = n - kept.len();
+    let note = if left_out > 0 {
+        format!(
+            " ({left_out} of {n} point(s) left out: flagged `enclosed`, they see the back of a surface in most directions)"
+        )
+    } else {
+        String::new()
+    };
+    if kept.is_empty() {
+        return Some(format!("points: no figures: every point is enclosed{note}"));
+    }
+    let m = kept.len() as f64;
+    let e: Vec<f64> = kept
+        .iter()
+        .map(|&j| r.direct[j] + r.tallies.estimated[j].mean())
         .collect();
     // Batch means of the average are the average of the batch means, so its
     // error is that of the per-point errors combined with their correlation;
     // bounded above by the mean of the per-point errors (full correlation).
-    let avg = e.iter().sum::<f64>() / n as f64;
-    let se_bound = (0..n)
-        .map(|j| r.tallies.estimated[j].std_error())
+    let avg = e.iter().sum::<f64>() / m;
+    let se_bound = kept
+        .iter()
+        .map(|&j| r.tallies.estimated[j].std_error())
         .sum::<f64>()
-        / n as f64;
+        / m;
     let min = e.iter().copied().fold(f64::INFINITY, f64::min);
     let max = e.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     Some(format!(
         "points: E_avg {avg:.4} lx (std error <= {se_bound:.2e}), E_min {min:.4} lx, E_max {max:.4} lx, \
-         uniformity U0 = E_min/E_avg = {}",
+         uniformity U0 = E_min/E_avg = {}{note}",
         if avg > 0.0 {
             format!("{:.3}", min / avg)
         } else {

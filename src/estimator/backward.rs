@@ -118,6 +118,9 @@ impl BatchWork for BackwardWork<'_> {
             watched: vec![watched; self.len()],
             near_plain: vec![false; self.len()],
             near_reach: vec![false; self.len()],
+            enclosed: (0..self.len())
+                .map(|j| self.receivers.enclosed(j))
+                .collect(),
         }
     }
 

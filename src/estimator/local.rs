@@ -100,6 +100,7 @@ impl BatchWork for LocalWork<'_> {
             watched: (0..n).map(|j| self.receivers.watched(j)).collect(),
             near_plain: (0..n).map(|j| self.receivers.near_plain(j)).collect(),
             near_reach: (0..n).map(|j| self.near_reach(j)).collect(),
+            enclosed: (0..n).map(|j| self.receivers.enclosed(j)).collect(),
         }
     }
     /// Chains per batch when not given: about 2^20 receiver scores per

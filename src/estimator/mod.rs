@@ -291,6 +291,8 @@ pub struct Receivers {
     /// Radius [m] of each receiver's neighbourhood that holds almost all of
     /// its view (0: none, or not an illuminance point).
     view_r: Vec<f64>,
+    /// Per receiver: whether it is enclosed ([`view_probe`]).
+    enclosed: Vec<bool>,
     /// Per receiver: the near/far radius [m] it needs, a tenth of its
     /// distance to the nearest light where a surface lies closer than that
     /// (0: none needed); see [`near_need`].
@@ -456,14 +458,14 @@ impl Receivers {
             offset += list.idx.len();
             lists.push(list);
         }
-        let view_r = receivers
+        let (view_r, enclosed): (Vec<f64>, Vec<bool>) = receivers
             .iter()
             .zip(&frames)
             .map(|(rec, frame)| match rec.response {
-                Response::Illuminance => view_radius(scene, rec.p, frame),
-                Response::Luminance { .. } => 0.0,
+                Response::Illuminance => view_probe(scene, rec.p, frame),
+                Response::Luminance { .. } => (0.0, false),
             })
-            .collect();
+            .unzip();
         let need_r = receivers
             .iter()
             .zip(&frames)
@@ -473,6 +475,7 @@ impl Receivers {
             near_paths: 0,
             near_r: vec![0.0; receivers.len()],
             view_r,
+            enclosed,
             need_r,
             all: receivers.to_vec(),
             frames,
@@ -503,6 +506,14 @@ impl Receivers {
     /// of [`crate::tally::Diagnostics`] applies to it).
     pub fn watched(&self, j: usize) -> bool {
         self.view_r[j] > self.near_r[j]
+    }
+
+    /// Whether illuminance point `j` is enclosed: it sees the back of a
+    /// surface in most directions (inside a solid, behind a wall, outside a
+    /// closed room); see [`view_probe`]. Its `E` is almost surely not what
+    /// was meant, and it is flagged `enclosed`.
+    pub fn enclosed(&self, j: usize) -> bool {
+        self.enclosed[j]
     }
 
     /// Radius [m] of receiver `j`'s watched neighbourhood (0: none); see
@@ -863,20 +874,34 @@ pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame) -> f64 {
 /// (`a^2 / (a^2 + h^2)`). The local estimate of the light from there rests
 /// on the collisions that land there, which [`Receivers::score`] counts.
 pub fn view_radius(scene: &Scene, p: DVec3, frame: &Frame) -> f64 {
+    view_probe(scene, p, frame).0
+}
+
+/// The probe of [`view_radius`], which also tells whether the point is
+/// *enclosed*: more than half of its 16 probe rays meet the back (black)
+/// side of a surface, as from inside a solid, behind a wall or outside a
+/// closed room. Returns `(radius, enclosed)`.
+pub fn view_probe(scene: &Scene, p: DVec3, frame: &Frame) -> (f64, bool) {
     const PROBES: usize = 16;
+    let mut back = 0;
     let mut t: Vec<f64> = (0..PROBES)
         .map(|k| {
             let d = probe_direction(k, PROBES, frame);
-            scene.first_hit_from(p, d).map_or(f64::INFINITY, |h| h.t)
+            let h = scene.first_hit_from(p, d);
+            if h.as_ref().is_some_and(|h| d.dot(h.n) >= 0.0) {
+                back += 1;
+            }
+            h.map_or(f64::INFINITY, |h| h.t)
         })
         .collect();
     t.sort_by(f64::total_cmp);
     let median = 0.5 * (t[PROBES / 2 - 1] + t[PROBES / 2]);
-    if median.is_finite() {
+    let radius = if median.is_finite() {
         10.0 * median
     } else {
         0.0
-    }
+    };
+    (radius, back > PROBES / 2)
 }
 
 /// Probe direction `k` of `count` over the hemisphere of `frame`'s normal:

@@ -153,6 +153,13 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
         .zip(notes)
         .filter_map(|(name, note)| note.map(|n| format!("{name}: {n}")))
         .collect();
+    for (k, name) in names.iter().enumerate() {
+        if scene.sealed(k) {
+            scene.notes.push(format!(
+                "WARNING: {name} is sealed inside a solid: most rays from it meet the back of a surface, so its light hardly reaches a point in front of one"
+            ));
+        }
+    }
     Ok(scene.with_light_names(names))
 }
 

@@ -582,6 +582,46 @@ impl Scene {
             .is_some_and(|(_, n)| n.dot(x - self.lights[k].position()) < 0.0)
     }
 
+    /// Whether light `k` is sealed: strictly inside a box or sphere that
+    /// reflects outward, or at least 28 of 32 probe rays from its
+    /// position (a Fibonacci sphere) meet the back side of a surface, as
+    /// inside a closed solid (not all: a solid standing on a floor shares
+    /// its bottom face's plane with the floor's front); its light then
+    /// hardly reaches a point in front of any surface. Area sources are
+    /// never probed (they emit from their own surface).
+    pub fn sealed(&self, k: usize) -> bool {
+        const PROBES: usize = 32;
+        let l = &self.lights[k];
+        if matches!(l, Light::Area(_)) {
+            return false;
+        }
+        let p = l.position();
+        // Strictly inside a closed box or sphere that reflects outward.
+        let outward = |s: u32| self.surfaces[s as usize].sides == Sides::Front;
+        if self
+            .spheres
+            .iter()
+            .any(|(sp, s)| outward(*s) && sp.classify(p) == Inside::In)
+            || self
+                .boxes
+                .iter()
+                .any(|(b, s)| outward(*s) && b.classify(p) == Inside::In)
+        {
+            return true;
+        }
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        let back = (0..PROBES)
+            .filter(|&i| {
+                let z = 1.0 - 2.0 * (i as f64 + 0.5) / PROBES as f64;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let (sp, cp) = (golden * i as f64).sin_cos();
+                let d = DVec3::new(r * cp, r * sp, z);
+                self.first_hit_from(p, d).is_some_and(|h| d.dot(h.n) >= 0.0)
+            })
+            .count();
+        back >= PROBES * 7 / 8
+    }
+
     /// Index of a light picked with probability proportional to its power.
     #[inline]
     pub fn pick_light_index(&self, u: f64) -> usize {

@@ -304,6 +304,9 @@ pub struct Diagnostics {
     /// The `near` check: a surface much closer than the nearest light,
     /// on the plain local estimate.
     pub near: bool,
+    /// The point sees the back of a surface in most directions (inside a
+    /// solid, behind a wall, outside a closed room).
+    pub enclosed: bool,
 }
 
 impl Diagnostics {
@@ -325,6 +328,7 @@ impl Diagnostics {
             near_reach: None,
             indirect_zero: w.mean() == 0.0,
             near: false,
+            enclosed: false,
         }
     }
 
@@ -354,6 +358,9 @@ impl Diagnostics {
         }
         if self.near {
             f.push("near");
+        }
+        if self.enclosed {
+            f.push("enclosed");
         }
         if f.is_empty() {
             "ok".to_string()

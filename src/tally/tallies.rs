@@ -27,6 +27,8 @@ pub struct Tallies {
     pub near_plain: Vec<bool>,
     /// Per receiver: whether its near part's reach is counted.
     pub near_reach: Vec<bool>,
+    /// Per receiver: whether it is enclosed (flag `enclosed`; empty: none).
+    pub enclosed: Vec<bool>,
     /// Per receiver: the near part's exposed and reached path vertices over
     /// the run (see [`crate::tally::Diagnostics::near_reach`]).
     pub near_vertices: Vec<[u64; 2]>,
@@ -62,6 +64,7 @@ impl Tallies {
             watched: vec![false; n],
             near_plain: vec![false; n],
             near_reach: vec![false; n],
+            enclosed: Vec::new(),
             near_vertices: vec![[0; 2]; n],
         }
     }
@@ -143,6 +146,7 @@ impl Tallies {
             .unwrap_or(false)
             .then(|| self.near_hits[j]);
         d.near = self.near_plain.get(j).copied().unwrap_or(false);
+        d.enclosed = self.enclosed.get(j).copied().unwrap_or(false);
         d.near_reach = (self.near_reach.get(j).copied().unwrap_or(false)
             && self.near_vertices[j][0] > 0)
             .then(|| self.near_vertices[j][1]);

@@ -1,0 +1,97 @@
+//! Points inside a solid, behind a wall or outside a closed room are
+//! flagged `enclosed` and left out of the grid figures; a light sealed
+//! inside a solid is warned about.
+
+mod common;
+
+use glam::DVec3;
+use lumest::commands::illuminance::grid_summary;
+use lumest::estimator::Receivers;
+use lumest::estimator::local::run;
+use lumest::scene::parse;
+use std::path::Path;
+
+const ROOM: &str = r#"
+[[surface]]
+name = "room"
+type = "box"
+min = [0.0, 0.0, 0.0]
+max = [4.0, 3.0, 3.0]
+normals = "inward"
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+name = "desk"
+type = "box"
+min = [1.0, 1.0, 0.0]
+max = [2.0, 2.0, 0.75]
+normals = "outward"
+material = { type = "lambertian", reflectance = 0.6 }
+"#;
+
+#[test]
+fn points_in_solids_behind_walls_and_outside_the_room_are_flagged_and_left_out() {
+    let scene = parse(
+        &format!(
+            "{ROOM}[[light]]\ntype = \"point\"\nposition = [3.0, 1.5, 2.5]\nintensity = 200.0\n"
+        ),
+        Path::new("room.toml"),
+    )
+    .unwrap();
+    assert!(scene.notes.is_empty(), "{:?}", scene.notes);
+    let points = [
+        (DVec3::new(3.0, 0.5, 0.0), DVec3::Z),  // on the floor: fine
+        (DVec3::new(1.5, 1.5, 0.75), DVec3::Z), // on the desk top: fine
+        (DVec3::new(0.5, 2.5, 1.0), DVec3::X),  // facing into the room from a wall: fine
+        (DVec3::new(1.5, 1.5, 0.4), DVec3::Z),  // inside the desk
+        (DVec3::new(2.0, 1.5, 3.5), -DVec3::Z), // above the ceiling, facing it
+        (DVec3::new(5.0, 1.5, 1.0), -DVec3::X), // outside the room, facing its wall
+    ];
+    let rec = Receivers::new(&scene, &points).unwrap();
+    let enclosed: Vec<bool> = (0..points.len()).map(|j| rec.enclosed(j)).collect();
+    assert_eq!(enclosed, [false, false, false, true, true, true]);
+    let r = run(&scene, &rec, &common::chains_cfg(20_000, 1, 2), &mut |_| {
+        true
+    });
+    for j in 0..points.len() {
+        let flag = r.tallies.diagnostics(j, r.direct[j]).flag();
+        assert_eq!(flag.contains("enclosed"), enclosed[j], "point {j}: {flag}");
+    }
+    // The figures use the three good points only, and say so.
+    let line = grid_summary(&r, points.len()).unwrap();
+    assert!(line.contains("3 of 6 point(s) left out"), "{line}");
+    let e: Vec<f64> = (0..3)
+        .map(|j| r.direct[j] + r.tallies.estimated[j].mean())
+        .collect();
+    let min = e.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(min > 0.0);
+    assert!(line.contains(&format!("E_min {min:.4} lx")), "{line}");
+}
+
+#[test]
+fn a_light_sealed_inside_a_solid_is_warned_about() {
+    let sealed = parse(
+        &format!(
+            "{ROOM}[[light]]\ntype = \"point\"\nposition = [1.5, 1.5, 0.4]\nintensity = 200.0\n"
+        ),
+        Path::new("room.toml"),
+    )
+    .unwrap();
+    assert!(sealed.sealed(0));
+    assert!(
+        sealed
+            .notes
+            .iter()
+            .any(|n| n.contains("WARNING") && n.contains("sealed")),
+        "{:?}",
+        sealed.notes
+    );
+    let free = parse(
+        &format!(
+            "{ROOM}[[light]]\ntype = \"point\"\nposition = [1.5, 1.5, 0.9]\nintensity = 200.0\n"
+        ),
+        Path::new("room.toml"),
+    )
+    .unwrap();
+    assert!(!free.sealed(0));
+}
