@@ -434,7 +434,75 @@ fn overflowing_light_power_is_a_clear_error() {
     )
     .unwrap_err();
     assert!(
-        e.contains("test.toml:9") && e.contains("intensity") && e.contains("too large"),
+        e.contains("test.toml:9") && e.contains("intensity") && e.contains("out of range"),
         "{e}"
     );
+}
+
+#[test]
+fn extreme_intensities_and_coordinates_are_rejected_or_scale_exactly() {
+    let scene = |i: &str, z: &str| {
+        format!(
+            "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+             material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+             [[surface]]\ntype = \"plane\"\npoint = [0, 0, 1]\nnormal = [0, 0, -1]\n\
+             material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+             [[light]]\ntype = \"point\"\nposition = [0, 0, {z}]\nintensity = {i}\n"
+        )
+    };
+    // Out of range: a clear error naming the field, never NaN later.
+    for (i, z, field) in [
+        ("1e77", "0.5", "intensity"),
+        ("1e-70", "0.5", "intensity"),
+        ("1", "1e13", "position"),
+    ] {
+        let e = parse(&scene(i, z)).unwrap_err();
+        assert!(
+            e.contains(field) && (e.contains("range") || e.contains("within")),
+            "{e}"
+        );
+    }
+    // In range: the answer scales exactly with the intensity, with no NaN
+    // and the same flags.
+    let run = |i: &str| {
+        let s = lumest::scene::parse(&scene(i, "0.5"), std::path::Path::new("t.toml")).unwrap();
+        let pts = [
+            (glam::DVec3::new(0.3, 0.0, 0.0), glam::DVec3::Z),
+            (glam::DVec3::new(0.0, 0.0, 0.5 - 1e-6), glam::DVec3::Z),
+        ];
+        let rec = lumest::estimator::Receivers::new(&s, &pts).unwrap();
+        let cfg = lumest::run::RunConfig {
+            stop: lumest::run::Stop {
+                chains: Some(20_000),
+                ..Default::default()
+            },
+            threads: 1,
+            ..Default::default()
+        };
+        let r = lumest::estimator::local::run(&s, &rec, &cfg, &mut |_| true);
+        (0..2)
+            .map(|j| {
+                let w = &r.tallies.estimated[j];
+                let d = r.tallies.diagnostics(j, r.direct[j]);
+                (r.direct[j] + w.mean(), w.std_error(), d.vov, d.flag())
+            })
+            .collect::<Vec<_>>()
+    };
+    let (a, b, c) = (run("1"), run("1e59"), run("1e-59"));
+    for j in 0..2 {
+        for (x, k) in [(&b[j], 1e59), (&c[j], 1e-59)] {
+            assert!(
+                (x.0 / k / a[j].0 - 1.0).abs() < 1e-12,
+                "{x:?} vs {:?}",
+                a[j]
+            );
+            assert!((x.1 / k / a[j].1 - 1.0).abs() < 1e-9, "{x:?} vs {:?}", a[j]);
+            assert!(
+                x.2.is_finite() && (x.2 - a[j].2).abs() < 1e-6,
+                "{x:?} vs {:?}",
+                a[j]
+            );
+            assert_eq!(x.3, a[j].3);
+        }
+    }
 }

@@ -341,6 +341,15 @@ impl Receivers {
                     message: "position and unit normal must be finite".into(),
                 });
             }
+            if p.abs().max_element() > crate::scene::MAX_COORD {
+                return Err(ReceiverError {
+                    index: j,
+                    message: format!(
+                        "every coordinate must lie within +-{:e} m (lengths are squared, and scores taken to the fourth power)",
+                        crate::scene::MAX_COORD
+                    ),
+                });
+            }
             for (k, l) in scene.lights.iter().enumerate() {
                 if l.contains(p) {
                     let c = l.position();

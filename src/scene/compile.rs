@@ -3,7 +3,9 @@
 
 use super::SceneError;
 use super::desc::{LightDesc, MaterialDesc, SceneDesc, SurfaceDesc};
-use super::world::{MAX_PLANES, Scene, Sides, SurfaceSpec};
+use super::world::{
+    MAX_COORD, MAX_INTENSITY, MAX_PLANES, MIN_INTENSITY, Scene, Sides, SurfaceSpec,
+};
 use crate::geometry::Plane;
 use crate::geometry::mesh::Mesh;
 use crate::geometry::sh::{ShCoeff, ShSurface, read_coefficients};
@@ -68,15 +70,21 @@ impl SourceCtx<'_> {
 
     fn finite_vec(&self, v: &Spanned<[f64; 3]>, field: &str) -> Result<DVec3, SceneError> {
         let a = *v.get_ref();
-        if a.iter().all(|x| x.is_finite()) {
-            Ok(DVec3::from_array(a))
-        } else {
-            Err(self.invalid(
+        if !a.iter().all(|x| x.is_finite()) {
+            return Err(self.invalid(
                 v.span(),
                 field,
                 format!("every component must be finite, got {a:?}"),
-            ))
+            ));
         }
+        if a.iter().any(|x| x.abs() > MAX_COORD) {
+            return Err(self.invalid(
+                v.span(),
+                field,
+                format!("every component must lie within +-{MAX_COORD:e} m, got {a:?}"),
+            ));
+        }
+        Ok(DVec3::from_array(a))
     }
 
     fn unit_vec(&self, v: &Spanned<[f64; 3]>, field: &str) -> Result<DVec3, SceneError> {
@@ -563,9 +571,7 @@ fn light(
             ));
         }
     };
-    // Flux and sums of fluxes must stay finite (1e300 cd would overflow them).
-    const MAX_INTENSITY: f64 = 1e250;
-    if i > MAX_INTENSITY {
+    if i > MAX_INTENSITY || (i > 0.0 && i < MIN_INTENSITY) {
         let sp = d.intensity.as_ref().map_or_else(
             || d.flux.as_ref().map_or(l.span(), Spanned::span),
             Spanned::span,
@@ -577,7 +583,10 @@ fn light(
             } else {
                 "flux"
             },
-            format!("too large: at most {MAX_INTENSITY:e} cd (or 4 pi times that in lm)"),
+            format!(
+                "out of range: 0 or between {MIN_INTENSITY:e} and {MAX_INTENSITY:e} cd (4 pi times that in lm); \
+                 results scale exactly with intensity, so rescale the input"
+            ),
         ));
     }
     match d.kind.get_ref().as_str() {
@@ -754,7 +763,10 @@ fn area(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String
             ));
         }
     };
-    if !(light.power().is_finite() && light.l0 <= 1e250) {
+    if !(light.power().is_finite()
+        && light.l0 <= MAX_INTENSITY
+        && (light.l0 == 0.0 || light.l0 >= MIN_INTENSITY))
+    {
         return Err(ctx.invalid(
             d.luminance
                 .as_ref()
@@ -764,7 +776,9 @@ fn area(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String
             } else {
                 "flux"
             },
-            "too large: the flux must stay finite (luminance at most 1e250 cd/m^2)",
+            format!(
+                "out of range: the luminance must be 0 or between {MIN_INTENSITY:e} and {MAX_INTENSITY:e} cd/m^2"
+            ),
         ));
     }
     Ok((Light::Area(std::sync::Arc::new(light)), None))
@@ -850,8 +864,15 @@ fn goniometric(
         (None, None) => 1.0,
     };
     let dist = Goniometric::new(&photometry, scale);
-    if !(dist.power().is_finite() && dist.max_intensity() <= 1e250) {
-        return Err(ctx.invalid(fs.span(), "file", "intensities too large: at most 1e250 cd"));
+    if !(dist.power().is_finite()
+        && dist.max_intensity() <= MAX_INTENSITY
+        && (dist.max_intensity() == 0.0 || dist.max_intensity() >= MIN_INTENSITY))
+    {
+        return Err(ctx.invalid(
+            fs.span(),
+            "file",
+            format!("intensities out of range: the largest must be 0 or between {MIN_INTENSITY:e} and {MAX_INTENSITY:e} cd"),
+        ));
     }
     let lamps = photometry.lamp_lumens.map_or_else(
         || "absolute photometry".to_string(),

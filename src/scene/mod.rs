@@ -10,7 +10,8 @@ pub mod desc;
 pub mod world;
 
 pub use world::{
-    BuildError, MAX_PLANES, Scene, SceneSummary, ShapeRef, Sides, Surface, SurfaceSpec,
+    BuildError, MAX_COORD, MAX_INTENSITY, MAX_PLANES, MIN_INTENSITY, Scene, SceneSummary, ShapeRef,
+    Sides, Surface, SurfaceSpec,
 };
 
 use std::path::{Path, PathBuf};

@@ -21,6 +21,19 @@ use crate::light::Light;
 use crate::material::Material;
 use glam::DVec3;
 
+/// Largest accepted coordinate magnitude [m]: squares of lengths and of
+/// scores (the variance of the variance takes fourth powers) stay finite.
+pub const MAX_COORD: f64 = 1e12;
+
+/// Largest accepted intensity [cd] (or luminance [cd/m^2]): results scale
+/// exactly with it, and beyond it the fourth powers of scores in the
+/// variance of the variance would overflow.
+pub const MAX_INTENSITY: f64 = 1e60;
+
+/// Smallest accepted non-zero intensity [cd] (or luminance [cd/m^2]):
+/// below it scores would underflow.
+pub const MIN_INTENSITY: f64 = 1e-60;
+
 /// Relative tolerance within which an emitter's hit wins a tie with a
 /// coplanar surface ([`Scene::first_hit_from`], [`Scene::intersect`]).
 const EMITTER_TIE: f64 = 1e-9;
@@ -346,9 +359,9 @@ impl Scene {
                     pos.x, pos.y, pos.z
                 )));
             }
-            if !(i.is_finite() && i >= 0.0 && l.power().is_finite()) {
+            if !(i.is_finite() && (0.0..=MAX_INTENSITY).contains(&i) && l.power().is_finite()) {
                 return Err(bad(format!(
-                    "intensity must be finite and >= 0 [cd] with a finite flux, got {i:e}"
+                    "intensity must lie in [0, {MAX_INTENSITY:e}] [cd], got {i:e}"
                 )));
             }
         }

@@ -343,7 +343,8 @@ impl Diagnostics {
         if self.rel_err.is_nan() || self.rel_err > 0.1 {
             f.push("R");
         }
-        if self.vov > vov_limit(self.batches) {
+        // NaN or infinite statistics are failures, never `ok`.
+        if !(self.vov <= vov_limit(self.batches)) {
             f.push("VOV");
         }
         if self.fom_ratio.is_some_and(|r| !(0.5..=2.0).contains(&r)) {
