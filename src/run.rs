@@ -65,6 +65,9 @@ pub struct Stop {
     /// points, met by a pilot and a fixed count of fresh batches (see the
     /// module docs).
     pub rel_error: Option<f64>,
+    /// Time limit [s] of a `rel_error` run given no `time`; `None`:
+    /// [`DEFAULT_REL_ERROR_CAP`].
+    pub rel_error_cap: Option<f64>,
 }
 
 /// Fewest batches for a standard error (and for the `--rel-error` rule).
@@ -323,7 +326,17 @@ pub struct Pilot {
     pub rel_error: f64,
     /// Batches planned for the run proper.
     pub planned: u64,
+    /// Wall time the planned batches need at the pilot's pace [s]
+    /// (infinite when no plan could be made).
+    pub estimated_time: f64,
+    /// The time limit the run proper ran under when none was given
+    /// ([`DEFAULT_REL_ERROR_CAP`]); `None` with `--time`.
+    pub default_cap: Option<f64>,
 }
+
+/// Time limit [s] of a `--rel-error` run given no `--time`: an unreachable
+/// target stops here (with a message) rather than running forever.
+pub const DEFAULT_REL_ERROR_CAP: f64 = 3600.0;
 
 /// Chains per pilot batch for runs of `bs` chains per batch: an eighth
 /// (at least 256, or `bs` if that is smaller), so that the pilot costs four
@@ -414,7 +427,22 @@ pub fn drive(
     // R^2 falls like 1 / chains: rescale the pilot's error to batches of `bs`.
     let r_p = r_p * (pilot_bs as f64 / bs as f64).sqrt();
     let planned = planned_batches(pilot.tallies.batches(), r_p, target);
-    let mut result = drive_batches(work, cfg, bs, planned.min(by_chains), start, observe);
+    // The pilot's pace per chain gives the run proper's time; without a
+    // time limit the run proper stops at a default cap.
+    let per_chain = pilot.wall / pilot.chains.max(1) as f64;
+    let estimated_time = per_chain * planned as f64 * bs as f64;
+    let default_cap = stop
+        .time
+        .is_none()
+        .then_some(stop.rel_error_cap.unwrap_or(DEFAULT_REL_ERROR_CAP));
+    let capped = RunConfig {
+        stop: Stop {
+            time: stop.time.or(default_cap),
+            ..stop
+        },
+        ..cfg.clone()
+    };
+    let mut result = drive_batches(work, &capped, bs, planned.min(by_chains), start, observe);
     if result.reason == StopReason::Chains && planned <= by_chains {
         result.reason = StopReason::RelError;
     }
@@ -425,6 +453,8 @@ pub fn drive(
         wall: pilot.wall,
         rel_error: r_p,
         planned,
+        estimated_time,
+        default_cap,
     });
     result
 }

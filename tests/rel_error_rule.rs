@@ -161,3 +161,30 @@ fn first_prefix_rule_fails_the_same_judgement() {
         o.coverage
     );
 }
+
+/// An unreachable target without `--time` stops at the default time cap
+/// (here set to 0.3 s) instead of running forever, and the pilot says how
+/// long the target would take.
+#[test]
+fn an_unreachable_target_stops_at_the_time_cap() {
+    let cfg = RunConfig {
+        seed: 3,
+        threads: 1,
+        stop: Stop {
+            chains: None,
+            time: None,
+            rel_error: Some(1e-7),
+            rel_error_cap: Some(0.3),
+        },
+        ..RunConfig::default()
+    };
+    let t = std::time::Instant::now();
+    let r = drive(&Skewed, &cfg, &mut |_| true);
+    let wall = t.elapsed().as_secs_f64();
+    assert_eq!(r.reason, StopReason::Time);
+    assert!(wall < 5.0, "took {wall} s");
+    let p = r.pilot.expect("a pilot");
+    assert_eq!(p.default_cap, Some(0.3));
+    assert!(p.planned > 1_000_000_000 && p.estimated_time > 1e3, "{p:?}");
+    assert!(r.tallies.batches() >= 32);
+}

@@ -265,6 +265,17 @@ pub fn summary(r: &RunResult) -> String {
             p.planned,
             if max <= target {
                 " (target met)".to_string()
+            } else if r.reason == crate::run::StopReason::Time {
+                format!(
+                    " (target MISSED: stopped by {}; the {} planned batches need about {:.3e} s at \
+                     the pilot's pace; the estimate and its error bar are unbiased)",
+                    p.default_cap.map_or_else(
+                        || "--time".to_string(),
+                        |c| format!("the default time limit of {c:.0} s (no --time was given)")
+                    ),
+                    p.planned,
+                    p.estimated_time
+                )
             } else {
                 format!(
                     " (target MISSED by {:.1} %; the estimate and its error bar are still unbiased: \

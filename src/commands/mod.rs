@@ -79,6 +79,7 @@ impl RunArgs {
             chains: self.chains,
             time: self.time,
             rel_error: self.rel_error,
+            rel_error_cap: None,
         };
         if let Some(t) = stop.time {
             anyhow::ensure!(
