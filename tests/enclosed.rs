@@ -53,9 +53,9 @@ fn points_in_solids_behind_walls_and_outside_the_room_are_flagged_and_left_out()
     let r = run(&scene, &rec, &common::chains_cfg(20_000, 1, 2), &mut |_| {
         true
     });
-    for j in 0..points.len() {
+    for (j, &e) in enclosed.iter().enumerate() {
         let flag = r.tallies.diagnostics(j, r.direct[j]).flag();
-        assert_eq!(flag.contains("enclosed"), enclosed[j], "point {j}: {flag}");
+        assert_eq!(flag.contains("enclosed"), e, "point {j}: {flag}");
     }
     // The figures use the three good points only, and say so.
     let line = grid_summary(&r, points.len()).unwrap();

@@ -344,7 +344,7 @@ impl Diagnostics {
             f.push("R");
         }
         // NaN or infinite statistics are failures, never `ok`.
-        if !(self.vov <= vov_limit(self.batches)) {
+        if self.vov.is_nan() || self.vov > vov_limit(self.batches) {
             f.push("VOV");
         }
         if self.fom_ratio.is_some_and(|r| !(0.5..=2.0).contains(&r)) {
