@@ -198,6 +198,69 @@ pub struct RunResult {
     /// The `--rel-error` pilot, if the run had one (its batches are not in
     /// the tallies; its time is in `wall`).
     pub pilot: Option<Pilot>,
+    /// How a `--time` run sized its batches from a timing probe, if it did
+    /// (see [`time_batch_size`]).
+    pub time_sizing: Option<TimeSizing>,
+}
+
+/// The timing probe of a `--time` run: batches are sized so that at least
+/// [`MIN_BATCHES`] of them fit in the time limit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeSizing {
+    /// Chains per second measured by the probe (all threads).
+    pub rate: f64,
+    /// The batch size the work would use by default.
+    pub default_batch_size: u64,
+    /// The batch size chosen.
+    pub batch_size: u64,
+    /// Estimated time of [`MIN_BATCHES`] batches at the chosen size [s]:
+    /// above the time limit when even the smallest batches cannot fit.
+    pub minimum_time: f64,
+}
+
+/// Smallest batch a `--time` run shrinks to (batch means of fewer chains
+/// are too skewed for the checks).
+pub const MIN_TIMED_BATCH: u64 = 256;
+
+/// Seed offset of the timing probe's streams.
+const PROBE_KEY: u64 = 0x7072_6f62_6554_494d; // "probeTIM"
+
+/// Batch size for a run limited by `seconds` of wall time on `threads`
+/// threads: one probe batch of [`MIN_TIMED_BATCH`] chains (its own
+/// streams, not kept) measures the pace, and the default size `bs` is
+/// halved until [`MIN_BATCHES`] batches fit in 80 % of the time left,
+/// down to [`MIN_TIMED_BATCH`]. Timed runs depend on the machine anyway
+/// (their chain count does); runs with `--chains` or `--rel-error` never
+/// use this.
+pub fn time_batch_size(
+    work: &dyn BatchWork,
+    cfg: &RunConfig,
+    bs: u64,
+    seconds: f64,
+    threads: usize,
+    start: Instant,
+) -> TimeSizing {
+    let probe_cfg = RunConfig {
+        seed: cfg.seed ^ PROBE_KEY,
+        ..cfg.clone()
+    };
+    let probe = MIN_TIMED_BATCH.min(bs);
+    let mut scratch = vec![0.0; work.scratch_len(bucket_count(cfg.orders))];
+    let t = Instant::now();
+    work.run_batch(&probe_cfg, 0, probe, bucket_count(cfg.orders), &mut scratch);
+    let rate = probe as f64 / t.elapsed().as_secs_f64().max(1e-9) * threads.max(1) as f64;
+    let left = (seconds - start.elapsed().as_secs_f64()).max(0.0);
+    let mut chosen = bs;
+    while chosen > MIN_TIMED_BATCH && (MIN_BATCHES * chosen) as f64 / rate > 0.8 * left {
+        chosen /= 2;
+    }
+    let chosen = chosen.max(MIN_TIMED_BATCH.min(bs));
+    TimeSizing {
+        rate,
+        default_batch_size: bs,
+        batch_size: chosen,
+        minimum_time: (MIN_BATCHES * chosen) as f64 / rate,
+    }
 }
 
 impl RunResult {
@@ -390,6 +453,7 @@ fn no_light(direct: &[f64], cfg: &RunConfig) -> RunResult {
         threads: 0,
         reason: StopReason::NoLight,
         pilot: None,
+        time_sizing: None,
     }
 }
 
@@ -404,14 +468,31 @@ pub fn drive(
     }
     let start = Instant::now();
     let stop = cfg.stop;
-    let bs = cfg
+    let mut bs = cfg
         .batch_size
         .unwrap_or_else(|| work.default_batch_size(stop.chains))
         .max(1);
+    // A run limited by time alone sizes its batches so that the minimum of
+    // batches fits in the limit.
+    let mut time_sizing = None;
+    if let (Some(seconds), None, None, None) =
+        (stop.time, stop.chains, stop.rel_error, cfg.batch_size)
+    {
+        let threads = if cfg.threads == 0 {
+            std::thread::available_parallelism().map_or(1, |p| p.get())
+        } else {
+            cfg.threads
+        };
+        let sizing = time_batch_size(work, cfg, bs, seconds, threads, start);
+        bs = sizing.batch_size;
+        time_sizing = Some(sizing);
+    }
     // At least two batches, so that every standard error exists.
     let by_chains = stop.chains.map_or(u64::MAX, |c| c.div_ceil(bs).max(2));
     let Some(target) = stop.rel_error else {
-        return drive_batches(work, cfg, bs, by_chains, start, observe);
+        let mut r = drive_batches(work, cfg, bs, by_chains, start, observe);
+        r.time_sizing = time_sizing;
+        return r;
     };
     let pilot_cfg = RunConfig {
         seed: cfg.seed ^ PILOT_KEY,
@@ -494,6 +575,7 @@ fn drive_batches(
         threads,
         reason: StopReason::Chains,
         pilot: None,
+        time_sizing: None,
     };
     let next = AtomicU64::new(0);
     let halt = AtomicBool::new(false);

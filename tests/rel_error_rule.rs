@@ -188,3 +188,63 @@ fn an_unreachable_target_stops_at_the_time_cap() {
     assert!(p.planned > 1_000_000_000 && p.estimated_time > 1e3, "{p:?}");
     assert!(r.tallies.batches() >= 32);
 }
+
+/// Work whose chains cost 20 microseconds each, with a large default batch.
+struct Slow;
+
+impl BatchWork for Slow {
+    fn len(&self) -> usize {
+        1
+    }
+    fn direct(&self) -> &[f64] {
+        &[0.0]
+    }
+    fn emits(&self) -> bool {
+        true
+    }
+    fn scratch_len(&self, _buckets: usize) -> usize {
+        0
+    }
+    fn default_batch_size(&self, _chains: Option<u64>) -> u64 {
+        1 << 16
+    }
+    fn run_batch(&self, cfg: &RunConfig, b: u64, bs: u64, _k: usize, _s: &mut [f64]) -> Batch {
+        std::thread::sleep(std::time::Duration::from_micros(20 * bs));
+        Batch {
+            index: b,
+            chains: bs,
+            sums: vec![bs as f64 * lognormal(cfg.seed, b)],
+            collisions: 0,
+            scores: 0,
+            near_hits: Vec::new(),
+            direct_sums: Vec::new(),
+        }
+    }
+}
+
+/// `--time 1` on work whose 32 default batches take 42 s: the batches
+/// shrink so that the run ends near the limit, with at least 32 batches.
+#[test]
+fn a_short_time_limit_shrinks_the_batches_instead_of_overrunning() {
+    let cfg = RunConfig {
+        seed: 9,
+        threads: 2,
+        stop: Stop {
+            chains: None,
+            time: Some(1.0),
+            ..Stop::default()
+        },
+        ..RunConfig::default()
+    };
+    let t = std::time::Instant::now();
+    let r = drive(&Slow, &cfg, &mut |_| true);
+    let wall = t.elapsed().as_secs_f64();
+    let sizing = r.time_sizing.expect("sized by time");
+    assert!(
+        sizing.batch_size < 1 << 16 && sizing.batch_size >= 256,
+        "{sizing:?}"
+    );
+    assert!(r.tallies.batches() >= 32);
+    // Generous for a loaded machine; the old sizing took 42 s.
+    assert!(wall < 6.0, "took {wall} s");
+}

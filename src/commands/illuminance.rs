@@ -251,6 +251,26 @@ pub fn summary(r: &RunResult) -> String {
         },
     );
     let mut text = format!("{text}\n{flags}");
+    if let Some(t) = &r.time_sizing
+        && t.batch_size < t.default_batch_size
+    {
+        text += &format!(
+            "\n--time: batches of {} chains (default {}) so that {} batches fit at the measured {:.3e} chains/s{}",
+            t.batch_size,
+            t.default_batch_size,
+            crate::run::MIN_BATCHES,
+            t.rate,
+            if r.reason == crate::run::StopReason::Time {
+                String::new()
+            } else {
+                format!(
+                    "; even so the minimum of {} batches needs about {:.3} s",
+                    crate::run::MIN_BATCHES,
+                    t.minimum_time
+                )
+            }
+        );
+    }
     if let Some(p) = &r.pilot {
         let target = p.target;
         text += &format!(
