@@ -587,3 +587,47 @@ fn a_cosine_luminaire_emitting_from_its_opening_is_the_lambertian_panel() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn lights_alone_and_panels_in_a_plane_get_the_exact_direct_light() {
+    // A scene of the panel alone, and the panel set into the ceiling plane
+    // of two planes: nothing can hide it, so its direct light is exact (no
+    // sampling), and it equals the quadrature.
+    let points = [
+        (DVec3::new(0.0, 0.0, 0.0), DVec3::Z),
+        (DVec3::new(1.0, 0.3, 0.0), DVec3::Z),
+        (DVec3::new(2.0, -0.5, 1.5), DVec3::new(-0.6, 0.0, 0.8)),
+        (DVec3::new(0.0, 0.0, 2.9), DVec3::Z),
+        (DVec3::new(0.0, 0.0, 2.0), DVec3::new(1.0, 0.0, 0.0)), // edge-on: half the panel
+        (DVec3::new(0.5, 0.2, 3.5), -DVec3::Z),                 // behind it: nothing
+    ];
+    for src in [panel(3.0), format!("{FLOOR}{CEILING}{}", panel(3.0))] {
+        let s = scene(&src);
+        let rec = Receivers::new(&s, &points).unwrap();
+        assert!(!rec.has_sampled_direct(), "{src}");
+        for (j, &(x, n)) in points.iter().enumerate() {
+            let exact = if x.z > 3.0 {
+                0.0
+            } else {
+                panel_brute(x, n, 3.0, false, 1200)
+            };
+            let got = rec.direct()[j];
+            assert!(
+                (got - exact).abs() <= 1e-5 * exact.abs().max(1e-3),
+                "point {j}: {got} vs {exact}"
+            );
+        }
+        if !src.contains("floor") {
+            // Nothing reflects: the estimate is the exact part, with zero error.
+            let r = lumest::estimator::local::run(
+                &s,
+                &rec,
+                &common::chains_cfg(10_000, 1, 2),
+                &mut |_| true,
+            );
+            for j in 0..points.len() {
+                assert_eq!(r.tallies.estimated[j].mean(), 0.0);
+            }
+        }
+    }
+}
