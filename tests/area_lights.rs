@@ -631,3 +631,34 @@ fn lights_alone_and_panels_in_a_plane_get_the_exact_direct_light() {
         }
     }
 }
+
+#[test]
+fn disc_sources_with_every_radial_profile_against_quadrature() {
+    use lumest::cases::luminaires::{DISC_PROFILES, disc_case};
+    let dir = std::env::temp_dir().join(format!("lumest-discs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cfg = common::chains_cfg(60_000, 4, 2);
+    let cases: Vec<_> = (0..DISC_PROFILES.len())
+        .map(|k| disc_case(&dir, k).unwrap())
+        .collect();
+    let bound = sidak(cases.iter().map(|c| c.exact.len()).sum());
+    for (k, case) in cases.iter().enumerate() {
+        let rec = Receivers::from_receivers(&case.scene, &case.receivers).unwrap();
+        assert!(rec.has_sampled_direct());
+        let r = lumest::estimator::local::run(&case.scene, &rec, &cfg, &mut |_| true);
+        let mut resolved = false;
+        for (j, &e) in case.exact.iter().enumerate() {
+            let w = &r.tallies.estimated[j];
+            let est = r.direct[j] + w.mean();
+            let z = (est - e) / w.std_error();
+            assert!(
+                z.abs() < bound,
+                "profile {k} point {j}: {est} +- {} vs {e} (z = {z:.2})",
+                w.std_error()
+            );
+            resolved |= ((est - 1.02 * e) / w.std_error()).abs() > bound;
+        }
+        assert!(resolved, "profile {k}: no point resolves a 2 % error");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

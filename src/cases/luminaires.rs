@@ -488,8 +488,83 @@ pub fn validate_luminaires(a: &LuminairesArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The sampled-direct cases with their references.
+/// The radial profiles of the disc cases: scene value, reference name,
+/// turning radius or offset [m] (the disc's radius is 0.4 m), and the
+/// kinks of the profile for the reference's panels.
+pub const DISC_PROFILES: [(&str, &str, f64); 8] = [
+    ("\"uniform\"", "uniform", 0.0),
+    ("\"linear-decreasing\"", "linear-decreasing", 0.0),
+    ("\"linear-increasing\"", "linear-increasing", 0.0),
+    ("{ type = \"v\", turning = 0.15 }", "v", 0.15),
+    ("{ type = \"tent\", turning = 0.1 }", "tent", 0.1),
+    ("\"hyperbolic-decreasing\"", "hyperbolic-decreasing", 0.0),
+    ("\"hyperbolic-increasing\"", "hyperbolic-increasing", 0.04),
+    (
+        "{ type = \"hyperbolic-increasing\", offset = 0.02 }",
+        "hyperbolic-increasing",
+        0.02,
+    ),
+];
+
+/// A disc source of radius 0.4 m at height 2.5 m facing down, with profile
+/// `k` of [`DISC_PROFILES`] and a flux of 1000 lm, over a black floor with
+/// a far box (so that even the uniform disc is sampled): points on the
+/// axis, off it, beyond the rim, tilted and close below the disc, with
+/// their exact values by [`crate::reference::disc_profile`].
+pub fn disc_case(dir: &Path, k: usize) -> anyhow::Result<Case> {
+    use crate::reference::disc_profile::{disc_illuminance, profile_luminance};
+    let (value, name, t) = DISC_PROFILES[k];
+    let src = format!(
+        "{BLACK_FLOOR}{FAR_BOX}\n[[light]]\ntype = \"disc\"\ncenter = [0.0, 0.0, 2.5]\nnormal = [0.0, 0.0, -1.0]\nradius = 0.4\nflux = 1000.0\nprofile = {value}\n"
+    );
+    let scene = build(&src, dir)?;
+    let l0 = match &scene.lights[0] {
+        crate::light::Light::Area(a) => a.l0,
+        _ => anyhow::bail!("internal: not an area light"),
+    };
+    let pts = [
+        (DVec3::new(0.0, 0.0, 0.0), DVec3::Z),
+        (DVec3::new(0.0, 0.0, 2.3), DVec3::Z),
+        (DVec3::new(0.3, 0.1, 1.5), DVec3::Z),
+        (DVec3::new(1.5, -0.5, 0.0), DVec3::Z),
+        (
+            DVec3::new(0.6, 0.0, 2.2),
+            DVec3::new(-1.0, 0.0, 0.3).normalize(),
+        ),
+        (
+            DVec3::new(-0.2, 0.3, 2.0),
+            DVec3::new(0.0, 0.5, 1.0).normalize(),
+        ),
+    ];
+    let kinks = [t];
+    let l = |s: f64| l0 * profile_luminance(name, 0.4, t, s).unwrap_or(f64::NAN);
+    let exact = pts
+        .iter()
+        .map(|&(x, n)| {
+            disc_illuminance(DVec3::new(0.0, 0.0, 2.5), -DVec3::Z, 0.4, &l, &kinks, x, n)
+        })
+        .collect();
+    Ok(Case {
+        scene,
+        receivers: pts
+            .iter()
+            .map(|&(p, n)| Receiver::illuminance(p, n))
+            .collect(),
+        exact,
+    })
+}
+
+/// The sampled-direct cases with their references: the disc with each
+/// radial profile.
 fn cases(dir: &Path) -> anyhow::Result<Vec<(String, String, Case)>> {
-    let _ = (dir, FAR_BOX);
-    Ok(Vec::new())
+    (0..DISC_PROFILES.len())
+        .map(|k| {
+            let (value, ..) = DISC_PROFILES[k];
+            Ok((
+                format!("luminaires_disc_{k}"),
+                format!("Disc source, profile {value}: direct light against 2-D quadrature"),
+                disc_case(dir, k)?,
+            ))
+        })
+        .collect()
 }

@@ -4,6 +4,7 @@
 //! stays independent of the Monte Carlo code.
 
 pub mod closed_form;
+pub mod disc_profile;
 pub mod quadrature;
 pub mod sobolev;
 
