@@ -628,14 +628,14 @@ fn next_event(
         if guide && cos_l > 0.0 && center_seen() {
             p_b += match l {
                 // The photon's direction density towards `h`, per solid angle.
-                Light::Gonio { .. } => {
+                Light::Gonio { .. } | Light::Spot(_) => {
                     l.power() / total * l.photon_pdf(-to_c / dist) * cos_l / dist2
                 }
                 _ => l.power() / total * cos_l / (4.0 * PI * dist2),
             };
         }
         match *l {
-            Light::Point { .. } | Light::Gonio { .. } => {
+            Light::Point { .. } | Light::Gonio { .. } | Light::Spot(_) => {
                 if !center_seen() {
                     continue;
                 }
@@ -695,7 +695,7 @@ fn connect(
     // Isotropic from points and spheres; a goniometric light's photons
     // follow its emission (so that p_B stays positive where it emits).
     let dir = match light {
-        Light::Gonio { .. } => light.photon(rng.next_2d(), rng.next_f64()),
+        Light::Gonio { .. } | Light::Spot(_) => light.photon(rng.next_2d(), rng.next_f64()),
         _ => sample_uniform_sphere(rng.next_2d()).w,
     };
     let ray = Ray {

@@ -163,7 +163,7 @@ pub fn exact_direct(scene: &Scene, k: usize) -> bool {
         Light::Gonio {
             opening: Some(_), ..
         } => false,
-        Light::Point { .. } | Light::Gonio { .. } => true,
+        Light::Point { .. } | Light::Gonio { .. } | Light::Spot(_) => true,
         Light::Sphere { .. } => scene.planes_only(),
         Light::Area(a) => {
             if !a.is_uniform() {

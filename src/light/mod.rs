@@ -3,6 +3,7 @@
 //! The sources:
 //! - an isotropic **point** of intensity `I` [cd];
 //! - a **goniometric** point luminaire from a photometric file ([`Goniometric`]);
+//! - a **spot**: a point with a smooth falloff between two cones ([`Spot`]);
 //! - a Lambertian **area** source, rectangle or disc, opaque, with a uniform
 //!   or radial luminance profile ([`AreaLight`]);
 //! - a **sphere** of radius `R` [m] whose surface emits as a Lambertian
@@ -16,12 +17,14 @@ pub mod area;
 pub mod goniometric;
 pub mod lambert;
 pub mod radial_profile;
+pub mod spot;
 
 use crate::math::quadrature::panel;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
 pub use area::{AreaLight, AreaShape};
 use glam::DVec3;
 pub use goniometric::Goniometric;
+pub use spot::Spot;
 use std::f64::consts::PI;
 
 /// A light source (closed set).
@@ -43,6 +46,8 @@ pub enum Light {
     },
     /// Lambertian area source (also an opaque surface of the scene).
     Area(std::sync::Arc<AreaLight>),
+    /// Spot light.
+    Spot(Spot),
 }
 
 /// The luminous opening of a goniometric luminaire, for near-field
@@ -205,6 +210,7 @@ impl Light {
             Light::Point { i, .. } | Light::Sphere { i, .. } => 4.0 * PI * i,
             Light::Gonio { dist, .. } => dist.power(),
             Light::Area(a) => a.power(),
+            Light::Spot(sp) => sp.power(),
         }
     }
 
@@ -213,7 +219,7 @@ impl Light {
     pub fn is_point_like(&self) -> bool {
         matches!(
             self,
-            Light::Point { .. } | Light::Gonio { opening: None, .. }
+            Light::Point { .. } | Light::Gonio { opening: None, .. } | Light::Spot(_)
         )
     }
 
@@ -253,6 +259,7 @@ impl Light {
     pub fn intensity(&self, w: DVec3) -> f64 {
         match self {
             Light::Point { i, .. } => *i,
+            Light::Spot(sp) => sp.intensity(w),
             Light::Sphere { .. } | Light::Area(_) => 0.0,
             Light::Gonio { frame, dist, .. } => dist.intensity(frame.to_local(w)),
         }
@@ -265,6 +272,7 @@ impl Light {
     pub fn photon_pdf(&self, w: DVec3) -> f64 {
         match self {
             Light::Gonio { frame, dist, .. } => dist.pdf(frame.to_local(w)),
+            Light::Spot(sp) => sp.pdf(w),
             _ => crate::sampling::warp::uniform_sphere_pdf(),
         }
     }
@@ -276,6 +284,7 @@ impl Light {
             Light::Gonio { frame, dist, .. } => {
                 dist.sample(u, u2).map_or(DVec3::Z, |s| frame.to_world(s.d))
             }
+            Light::Spot(sp) => sp.sample(u, u2),
             _ => sample_uniform_sphere(u).w,
         }
     }
@@ -296,6 +305,23 @@ impl Light {
     ) -> EmissionSample {
         match *self {
             Light::Area(ref a) => a.sample_emission(u_dir, u_pos),
+            Light::Spot(ref sp) => {
+                let d = sp.sample(u_dir, u_extra);
+                let i = sp.intensity(d);
+                let pdf = sp.pdf(d);
+                EmissionSample {
+                    o: sp.p,
+                    d,
+                    le: i,
+                    cos: 1.0,
+                    pdf_pos: 1.0,
+                    pdf_dir: pdf,
+                    delta_pos: true,
+                    delta_dir: false,
+                    // Sampled in proportion to the intensity: exactly the power.
+                    phi: sp.power(),
+                }
+            }
             Light::Gonio {
                 p,
                 ref frame,
@@ -379,6 +405,7 @@ impl Light {
     pub fn position(&self) -> DVec3 {
         match *self {
             Light::Point { p, .. } | Light::Gonio { p, .. } => p,
+            Light::Spot(ref sp) => sp.p,
             Light::Sphere { c, .. } => c,
             Light::Area(ref a) => a.center(),
         }
@@ -389,7 +416,7 @@ impl Light {
     /// [`AreaLight::emitted`]).
     pub fn luminance(&self) -> f64 {
         match *self {
-            Light::Point { .. } | Light::Gonio { .. } | Light::Area(_) => 0.0,
+            Light::Point { .. } | Light::Gonio { .. } | Light::Area(_) | Light::Spot(_) => 0.0,
             Light::Sphere { r, i, .. } => i / (PI * r * r),
         }
     }
@@ -400,7 +427,7 @@ impl Light {
     pub fn contains(&self, x: DVec3) -> bool {
         match *self {
             Light::Area(_) => false,
-            Light::Point { p, .. } | Light::Gonio { p, .. } => {
+            Light::Point { p, .. } | Light::Gonio { p, .. } | Light::Spot(Spot { p, .. }) => {
                 (p - x).length() <= 1e-12 * p.abs().max_element().max(x.abs().max_element())
             }
             Light::Sphere { c, r, .. } => (c - x).length() <= r,
@@ -412,7 +439,7 @@ impl Light {
     /// area source (a surface of the scene, met by the scene's intersection).
     pub fn hit(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<f64> {
         match *self {
-            Light::Point { .. } | Light::Gonio { .. } | Light::Area(_) => None,
+            Light::Point { .. } | Light::Gonio { .. } | Light::Area(_) | Light::Spot(_) => None,
             Light::Sphere { c, r, .. } => {
                 let oc = o - c;
                 let b = oc.dot(d);
@@ -442,7 +469,7 @@ impl Light {
             Light::Gonio {
                 opening: Some(_), ..
             } => f64::NAN,
-            Light::Point { p, .. } | Light::Gonio { p, .. } => {
+            Light::Point { p, .. } | Light::Gonio { p, .. } | Light::Spot(Spot { p, .. }) => {
                 let d = p - x;
                 let d2 = d.length_squared();
                 let c = n.dot(d);
@@ -477,7 +504,7 @@ impl Light {
             | Light::Gonio {
                 opening: Some(_), ..
             } => f64::NAN,
-            Light::Point { p, .. } | Light::Gonio { p, .. } => {
+            Light::Point { p, .. } | Light::Gonio { p, .. } | Light::Spot(Spot { p, .. }) => {
                 let wi = (p - x).normalize();
                 self.direct_illuminance(x, n) * w(wi)
             }

@@ -531,6 +531,16 @@ fn light(
     if kind == "rectangle" || kind == "disc" {
         return area(l, ctx);
     }
+    if kind != "spot" {
+        not_for(
+            kind,
+            &[
+                ("direction", d.direction.as_ref().map(Spanned::span)),
+                ("inner", d.inner.as_ref().map(Spanned::span)),
+                ("outer", d.outer.as_ref().map(Spanned::span)),
+            ],
+        )?;
+    }
     let area_only = [
         ("corner", d.corner.as_ref().map(Spanned::span)),
         ("edge1", d.edge1.as_ref().map(Spanned::span)),
@@ -629,11 +639,46 @@ fn light(
             }
             Ok((Light::Sphere { c, r, i }, None))
         }
+        "spot" => {
+            not_for(
+                "spot",
+                &[
+                    ("center", d.center.as_ref().map(Spanned::span)),
+                    ("radius", d.radius.as_ref().map(Spanned::span)),
+                ],
+            )?;
+            let p = ctx.finite_vec(ctx.required(&d.position, l.span(), "position")?, "position")?;
+            let axis = ctx.unit_vec(ctx.required(&d.direction, l.span(), "direction")?, "direction")?;
+            let angle = |v: &Option<Spanned<f64>>, field: &str| -> Result<f64, SceneError> {
+                let a = ctx.required(v, l.span(), field)?;
+                let x = *a.get_ref();
+                if !(x.is_finite() && (0.0..=180.0).contains(&x)) {
+                    return Err(ctx.invalid(a.span(), field, format!("must lie in [0, 180] degrees, got {x}")));
+                }
+                Ok(x)
+            };
+            let (inner, outer) = (angle(&d.inner, "inner")?, angle(&d.outer, "outer")?);
+            if outer < inner || outer <= 0.0 {
+                let sp = d.outer.as_ref().map_or(l.span(), Spanned::span);
+                return Err(ctx.invalid(
+                    sp,
+                    "outer",
+                    format!("must be > 0 and >= `inner` ({inner} degrees), got {outer}"),
+                ));
+            }
+            // `i` above took a flux as isotropic: a spot's flux fills its cones.
+            let unit = crate::light::Spot::new(p, axis, inner.to_radians(), outer.to_radians(), 1.0);
+            let i0 = if d.flux.is_some() { i * 4.0 * PI / unit.power() } else { i };
+            Ok((
+                Light::Spot(crate::light::Spot { i0, ..unit }),
+                None,
+            ))
+        }
         other => Err(ctx.invalid(
             d.kind.span(),
             "type",
             format!(
-                "unknown light type `{other}` (this version knows: point, sphere, ies, ldt, rectangle, disc)"
+                "unknown light type `{other}` (this version knows: point, sphere, spot, ies, ldt, rectangle, disc)"
             ),
         )),
     }
@@ -658,6 +703,9 @@ fn area(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String
         ("rotate", d.rotate.as_ref().map(Spanned::span)),
         ("multiplier", d.multiplier.as_ref().map(Spanned::span)),
         ("opening", d.opening.as_ref().map(Spanned::span)),
+        ("direction", d.direction.as_ref().map(Spanned::span)),
+        ("inner", d.inner.as_ref().map(Spanned::span)),
+        ("outer", d.outer.as_ref().map(Spanned::span)),
     ];
     let by_shape = if rect {
         [

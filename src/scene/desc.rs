@@ -142,6 +142,12 @@ pub struct LightDesc {
     /// file gives (near-field accuracy) instead of from its position alone;
     /// default false.
     pub opening: Option<Spanned<bool>>,
+    /// Beam direction of a spot light (normalised; non-zero).
+    pub direction: Option<Spanned<[f64; 3]>>,
+    /// Inner cone half-angle of a spot light [deg]: full intensity inside.
+    pub inner: Option<Spanned<f64>>,
+    /// Outer cone half-angle of a spot light [deg]: nothing outside.
+    pub outer: Option<Spanned<f64>>,
     /// Corner of a rectangle source [m].
     pub corner: Option<Spanned<[f64; 3]>>,
     /// First edge of a rectangle source [m].

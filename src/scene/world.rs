@@ -146,6 +146,8 @@ pub struct SceneSummary {
     pub sphere_lights: usize,
     /// Number of goniometric luminaires (IES, LDT).
     pub goniometric_lights: usize,
+    /// Number of spot lights.
+    pub spot_lights: usize,
     /// Number of area sources (their emitting surfaces are counted with
     /// the rectangles and discs).
     pub area_lights: usize,
@@ -176,6 +178,9 @@ impl std::fmt::Display for SceneSummary {
         } else {
             String::new()
         };
+        if self.spot_lights > 0 {
+            gonio.push_str(&format!(", {} spot light(s)", self.spot_lights));
+        }
         if self.area_lights > 0 {
             gonio.push_str(&format!(", {} area source(s)", self.area_lights));
         }
@@ -309,6 +314,7 @@ impl Scene {
             let (pos, i) = match *l {
                 Light::Point { p, i } => (p, i),
                 Light::Gonio { p, .. } => (p, l.power() / (4.0 * std::f64::consts::PI)),
+                Light::Spot(sp) => (sp.p, sp.i0),
                 Light::Sphere { c, r, i } => {
                     if !(r.is_finite() && r > 0.0) {
                         return Err(bad(format!("radius must be finite and > 0 [m], got {r}")));
@@ -679,6 +685,7 @@ impl Scene {
             sh_objects: self.shs.len(),
             point_lights: count(|l| matches!(l, Light::Point { .. })),
             goniometric_lights: count(|l| matches!(l, Light::Gonio { .. })),
+            spot_lights: count(|l| matches!(l, Light::Spot(_))),
             sphere_lights: count(|l| matches!(l, Light::Sphere { .. })),
             area_lights: count(|l| matches!(l, Light::Area(_))),
             bvh: !self.meshes.is_empty(),
