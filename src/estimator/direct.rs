@@ -54,8 +54,8 @@ pub enum Strategy {
 pub struct LightSet {
     /// Indices into [`Scene::lights`].
     lights: Vec<u32>,
-    /// Cumulative pick probabilities.
-    cdf: Vec<f64>,
+    /// Alias table of the set's powers (`None`: nothing emits).
+    pick: Option<crate::sampling::alias::AliasTable>,
     /// Pick probability per scene light (0 outside the set).
     prob: Vec<f64>,
 }
@@ -68,22 +68,17 @@ impl LightSet {
             .map(|&k| scene.lights[k as usize].power())
             .sum();
         let mut prob = vec![0.0; scene.lights.len()];
-        let mut cdf = Vec::with_capacity(lights.len());
-        let mut acc = 0.0;
         for &k in &lights {
-            let p = if total > 0.0 {
-                scene.lights[k as usize].power() / total
-            } else {
-                0.0
-            };
-            prob[k as usize] = p;
-            acc += p;
-            cdf.push(acc);
+            if total > 0.0 {
+                prob[k as usize] = scene.lights[k as usize].power() / total;
+            }
         }
-        if let Some(last) = cdf.last_mut() {
-            *last = 1.0;
-        }
-        Self { lights, cdf, prob }
+        let powers: Vec<f64> = lights
+            .iter()
+            .map(|&k| scene.lights[k as usize].power())
+            .collect();
+        let pick = crate::sampling::alias::AliasTable::new(&powers);
+        Self { lights, pick, prob }
     }
 
     /// Whether the set holds no source that emits.
@@ -97,11 +92,7 @@ impl LightSet {
     }
 
     fn pick(&self, u: f64) -> u32 {
-        let i = self
-            .cdf
-            .partition_point(|&c| c <= u)
-            .min(self.lights.len() - 1);
-        self.lights[i]
+        self.lights[self.pick.as_ref().map_or(0, |t| t.sample(u))]
     }
 }
 

@@ -3,6 +3,7 @@
 //! Nothing here mentions lights or scenes: a warp takes explicit uniforms
 //! (so tests can drive it) and returns a named record with its pdf.
 
+pub mod alias;
 pub mod qmc;
 pub mod rng;
 pub mod warp;

@@ -243,8 +243,9 @@ pub struct Scene {
     /// What compiling the scene found worth telling the user (for example
     /// a luminaire table's flux against its file's lamp lumens).
     pub notes: Vec<String>,
-    /// Cumulative power fractions for picking a light (last entry 1).
-    light_cdf: Vec<f64>,
+    /// Alias table of the lights' powers, for picking the emitting light
+    /// in O(1); `None` when nothing emits.
+    light_pick: Option<crate::sampling::alias::AliasTable>,
     /// Total emitted flux [lm].
     total_power: f64,
     /// Per light: the surface a point-like light lies on, if any, and the
@@ -389,7 +390,7 @@ impl Scene {
             lights: Vec::new(),
             light_names: Vec::new(),
             notes: Vec::new(),
-            light_cdf: Vec::new(),
+            light_pick: None,
             total_power: 0.0,
             light_surface: Vec::new(),
         };
@@ -506,21 +507,8 @@ impl Scene {
 
     fn set_lights(&mut self, lights: Vec<Light>) {
         let total_power: f64 = lights.iter().map(Light::power).sum();
-        let mut acc = 0.0;
-        let mut light_cdf: Vec<f64> = lights
-            .iter()
-            .map(|l| {
-                acc += l.power();
-                if total_power > 0.0 {
-                    acc / total_power
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        if let Some(last) = light_cdf.last_mut() {
-            *last = 1.0;
-        }
+        let powers: Vec<f64> = lights.iter().map(Light::power).collect();
+        let light_pick = crate::sampling::alias::AliasTable::new(&powers);
         self.light_surface = lights
             .iter()
             .map(|l| {
@@ -532,7 +520,7 @@ impl Scene {
             })
             .collect();
         self.lights = lights;
-        self.light_cdf = light_cdf;
+        self.light_pick = light_pick;
         self.total_power = total_power;
     }
 
@@ -641,12 +629,12 @@ impl Scene {
         back >= PROBES * 7 / 8
     }
 
-    /// Index of a light picked with probability proportional to its power.
+    /// Index of a light picked with probability proportional to its power
+    /// (an alias table: O(1)); light 0 when nothing emits (no chain is
+    /// traced then).
     #[inline]
     pub fn pick_light_index(&self, u: f64) -> usize {
-        self.light_cdf
-            .partition_point(|&c| c <= u)
-            .min(self.lights.len() - 1)
+        self.light_pick.as_ref().map_or(0, |t| t.sample(u))
     }
 
     /// Total emitted flux [lm].
