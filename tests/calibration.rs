@@ -366,8 +366,12 @@ fn office_error_bars_are_calibrated() {
     // The office example and every fourth point of its work-plane grid (17
     // points: desk tops and edges, the partition, the column 0.5 m from the
     // glossy whiteboard).
+    // The office as it was with six point lights (tests/data/office_points.toml).
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data");
-    let scene = lumest::scene::load(&dir.join("office.toml")).unwrap();
+    let scene = lumest::scene::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/office_points.toml"),
+    )
+    .unwrap();
     let grid = lumest::io::read_points(dir.join("office_grid.csv").to_str().unwrap()).unwrap();
     let points: Vec<_> = grid.points.iter().copied().step_by(4).collect();
     let (runs, b) = runs_of(&scene, &points, 8192, 192, 9000);

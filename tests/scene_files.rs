@@ -210,7 +210,7 @@ fn inline_degree_zero_sh_sphere_gives_the_analytic_spheres_answers() {
 }
 
 /// The office's first order from the independent reference
-/// ([`common::direct`]): the shapes of `data/office.toml` written out here
+/// ([`common::direct`]): the shapes of `tests/data/office_points.toml` written out here
 /// (the sculpture read from `data/blob.obj` and placed by
 /// `x -> translate + scale Rz(30 deg) x` with this test's own arithmetic),
 /// its six 250 cd point lights.
@@ -277,7 +277,7 @@ fn office_example_matches_its_pinned_backward_reference() {
         .args([
             "illuminance",
             "--scene",
-            "data/office.toml",
+            "tests/data/office_points.toml",
             "--points",
             "data/office_grid.csv",
             "--out",
