@@ -399,13 +399,161 @@ material = { type = "lambertian", reflectance = 0.0 }
     Ok((covered, total, zs / n, (z2 / n).sqrt()))
 }
 
+/// A closed-form check: the exact direct light of the estimator's path
+/// against an independent closed form at `points` receivers.
+#[derive(Clone, Debug)]
+pub struct ClosedFormRow {
+    /// What is checked.
+    pub case: String,
+    /// Receivers.
+    pub points: usize,
+    /// Largest relative difference.
+    pub max_rel: f64,
+    /// Accepted relative difference.
+    pub tolerance: f64,
+}
+
+/// The exact direct light that a scene of lights alone gives (Lambert's
+/// contour integral, the disc's closed form, a photometric table's
+/// interpolation) against [`crate::reference::area_source`] and
+/// [`crate::reference::disc_profile`]: the panel on a parallel floor and a
+/// perpendicular wall (superposed configuration factors), a uniform disc
+/// (2-D quadrature), and a cosine luminaire from an IES table in 0.5 degree
+/// steps (`I0 h^2 / d^4`; the tolerance allows bilinear interpolation).
+pub fn closed_form_rows(dir: &Path) -> anyhow::Result<Vec<ClosedFormRow>> {
+    use crate::reference::area_source::{
+        cosine_intensity_plane, parallel_rectangle, perpendicular_rectangle,
+    };
+    use crate::reference::disc_profile::disc_illuminance;
+    let rel = |a: f64, b: f64| {
+        if b == 0.0 {
+            a.abs()
+        } else {
+            (a / b - 1.0).abs()
+        }
+    };
+    let mut rows = Vec::new();
+    // The panel (x in [-0.3, 0.3], y in [-0.6, 0.6], z = 3, emitting down) alone.
+    let panel = build(PANEL, dir)?;
+    let mut floor = Vec::new();
+    let mut wall = Vec::new();
+    for i in 0..9 {
+        for k in 0..9 {
+            let (x, y) = (-2.0 + 0.5 * i as f64, -2.0 + 0.5 * k as f64);
+            floor.push((DVec3::new(x, y, 0.2 * k as f64), DVec3::Z));
+            // A wall x = 1 facing -x, points below the panel's height.
+            wall.push((DVec3::new(1.0, y, 0.3 * i as f64), -DVec3::X));
+        }
+    }
+    for (name, pts, perpendicular) in [
+        ("floor (parallel)", floor, false),
+        ("wall (perpendicular)", wall, true),
+    ] {
+        let rec = Receivers::new(&panel, &pts).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let mut max_rel: f64 = 0.0;
+        for (j, &(p, _)) in pts.iter().enumerate() {
+            let exact = if perpendicular {
+                // The panel's plane (z = 3) is perpendicular to the wall
+                // (x = 1), at distance 3 - z from the point; the panel spans
+                // y - p.y along the wall and 1 - x in [0.7, 1.3] away from it.
+                perpendicular_rectangle(1000.0, -0.6 - p.y, 0.6 - p.y, 0.7, 1.3, 3.0 - p.z)
+            } else {
+                parallel_rectangle(
+                    1000.0,
+                    -0.3 - p.x,
+                    0.3 - p.x,
+                    -0.6 - p.y,
+                    0.6 - p.y,
+                    3.0 - p.z,
+                )
+            };
+            max_rel = max_rel.max(rel(rec.direct()[j], exact));
+        }
+        rows.push(ClosedFormRow {
+            case: format!("panel on a {name}: contour integral vs configuration factors"),
+            points: pts.len(),
+            max_rel,
+            tolerance: 1e-10,
+        });
+    }
+    // A uniform disc alone.
+    let disc = build(
+        "[[light]]\ntype = \"disc\"\ncenter = [0.0, 0.0, 2.5]\nnormal = [0.0, 0.0, -1.0]\nradius = 0.4\nluminance = 1000.0\n",
+        dir,
+    )?;
+    let pts: Vec<(DVec3, DVec3)> = (0..40)
+        .map(|k| {
+            let t = k as f64 / 40.0;
+            let n = DVec3::new((7.0 * t).sin() * 0.6, (5.0 * t).cos() * 0.3, 1.0).normalize();
+            (DVec3::new(3.0 * t - 1.5, 1.0 - 2.0 * t, 2.3 * t), n)
+        })
+        .collect();
+    let rec = Receivers::new(&disc, &pts).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut max_rel: f64 = 0.0;
+    for (j, &(p, n)) in pts.iter().enumerate() {
+        let exact = disc_illuminance(
+            DVec3::new(0.0, 0.0, 2.5),
+            -DVec3::Z,
+            0.4,
+            &|_| 1000.0,
+            &[],
+            p,
+            n,
+        );
+        max_rel = max_rel.max(rel(rec.direct()[j], exact));
+    }
+    rows.push(ClosedFormRow {
+        case: "uniform disc, tilted receivers (some cut by the horizon): closed form vs 2-D quadrature".into(),
+        points: pts.len(),
+        max_rel,
+        tolerance: 1e-6,
+    });
+    // The cosine luminaire (I0 = 720 cd) 2.5 m above the floor.
+    write_cosine_ies(dir)?;
+    let cos = build(
+        "[[light]]\ntype = \"ies\"\nfile = \"cosine.ies\"\nposition = [0.0, 0.0, 2.5]\n",
+        dir,
+    )?;
+    let pts: Vec<(DVec3, DVec3)> = (0..50)
+        .map(|k| (DVec3::new(0.13 * k as f64, 0.05 * k as f64, 0.0), DVec3::Z))
+        .collect();
+    let rec = Receivers::new(&cos, &pts).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut max_rel: f64 = 0.0;
+    for (j, &(p, _)) in pts.iter().enumerate() {
+        let d = (DVec3::new(0.0, 0.0, 2.5) - p).length();
+        max_rel = max_rel.max(rel(rec.direct()[j], cosine_intensity_plane(720.0, 2.5, d)));
+    }
+    rows.push(ClosedFormRow {
+        case: "cosine luminaire (IES table, 0.5 deg steps): bilinear table vs I0 h^2 / d^4".into(),
+        points: pts.len(),
+        max_rel,
+        // Linear interpolation of cos over 0.5 degrees: (dgamma^2 / 8) tan^2... at most ~1e-4 near 80 deg.
+        tolerance: 2e-4,
+    });
+    Ok(rows)
+}
+
 /// Run `lumest validate luminaires`.
 pub fn validate_luminaires(a: &LuminairesArgs) -> anyhow::Result<()> {
     let dir = a.case.report.join("luminaires_scenes");
     std::fs::create_dir_all(&dir)?;
     let mut pass = true;
 
-    println!("## Direct light from the panel: variance of the sampling strategies");
+    println!("## Closed forms of the exact direct light");
+    for r in closed_form_rows(&dir)? {
+        let ok = r.max_rel <= r.tolerance;
+        pass &= ok;
+        println!(
+            "{:<96} {:>4} points, max rel. difference {:.2e} (tolerance {:.0e}): {}",
+            r.case,
+            r.points,
+            r.max_rel,
+            r.tolerance,
+            if ok { "PASS" } else { "FAIL" }
+        );
+    }
+
+    println!("\n## Direct light from the panel: variance of the sampling strategies");
     println!(
         "{:<40} {:<8} {:>14} {:>10} {:>12} {:>10} {:>10}",
         "receiver", "strategy", "mean", "std err", "var/sample", "rel. var", "s/1e6"

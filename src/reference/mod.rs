@@ -3,6 +3,7 @@
 //! This module never calls the chain or the estimators, so a check against it
 //! stays independent of the Monte Carlo code.
 
+pub mod area_source;
 pub mod closed_form;
 pub mod disc_profile;
 pub mod quadrature;

@@ -126,8 +126,8 @@ mod tests {
         let s: f64 = off.iter().sum();
         let off: Vec<f64> = off.iter().map(|p| p / s).collect();
         assert!(chi2_p(&counts, &off, n as f64) < 1e-6);
-        for i in 0..w.len() {
-            assert!((t.pmf(i) - probs[i]).abs() < 1e-15);
+        for (i, p) in probs.iter().enumerate() {
+            assert!((t.pmf(i) - p).abs() < 1e-15);
         }
     }
 
