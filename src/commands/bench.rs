@@ -38,6 +38,106 @@ pub struct BenchArgs {
     /// views on the Sobolev scene) instead of the throughput run.
     #[arg(long)]
     pub compare: bool,
+    /// Luminaire costs instead: the load time of a scene of 1000
+    /// photometric luminaires (`data/pendant.ies`), and the cost of a
+    /// goniometric light's direct term and emission sample against a
+    /// point light's.
+    #[arg(long)]
+    pub luminaires: bool,
+}
+
+/// `lumest bench --luminaires`: the load time of a 1000-luminaire scene
+/// (each light reads and tabulates its IES file: the requirement is under
+/// a second) and the cost per call of the direct term and of an emission
+/// sample of a goniometric light against a point light (requirement: the
+/// direct term at most twice a point's).
+pub fn luminaires(_a: &BenchArgs) -> anyhow::Result<()> {
+    use crate::light::Light;
+    use crate::sampling::Philox4x32;
+    use glam::DVec3;
+    use std::hint::black_box;
+    use std::time::Instant;
+    let ies = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/pendant.ies");
+    anyhow::ensure!(ies.exists(), "{} not found", ies.display());
+    let dir = std::env::temp_dir().join(format!("lumest-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    std::fs::copy(&ies, dir.join("pendant.ies"))?;
+    let mut src = String::from(
+        "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+         material = { type = \"lambertian\", reflectance = 0.5 }\n",
+    );
+    for k in 0..1000 {
+        let (x, y) = ((k % 40) as f64 * 1.5, (k / 40) as f64 * 1.5);
+        src += &format!(
+            "[[light]]\ntype = \"ies\"\nfile = \"pendant.ies\"\nposition = [{x}, {y}, 3.0]\nrotate = {}\n",
+            k % 360
+        );
+    }
+    let path = dir.join("many.toml");
+    std::fs::write(&path, &src)?;
+    let t = Instant::now();
+    let loaded = crate::scene::load(&path);
+    let load = t.elapsed().as_secs_f64();
+    std::fs::remove_dir_all(&dir).ok();
+    let scene = loaded.map_err(|e| anyhow::anyhow!("{e}"))?;
+    println!(
+        "1000 IES luminaires (data/pendant.ies, 73 angles each): scene loaded in {load:.3} s ({} lights, {:.4e} lm){}",
+        scene.lights.len(),
+        scene.total_power(),
+        if load < 1.0 {
+            "; requirement < 1 s: met"
+        } else {
+            "; requirement < 1 s: NOT met"
+        }
+    );
+    let gonio = scene.lights[7].clone();
+    let point = Light::Point {
+        p: gonio.position(),
+        i: 100.0,
+    };
+    let n = 4_000_000;
+    let mut rng = Philox4x32::new(1, 0);
+    let xs: Vec<DVec3> = (0..4096)
+        .map(|_| {
+            let u = rng.next_2d();
+            DVec3::new(20.0 * u[0], 20.0 * u[1], 0.0)
+        })
+        .collect();
+    let time = |l: &Light| {
+        let t = Instant::now();
+        let mut acc = 0.0;
+        for k in 0..n {
+            acc += l.direct_illuminance(black_box(xs[k & 4095]), DVec3::Z);
+        }
+        black_box(acc);
+        t.elapsed().as_secs_f64() / n as f64 * 1e9
+    };
+    let (tp, tg) = (time(&point), time(&gonio));
+    println!(
+        "direct term: point {tp:.1} ns, goniometric {tg:.1} ns per call: ratio {:.2} (requirement <= 2: {})",
+        tg / tp,
+        if tg <= 2.0 * tp { "met" } else { "NOT met" }
+    );
+    let emit = |l: &Light| {
+        let mut rng = Philox4x32::new(2, 0);
+        let t = Instant::now();
+        let mut acc = 0.0;
+        for _ in 0..n {
+            let e = l.sample_emission(rng.next_2d(), rng.next_2d(), 0.5);
+            acc += e.d.z;
+        }
+        black_box(acc);
+        t.elapsed().as_secs_f64() / n as f64 * 1e9
+    };
+    let (ep, eg) = (emit(&point), emit(&gonio));
+    println!(
+        "emission sample: point {ep:.1} ns, goniometric {eg:.1} ns (table search O(log n) in {} cells)",
+        match &gonio {
+            Light::Gonio { dist, .. } => dist.cells(),
+            _ => 0,
+        }
+    );
+    Ok(())
 }
 
 /// Local against backward estimation at equal wall time: for each point
@@ -108,6 +208,9 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
     );
     if a.compare {
         return compare(a, &counts, &times);
+    }
+    if a.luminaires {
+        return luminaires(a);
     }
     let problem = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).map_err(|e| anyhow::anyhow!("{e}"))?;
     println!(

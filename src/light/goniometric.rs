@@ -53,6 +53,13 @@ pub struct Goniometric {
     weight_total: f64,
     /// Emitted flux [lm].
     power: f64,
+    /// Every horizontal plane holds the same intensities (rotational
+    /// symmetry of a type C table): the intensity depends on gamma alone,
+    /// and no azimuth is computed.
+    rotational: bool,
+    /// The vertical angles are evenly spaced: `(v[0], 1 / step)` to locate
+    /// a cell without a search.
+    v_even: Option<(f64, f64)>,
 }
 
 /// A direction drawn from [`Goniometric::sample`].
@@ -83,7 +90,21 @@ impl Goniometric {
             cdf: Vec::new(),
             weight_total: 0.0,
             power: 0.0,
+            rotational: false,
+            v_even: None,
         };
+        g.rotational = p.kind == PhotometricType::C
+            && !g.h.is_empty()
+            && (0..g.h.len()).all(|a| (0..nv).all(|k| g.at(a, k) == g.at(0, k)));
+        if nv >= 2 {
+            let step = (g.v[nv - 1] - g.v[0]) / (nv - 1) as f64;
+            let even = step > 0.0
+                && g.v
+                    .iter()
+                    .enumerate()
+                    .all(|(k, &x)| (x - (g.v[0] + step * k as f64)).abs() <= 1e-12 * step);
+            g.v_even = even.then_some((g.v[0], 1.0 / step));
+        }
         let mut acc = 0.0;
         let mut power = 0.0;
         let (nh, nvc) = (g.h.len().saturating_sub(1), nv.saturating_sub(1));
@@ -191,9 +212,43 @@ impl Goniometric {
     }
 
     /// Intensity [cd] towards unit direction `d` (luminaire frame).
+    #[inline]
     pub fn intensity(&self, d: DVec3) -> f64 {
+        if self.rotational {
+            // The same as `intensity_at(any C, gamma)`, without the azimuth.
+            let g = (-d.z).clamp(-1.0, 1.0).acos();
+            return self.intensity_gamma(g);
+        }
         let (h, v) = self.angles(d);
         self.intensity_at(h, v)
+    }
+
+    /// Intensity [cd] of a rotationally symmetric table at vertical angle
+    /// `v` [rad]: linear in `v` between the measured angles, zero outside.
+    #[inline]
+    fn intensity_gamma(&self, v: f64) -> f64 {
+        let nv = self.v.len();
+        if nv == 0 || v < self.v[0] || v > self.v[nv - 1] {
+            return 0.0;
+        }
+        let (k, t) = self.locate_v(v);
+        let k1 = (k + 1).min(nv - 1);
+        self.i[k] + t * (self.i[k1] - self.i[k])
+    }
+
+    /// Cell and fraction of vertical angle `v` (inside the measured range).
+    #[inline]
+    fn locate_v(&self, v: f64) -> (usize, f64) {
+        let nv = self.v.len();
+        if let Some((v0, inv)) = self.v_even
+            && nv >= 2
+        {
+            let x = (v - v0) * inv;
+            let k = (x.max(0.0) as usize).min(nv - 2);
+            // The fraction within the cell (to rounding, what the search gives).
+            return (k, (x - k as f64).clamp(0.0, 1.0));
+        }
+        locate(&self.v, v)
     }
 
     /// Intensity [cd] at angles `(h, v)` [rad]: bilinear, zero outside the
@@ -210,12 +265,17 @@ impl Goniometric {
             return 0.0;
         }
         let (a, th) = locate(&self.h, h);
-        let (k, tv) = locate(&self.v, v);
+        let (k, tv) = self.locate_v(v);
         let a1 = (a + 1).min(nh - 1);
         let k1 = (k + 1).min(nv - 1);
         let lo = self.at(a, k) + tv * (self.at(a, k1) - self.at(a, k));
         let hi = self.at(a1, k) + tv * (self.at(a1, k1) - self.at(a1, k));
         lo + th * (hi - lo)
+    }
+
+    /// Number of cells of the emission sampler's table (searched by bisection).
+    pub fn cells(&self) -> usize {
+        self.cdf.len()
     }
 
     /// Draw a direction: `u[0]` picks the cell, `u[1]` and the rescaled
@@ -563,6 +623,35 @@ mod tests {
             let d = crate::sampling::warp::sample_uniform_sphere(rng.next_2d()).w;
             let (x, y) = (a.intensity(d), b.intensity(d));
             assert!((x - y).abs() <= 1e-12 * x.max(1.0), "{d}: {x} vs {y}");
+        }
+    }
+}
+
+#[cfg(test)]
+mod fast_path_tests {
+    use super::*;
+    use crate::io::photometry::ies;
+    use crate::sampling::Philox4x32;
+
+    /// The rotational and evenly spaced shortcuts give the general
+    /// bilinear rule's values (to rounding), including on uneven tables.
+    #[test]
+    fn shortcuts_agree_with_the_general_rule() {
+        let pendant = Goniometric::new(&ies::parse(ies::tests::PENDANT, "p.ies").unwrap(), 1.0);
+        assert!(pendant.rotational && pendant.v_even.is_some());
+        let mut uneven = pendant.clone();
+        uneven.v_even = None;
+        uneven.rotational = false;
+        let mut rng = Philox4x32::new(3, 0);
+        for _ in 0..20_000 {
+            let d = crate::sampling::warp::sample_uniform_sphere(rng.next_2d()).w;
+            let (h, v) = pendant.angles(d);
+            let fast = pendant.intensity(d);
+            let general = uneven.intensity_at(h, v);
+            assert!(
+                (fast - general).abs() <= 1e-12 * general.abs().max(1.0),
+                "{d}: {fast} vs {general}"
+            );
         }
     }
 }

@@ -476,8 +476,9 @@ impl Light {
                 if c <= 0.0 || d2 == 0.0 {
                     0.0
                 } else {
-                    let dist = d2.sqrt();
-                    self.intensity(-d / dist) * c / (d2 * dist)
+                    // One division: c / d^3 = c inv^3.
+                    let inv = d2.sqrt().recip();
+                    self.intensity(-d * inv) * c * (inv * inv * inv)
                 }
             }
             Light::Sphere { c, r, .. } => {
