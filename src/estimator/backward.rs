@@ -343,16 +343,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         // times `cos` (the integrand of `E = int L cos dw`, or of the
         // luminance), and the density of its own first direction there.
         let v = connect(scene, rec.p, None, first_max, rng, |w: DVec3| {
-            let wl = frame.to_local(w);
-            if wl.z <= 0.0 {
-                return (0.0, 0.0);
-            }
-            match rec.response {
-                Response::Illuminance => (wl.z, wl.z / PI),
-                Response::Luminance { material, wo } => {
-                    (material.eval(wl, wo) * wl.z, material.pdf(wo, wl))
-                }
-            }
+            rec.transfer(frame, w)
         });
         if v > 0.0 {
             add(1, v);

@@ -96,20 +96,10 @@ impl LightSet {
     }
 }
 
-/// The receiver's response and its own sampling density towards unit world
-/// direction `wi`: `(w(wi) max(0, n . wi), p_B(wi))`.
+/// The receiver's transfer and sampling density ([`Receiver::transfer`]).
 #[inline]
 fn response(rec: &Receiver, frame: &Frame, wi: DVec3) -> (f64, f64) {
-    let wl = frame.to_local(wi);
-    if wl.z <= 0.0 {
-        return (0.0, 0.0);
-    }
-    match rec.response {
-        Response::Illuminance => (wl.z, wl.z / PI),
-        Response::Luminance { material, wo } => {
-            (material.eval(wl, wo) * wl.z, material.pdf(wo, wl))
-        }
-    }
+    rec.transfer(frame, wi)
 }
 
 /// Solid angle [sr] of the cone that a sphere of radius `r` subtends from

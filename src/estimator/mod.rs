@@ -114,6 +114,25 @@ impl Receiver {
         }
     }
 
+    /// The receiver's transfer towards unit world direction `wi` (towards
+    /// the source; `frame` is that of its normal): `(w(wi) max(0, n . wi),
+    /// p_B(wi))`, the response times the cosine (the integrand of
+    /// `E = int L cos dw`, or of the luminance) and the density [1/sr] of
+    /// the receiver's own sampling (cosine, or the BRDF's) there.
+    #[inline]
+    pub fn transfer(&self, frame: &Frame, wi: DVec3) -> (f64, f64) {
+        let wl = frame.to_local(wi);
+        if wl.z <= 0.0 {
+            return (0.0, 0.0);
+        }
+        match self.response {
+            Response::Illuminance => (wl.z, wl.z / std::f64::consts::PI),
+            Response::Luminance { material, wo } => {
+                (material.eval(wl, wo) * wl.z, material.pdf(wo, wl))
+            }
+        }
+    }
+
     /// The response when it does not depend on the direction of arrival.
     fn constant_weight(&self) -> Option<f64> {
         match self.response {

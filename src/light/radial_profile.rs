@@ -215,35 +215,13 @@ impl RadialProfile {
             ProfileKind::HyperbolicDecreasing => 1e-9 * r,
             _ => 0.0,
         };
-        let (mut lo, mut hi) = (0.0, r);
         // A start from the uniform profile's inverse.
-        let mut s = r * u.clamp(0.0, 1.0).sqrt();
-        for _ in 0..200 {
-            let f = self.g_int(s) - target;
-            if f == 0.0 {
-                break;
-            }
-            if f > 0.0 {
-                hi = s;
-            } else {
-                lo = s;
-            }
-            if hi - lo <= 4.0 * f64::EPSILON * r {
-                break;
-            }
-            let d = self.shape(s) * s;
-            let next = if d > 0.0 { s - f / d } else { f64::NAN };
-            let step = if next > lo && next < hi {
-                next
-            } else {
-                0.5 * (lo + hi)
-            };
-            if (step - s).abs() <= 2.0 * f64::EPSILON * r {
-                s = step;
-                break;
-            }
-            s = step;
-        }
+        let s = crate::math::roots::bracketed_newton(
+            |s| (self.g_int(s) - target, self.shape(s) * s),
+            0.0,
+            r,
+            r * u.clamp(0.0, 1.0).sqrt(),
+        );
         s.clamp(floor, r)
     }
 

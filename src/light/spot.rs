@@ -103,35 +103,17 @@ impl Spot {
 /// shrinking bracket (bisection when a step leaves it).
 fn invert_ring(u: f64) -> f64 {
     let u = u.clamp(0.0, 1.0);
-    let (mut lo, mut hi) = (0.0f64, 1.0f64);
-    let mut t = u.powf(1.0 / 3.0).min(1.0);
-    for _ in 0..100 {
-        let f = 2.0 * t * t * t - t * t * t * t - u;
-        if f == 0.0 {
-            break;
-        }
-        if f > 0.0 {
-            hi = t;
-        } else {
-            lo = t;
-        }
-        if hi - lo <= 4.0 * f64::EPSILON {
-            break;
-        }
-        let d = 6.0 * t * t - 4.0 * t * t * t;
-        let next = if d > 0.0 { t - f / d } else { f64::NAN };
-        let step = if next > lo && next < hi {
-            next
-        } else {
-            0.5 * (lo + hi)
-        };
-        if (step - t).abs() <= 2.0 * f64::EPSILON {
-            t = step;
-            break;
-        }
-        t = step;
-    }
-    t
+    crate::math::roots::bracketed_newton(
+        |t| {
+            (
+                2.0 * t * t * t - t * t * t * t - u,
+                6.0 * t * t - 4.0 * t * t * t,
+            )
+        },
+        0.0,
+        1.0,
+        u.powf(1.0 / 3.0),
+    )
 }
 
 #[cfg(test)]
