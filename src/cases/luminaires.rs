@@ -318,8 +318,8 @@ material = { type = "lambertian", reflectance = 0.5 }
 /// Coverage of the 95 % interval of the sampled direct light: `runs`
 /// independent runs of `chains` chains of the panel over a black floor,
 /// half hidden by a box (so the direct light is sampled and is the whole
-/// answer), at three points whose exact values come from a midpoint rule
-/// over the panel with the box's shadow (1200 x 2400 cells, written here
+/// answer), at three points whose exact values come from quadrature over
+/// the panel with the box's shadow found exactly per row (written here
 /// with no estimator code). Returns (covered, total, mean z, rms z).
 pub fn coverage(dir: &Path, runs: u64, chains: u64) -> anyhow::Result<(u64, u64, f64, f64)> {
     let blocker = r#"
@@ -347,32 +347,84 @@ material = { type = "lambertian", reflectance = 0.0 }
         }
         t0 < t1
     };
+    // The exact values: for each abscissa of the panel the hidden part of
+    // its line is one interval (the box is convex), found by a scan and
+    // bisection; the visible parts are integrated by Gauss-Legendre panels,
+    // the abscissae by 400 Gauss-Legendre panels (the row integral is
+    // continuous, with kinks where the shadow starts).
     let exact: Vec<f64> = points
         .iter()
         .map(|&(x, n)| {
-            let m = 1200;
-            let (dx, dy) = (0.6 / m as f64, 1.2 / (2 * m) as f64);
-            let mut sum = 0.0;
-            for i in 0..m {
-                for k in 0..2 * m {
-                    let y = DVec3::new(
-                        -0.3 + (i as f64 + 0.5) * dx,
-                        -0.6 + (k as f64 + 0.5) * dy,
-                        3.0,
-                    );
-                    let v = y - x;
-                    let d2 = v.length_squared();
-                    let (cx, cy) = (n.dot(v), v.z);
-                    if cx > 0.0 && cy > 0.0 && !hidden(x, y) {
-                        sum += cx * cy / (d2 * d2);
-                    }
+            let integrand = |px: f64, py: f64| {
+                let v = DVec3::new(px, py, 3.0) - x;
+                let d2 = v.length_squared();
+                let (cx, cy) = (n.dot(v), v.z);
+                if cx > 0.0 && cy > 0.0 {
+                    cx * cy / (d2 * d2)
+                } else {
+                    0.0
                 }
-            }
-            1000.0 * sum * dx * dy
+            };
+            let row = |px: f64| {
+                let blocked = |py: f64| hidden(x, DVec3::new(px, py, 3.0));
+                let scan = 400;
+                let ys: Vec<f64> = (0..=scan)
+                    .map(|k| -0.6 + 1.2 * k as f64 / scan as f64)
+                    .collect();
+                let hit: Vec<usize> = (0..=scan).filter(|&k| blocked(ys[k])).collect();
+                let gl = |a: f64, b: f64| {
+                    let panels = 16;
+                    let h = (b - a) / panels as f64;
+                    (0..panels)
+                        .map(|k| {
+                            crate::math::quadrature::panel(
+                                &|py| integrand(px, py),
+                                a + h * k as f64,
+                                a + h * (k + 1) as f64,
+                            )
+                        })
+                        .sum::<f64>()
+                };
+                let (Some(&first), Some(&last)) = (hit.first(), hit.last()) else {
+                    return gl(-0.6, 0.6);
+                };
+                // Ends of the hidden interval, by bisection.
+                let edge = |mut vis: f64, mut hid: f64| {
+                    for _ in 0..60 {
+                        let m = 0.5 * (vis + hid);
+                        if blocked(m) { hid = m } else { vis = m }
+                    }
+                    0.5 * (vis + hid)
+                };
+                let a = if first == 0 {
+                    -0.6
+                } else {
+                    edge(ys[first - 1], ys[first])
+                };
+                let b = if last == scan {
+                    0.6
+                } else {
+                    edge(ys[last + 1], ys[last])
+                };
+                gl(-0.6, a) + gl(b, 0.6)
+            };
+            let panels = 400;
+            let h = 0.6 / panels as f64;
+            1000.0
+                * (0..panels)
+                    .map(|k| {
+                        crate::math::quadrature::panel(
+                            &row,
+                            -0.3 + h * k as f64,
+                            -0.3 + h * (k + 1) as f64,
+                        )
+                    })
+                    .sum::<f64>()
         })
         .collect();
     let rec = Receivers::new(&scene, &points).map_err(|e| anyhow::anyhow!("{e}"))?;
     let (mut covered, mut total, mut zs, mut z2) = (0u64, 0u64, 0.0, 0.0);
+
     for run in 0..runs {
         let cfg = crate::run::RunConfig {
             seed: 1000 + run,
@@ -595,9 +647,14 @@ pub fn validate_luminaires(a: &LuminairesArgs) -> anyhow::Result<()> {
     if runs > 0 {
         let (covered, total, mean_z, rms_z) = coverage(&dir, runs, chains)?;
         let frac = covered as f64 / total as f64;
-        // Binomial: 4 standard deviations around 95 %.
+        // Binomial: 4 standard deviations around 95 %; and no bias of the
+        // z scores (their mean within 4 standard errors of 0). The balance
+        // heuristic failed the second (mean z -0.13, rms 1.17 over 1200: its
+        // rare BRDF hits make batch means of 8 samples skewed); the power
+        // heuristic, the default, passes.
         let sd = (0.95 * 0.05 / total as f64).sqrt();
-        let ok = (frac - 0.95).abs() <= 4.0 * sd;
+        let ok =
+            (frac - 0.95).abs() <= 4.0 * sd && mean_z.abs() <= 4.0 * rms_z / (total as f64).sqrt();
         pass &= ok;
         println!(
             "\n## Coverage of the sampled direct light ({runs} runs x {chains} chains, 3 points, half hidden panel)"

@@ -512,7 +512,7 @@ impl Receivers {
             direct,
             direct_sets,
             direct_set,
-            direct_strategy: direct::Strategy::Balance,
+            direct_strategy: direct::Strategy::Power,
         };
         r.refresh_watch();
         Ok(r)
@@ -588,7 +588,7 @@ impl Receivers {
         self.direct_set.iter().any(Option::is_some)
     }
 
-    /// Draw the sampled direct light with `strategy` (default: the balance
+    /// Draw the sampled direct light with `strategy` (default: the power
     /// heuristic), e.g. to compare the strategies' variances.
     pub fn with_direct_strategy(mut self, strategy: direct::Strategy) -> Self {
         self.direct_strategy = strategy;
