@@ -439,9 +439,11 @@ pub fn run_job(
     quiet: bool,
 ) -> RunResult {
     let pb = progress_bar(cfg, quiet);
+    // A first Ctrl-C (or SIGTERM) stops the run after the batches in hand;
+    // what was folded is kept and written.
     let mut observe = |p: &crate::run::Progress| {
         tick(&pb, cfg, p);
-        true
+        !crate::io::interrupt::interrupted()
     };
     let result = match estimator {
         EstimatorKind::Local => run(scene, &job.receivers, cfg, &mut observe),
@@ -545,7 +547,20 @@ pub(crate) fn measure_with(
     for note in &scene.notes {
         eprintln!("lumest: {note}");
     }
+    crate::io::interrupt::install();
     let result = run_job(&scene, &job, &cfg, estimator, run_args.quiet);
+    if crate::io::interrupt::interrupted() {
+        anyhow::ensure!(
+            result.tallies.batches() >= 2,
+            "interrupted before 2 batches were complete: nothing written"
+        );
+        eprintln!(
+            "lumest: interrupted by a signal after {} batches ({} chains): writing the results so far, \
+             with their error bars",
+            result.tallies.batches(),
+            result.chains
+        );
+    }
     if let (Some((_, out)), Some(csv)) = (points, job.points_csv(&result, cfg.orders)) {
         write_atomic(out, &csv).with_context(|| format!("writing {out}"))?;
     }

@@ -1,8 +1,8 @@
 //! Formats only: CSV point lists in, CSV results out, plots. No physics.
 
 pub mod csvio;
-pub mod interrupt;
 pub mod image;
+pub mod interrupt;
 pub mod photometry;
 pub mod plot;
 pub mod sh_coeffs;
