@@ -87,17 +87,25 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
         .collect();
     let mut rows = Vec::new();
     let mut lines = Vec::new();
-    // Line numbers from byte offsets. A record's position is where the
-    // reader started on it, before the comment lines it skipped, so those are
-    // stepped over here (the csv crate's own line count is off the same way).
-    let line_of = |byte: u64| -> u64 {
+    // Line numbers from byte offsets, counted on from the previous record
+    // (records come in file order), so reading is linear in the file size.
+    // A record's position is where the reader started on it, before the
+    // comment and blank lines it skipped, so those are stepped over here (the
+    // csv crate's own line count is off the same way).
+    let mut cursor = (0usize, 1u64);
+    let mut line_of = |byte: u64| -> u64 {
         let mut at = (byte as usize).min(text.len());
-        let mut line = text.as_bytes()[..at]
+        let (from, from_line) = if at >= cursor.0 { cursor } else { (0, 1) };
+        let mut line = from_line
+            + text.as_bytes()[from..at]
+                .iter()
+                .filter(|&&c| c == b'\n')
+                .count() as u64;
+        cursor = (at, line);
+        while ["#", "\n", "\r\n"]
             .iter()
-            .filter(|&&c| c == b'\n')
-            .count() as u64
-            + 1;
-        while text[at..].starts_with('#') {
+            .any(|p| text[at..].starts_with(p))
+        {
             match text[at..].find('\n') {
                 Some(k) => {
                     at += k + 1;
@@ -304,5 +312,45 @@ mod line_tests {
         std::fs::write(&p, "# top\nx,y\n1,2\n# mid\n# mid2\n3,4\n5,6\n").unwrap();
         let t = read_table(p.to_str().unwrap()).unwrap();
         assert_eq!(t.lines, vec![3, 6, 7]);
+    }
+
+    #[test]
+    fn blank_lines_are_counted() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        std::fs::write(&p, "x,y\n1,2\n\n\n3,4\n5,6\n").unwrap();
+        let t = read_table(p.to_str().unwrap()).unwrap();
+        assert_eq!(t.lines, vec![2, 5, 6]);
+    }
+
+    /// Line numbers stay exact deep in a large file (they are counted on
+    /// from the previous record, not from the start of the file for each).
+    #[test]
+    fn line_numbers_deep_in_a_large_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("big.csv");
+        let n = 30_000;
+        let mut text = String::from("id,x,y,z,nx,ny,nz\n");
+        for k in 0..n {
+            if k % 1000 == 999 {
+                text.push('\n');
+            }
+            text.push_str(&format!("p{k},{k},0.5,0.25,0,0,1\n"));
+        }
+        std::fs::write(&p, &text).unwrap();
+        let t = read_table(p.to_str().unwrap()).unwrap();
+        assert_eq!(t.rows.len(), n);
+        // Row k sits on line 2 + k + (blank lines before it).
+        for k in [0, 998, 999, 12_345, n - 1] {
+            assert_eq!(t.lines[k], 2 + k as u64 + (k as u64 + 1) / 1000, "row {k}");
+        }
+        // A bad cell near the end is reported on its own line.
+        let bad = text.replacen("p29990,29990,", "p29990,29x90,", 1);
+        std::fs::write(&p, &bad).unwrap();
+        let e = super::read_points(p.to_str().unwrap())
+            .unwrap_err()
+            .to_string();
+        let line = 2 + 29_990 + 29_991 / 1000;
+        assert!(e.contains(&format!("big.csv:{line}: field `x`")), "{e}");
     }
 }
