@@ -8,8 +8,8 @@
 use super::{RunArgs, progress_bar, tick};
 use crate::estimator::local::run;
 use crate::estimator::{Receiver, Receivers, ViewTarget, emitted_luminance, view_target};
-use crate::io::csvio::to_csv;
-use crate::io::{PointTable, ViewTable, format_number, read_points, read_views, write_atomic};
+use crate::io::csvio::write_csv_atomic;
+use crate::io::{PointTable, ViewTable, format_number, read_points, read_views};
 use crate::run::{RunConfig, RunResult};
 use crate::scene::{self, Scene};
 use crate::tally::{figure_of_merit, relative_error, t_factor};
@@ -345,51 +345,66 @@ impl Job {
         })
     }
 
-    /// CSV text of the points' results.
-    pub fn points_csv(&self, r: &RunResult, orders: u32) -> Option<Vec<u8>> {
-        let t = self.points.as_ref()?;
+    /// Stream the points' results to `out` (input columns, then result
+    /// columns); returns the number of rows written.
+    pub fn write_points(&self, r: &RunResult, orders: u32, out: &str) -> anyhow::Result<usize> {
+        let Some(t) = self.points.as_ref() else {
+            return Ok(0);
+        };
         let mut headers = t.headers.clone();
         headers.extend(result_headers("E", orders));
-        let rows: Vec<Vec<String>> = t
-            .rows
-            .iter()
-            .enumerate()
-            .map(|(j, row)| {
-                let mut c = row.clone();
-                c.resize(t.headers.len(), String::new());
-                c.extend(result_cells(r, j));
-                c
-            })
-            .collect();
-        Some(to_csv(&headers, &rows))
+        let rows = t.rows.iter().enumerate().map(|(j, row)| {
+            let mut c = row.clone();
+            c.resize(t.headers.len(), String::new());
+            c.extend(result_cells(r, j));
+            c
+        });
+        write_csv_atomic(out, &headers, rows).with_context(|| format!("writing {out}"))
     }
 
-    /// CSV text of the views' results, with the sub-point `sx,sy,sz` (empty when the ray leaves the scene).
-    pub fn views_csv(&self, r: &RunResult, orders: u32) -> Option<Vec<u8>> {
-        let (t, targets) = self.views.as_ref()?;
+    /// Stream the views' results to `out`, with the sub-point `sx,sy,sz`
+    /// (empty when the ray leaves the scene); returns the number of rows written.
+    pub fn write_views(&self, r: &RunResult, orders: u32, out: &str) -> anyhow::Result<usize> {
+        let Some((t, targets)) = self.views.as_ref() else {
+            return Ok(0);
+        };
         let mut headers = t.headers.clone();
         headers.extend(result_headers("L", orders));
         headers.extend(["sx", "sy", "sz"].map(String::from));
-        let rows: Vec<Vec<String>> = t
-            .rows
-            .iter()
-            .enumerate()
-            .map(|(k, row)| {
-                let mut c = row.clone();
-                c.resize(t.headers.len(), String::new());
-                match self.view_receiver[k] {
-                    Some(j) => c.extend(result_cells_plus(r, j, self.emitted[k])),
-                    None => c.extend(exact_cells(self.emitted[k], orders)),
-                }
-                match targets[k].sub_point() {
-                    Some(s) => c.extend([s.x, s.y, s.z].map(format_number)),
-                    None => c.extend(["", "", ""].map(String::from)),
-                }
-                c
-            })
-            .collect();
-        Some(to_csv(&headers, &rows))
+        let rows = t.rows.iter().enumerate().map(|(k, row)| {
+            let mut c = row.clone();
+            c.resize(t.headers.len(), String::new());
+            match self.view_receiver[k] {
+                Some(j) => c.extend(result_cells_plus(r, j, self.emitted[k])),
+                None => c.extend(exact_cells(self.emitted[k], orders)),
+            }
+            match targets[k].sub_point() {
+                Some(s) => c.extend([s.x, s.y, s.z].map(format_number)),
+                None => c.extend(["", "", ""].map(String::from)),
+            }
+            c
+        });
+        write_csv_atomic(out, &headers, rows).with_context(|| format!("writing {out}"))
     }
+}
+
+/// The rows-in, rows-out line of the run summary for one list.
+fn rows_line(
+    what: &str,
+    input: &str,
+    rows_in: usize,
+    comments: u64,
+    out: &str,
+    rows_out: usize,
+) -> String {
+    let input = if input == "-" { "<stdin>" } else { input };
+    let out = if out == "-" { "<stdout>" } else { out };
+    let comments = match comments {
+        0 => String::new(),
+        1 => " (and 1 comment line before the header)".to_string(),
+        n => format!(" (and {n} comment lines before the header)"),
+    };
+    format!("{what}: {rows_in} rows read from {input}{comments}, {rows_out} rows written to {out}")
 }
 
 /// Run a job with the chosen estimator.
@@ -508,14 +523,27 @@ pub(crate) fn measure_with(
         eprintln!("lumest: {note}");
     }
     let result = run_job(&scene, &job, &cfg, estimator, run_args.quiet);
-    if let (Some((_, out)), Some(csv)) = (points, job.points_csv(&result, cfg.orders)) {
-        write_atomic(out, &csv).with_context(|| format!("writing {out}"))?;
+    let mut rows = Vec::new();
+    if let (Some((input, out)), Some(t)) = (points, &job.points) {
+        let n = job.write_points(&result, cfg.orders, out)?;
+        rows.push((
+            rows_line("points", input, t.rows.len(), t.comment_lines, out, n),
+            n == t.rows.len(),
+        ));
     }
-    if let (Some((_, out)), Some(csv)) = (views, job.views_csv(&result, cfg.orders)) {
-        write_atomic(out, &csv).with_context(|| format!("writing {out}"))?;
+    if let (Some((input, out)), Some((t, _))) = (views, &job.views) {
+        let n = job.write_views(&result, cfg.orders, out)?;
+        rows.push((
+            rows_line("views", input, t.rows.len(), t.comment_lines, out, n),
+            n == t.rows.len(),
+        ));
     }
     for line in summary(&result).lines() {
         eprintln!("lumest: {line}");
+    }
+    for (line, whole) in &rows {
+        eprintln!("lumest: {line}");
+        anyhow::ensure!(*whole, "{line}: rows were lost");
     }
     if let Some(t) = &job.points {
         if let Some(line) = grid_summary(&result, t.rows.len()) {

@@ -33,6 +33,8 @@ pub struct PointTable {
     pub rows: Vec<Vec<String>>,
     /// Line number of each row in the file (1-based).
     pub lines: Vec<u64>,
+    /// Comment lines before the header (not rows).
+    pub comment_lines: u64,
     /// Position [m] and unit normal of each row (normal normalised here).
     pub points: Vec<(DVec3, DVec3)>,
 }
@@ -67,15 +69,41 @@ pub(crate) struct RawTable {
     pub headers: Vec<String>,
     pub rows: Vec<Vec<String>>,
     pub lines: Vec<u64>,
+    /// Comment lines (first character `#`) before the header.
+    pub comment_lines: u64,
 }
 
+/// Whether a line (from `at` in `text`) is blank: nothing before its end.
+fn blank_at(text: &str, at: usize) -> bool {
+    let rest = &text[at..];
+    rest.is_empty() || rest.starts_with('\n') || rest.starts_with("\r\n")
+}
+
+/// Read a CSV table with a header row.
+///
+/// Comments: lines whose first character is `#` are comments only before
+/// the header (a file's preamble); after the header every non-blank line is
+/// a row, so an id such as `#12` is data, never dropped. Blank lines are
+/// skipped anywhere.
 pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
     let file = display_name(path);
     let text = read_all(path)?;
+    // The preamble: comment and blank lines before the header.
+    let (mut start, mut start_line, mut comment_lines) = (0usize, 1u64, 0u64);
+    while start < text.len() && (text[start..].starts_with('#') || blank_at(&text, start)) {
+        comment_lines += u64::from(text[start..].starts_with('#'));
+        match text[start..].find('\n') {
+            Some(k) => {
+                start += k + 1;
+                start_line += 1;
+            }
+            None => start = text.len(),
+        }
+    }
+    let body = &text[start..];
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
-        .comment(Some(b'#'))
-        .from_reader(text.as_bytes());
+        .from_reader(body.as_bytes());
     let headers: Vec<String> = rdr
         .headers()
         .map_err(|e| InputError::File {
@@ -90,29 +118,25 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
     // Line numbers from byte offsets, counted on from the previous record
     // (records come in file order), so reading is linear in the file size.
     // A record's position is where the reader started on it, before the
-    // comment and blank lines it skipped, so those are stepped over here (the
-    // csv crate's own line count is off the same way).
-    let mut cursor = (0usize, 1u64);
+    // blank lines it skipped, so those are stepped over here (the csv
+    // crate's own line count is off the same way).
+    let mut cursor = (0usize, start_line);
     let mut line_of = |byte: u64| -> u64 {
-        let mut at = (byte as usize).min(text.len());
-        let (from, from_line) = if at >= cursor.0 { cursor } else { (0, 1) };
+        let mut at = (byte as usize).min(body.len());
+        let (from, from_line) = if at >= cursor.0 {
+            cursor
+        } else {
+            (0, start_line)
+        };
         let mut line = from_line
-            + text.as_bytes()[from..at]
+            + body.as_bytes()[from..at]
                 .iter()
                 .filter(|&&c| c == b'\n')
                 .count() as u64;
         cursor = (at, line);
-        while ["#", "\n", "\r\n"]
-            .iter()
-            .any(|p| text[at..].starts_with(p))
-        {
-            match text[at..].find('\n') {
-                Some(k) => {
-                    at += k + 1;
-                    line += 1;
-                }
-                None => break,
-            }
+        while at < body.len() && blank_at(body, at) {
+            at += body[at..].find('\n').map_or(body.len() - at, |k| k + 1);
+            line += 1;
         }
         line
     };
@@ -133,6 +157,7 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
         headers,
         rows,
         lines,
+        comment_lines,
     })
 }
 
@@ -183,6 +208,7 @@ pub fn read_points(path: &str) -> Result<PointTable, InputError> {
         headers: t.headers,
         rows: t.rows,
         lines: t.lines,
+        comment_lines: t.comment_lines,
         points,
     })
 }
@@ -233,6 +259,8 @@ pub struct ViewTable {
     pub rows: Vec<Vec<String>>,
     /// Line number of each row (1-based).
     pub lines: Vec<u64>,
+    /// Comment lines before the header (not rows).
+    pub comment_lines: u64,
     /// Observer position [m] and unit viewing direction of each row.
     pub views: Vec<(DVec3, DVec3)>,
 }
@@ -250,6 +278,7 @@ pub fn read_views(path: &str) -> Result<ViewTable, InputError> {
         headers: t.headers,
         rows: t.rows,
         lines: t.lines,
+        comment_lines: t.comment_lines,
         views,
     })
 }
@@ -267,12 +296,39 @@ pub fn format_number(x: f64) -> String {
 /// Write `contents` to `path` atomically (temporary file in the same folder,
 /// then rename), or to standard output for `-`.
 pub fn write_atomic(path: &str, contents: &[u8]) -> std::io::Result<()> {
+    write_atomic_with(path, |w| w.write_all(contents))
+}
+
+/// Write to `path` atomically through `fill`, which streams into a buffered
+/// writer (temporary file in the same folder, then rename; nothing is left
+/// behind when `fill` fails), or to standard output for `-`.
+pub fn write_atomic_with<T>(
+    path: &str,
+    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<T>,
+) -> std::io::Result<T> {
     if path == "-" {
-        let mut out = std::io::stdout().lock();
-        out.write_all(contents)?;
-        return out.flush();
+        let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+        let v = fill(&mut out)?;
+        out.flush()?;
+        return Ok(v);
     }
     let target = Path::new(path);
+    let tmp = temp_path(target);
+    let written = (|| {
+        let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        let v = fill(&mut f)?;
+        f.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        std::fs::rename(&tmp, target)?;
+        Ok(v)
+    })();
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
+}
+
+/// The temporary file next to `target` that an atomic write goes through.
+pub(crate) fn temp_path(target: &Path) -> PathBuf {
     let dir = target
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
@@ -280,14 +336,27 @@ pub fn write_atomic(path: &str, contents: &[u8]) -> std::io::Result<()> {
     let name = target
         .file_name()
         .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-    let tmp: PathBuf = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(contents)?;
-        f.sync_all()?;
-    }
-    std::fs::rename(&tmp, target).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
+    dir.join(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Stream a CSV table to `path` atomically (see [`write_atomic_with`]):
+/// the header, then each row as it is produced. Returns the number of rows
+/// written.
+pub fn write_csv_atomic(
+    path: &str,
+    headers: &[String],
+    rows: impl IntoIterator<Item = Vec<String>>,
+) -> std::io::Result<usize> {
+    write_atomic_with(path, |out| {
+        let mut w = csv::Writer::from_writer(out);
+        w.write_record(headers)?;
+        let mut n = 0;
+        for r in rows {
+            w.write_record(&r)?;
+            n += 1;
+        }
+        w.flush()?;
+        Ok(n)
     })
 }
 
@@ -309,9 +378,13 @@ mod line_tests {
     fn line_numbers_count_comment_lines() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("t.csv");
-        std::fs::write(&p, "# top\nx,y\n1,2\n# mid\n# mid2\n3,4\n5,6\n").unwrap();
+        std::fs::write(&p, "# top\n\n# more\nid,y\na,2\n\n#b,4\n# c,6\n").unwrap();
         let t = read_table(p.to_str().unwrap()).unwrap();
-        assert_eq!(t.lines, vec![3, 6, 7]);
+        // Comments only before the header: `#b` and `# c` are rows.
+        assert_eq!(t.comment_lines, 2);
+        assert_eq!(t.lines, vec![5, 7, 8]);
+        let ids: Vec<&str> = t.rows.iter().map(|r| r[0].as_str()).collect();
+        assert_eq!(ids, ["a", "#b", "# c"]);
     }
 
     #[test]
