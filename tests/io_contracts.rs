@@ -83,3 +83,58 @@ fn ids_starting_with_hash_are_rows_and_rows_are_counted() {
         "{err}"
     );
 }
+
+/// A column named twice, or named like a result column, is refused before
+/// the run with the file and the column.
+#[test]
+fn duplicated_or_reserved_column_names_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = write(dir.path(), "scene.toml", SCENE);
+    let out = dir.path().join("E.csv").to_string_lossy().into_owned();
+    for (name, text, want) in [
+        (
+            "dup.csv",
+            "id,x,y,z,nx,ny,nz,id\na,0,0,0,0,0,1,b\n",
+            "dup.csv:1: field `id`",
+        ),
+        (
+            "res.csv",
+            "E,x,y,z,nx,ny,nz\n1,0,0,0,0,0,1\n",
+            "res.csv: column `E`",
+        ),
+    ] {
+        let p = write(dir.path(), name, text);
+        let (ok, err) = run(&[
+            "illuminance",
+            "--scene",
+            &s,
+            "--points",
+            &p,
+            "--out",
+            &out,
+            "--chains",
+            "500",
+            "--quiet",
+        ]);
+        assert!(!ok && err.contains(want), "{name}: {err}");
+        assert!(!Path::new(&out).exists(), "{name}: output written");
+    }
+    let v = write(
+        dir.path(),
+        "v.csv",
+        "x,y,z,dx,dy,dz,L_flag\n0,0,0.5,0,0,1,a\n",
+    );
+    let (ok, err) = run(&[
+        "luminance",
+        "--scene",
+        &s,
+        "--views",
+        &v,
+        "--out",
+        &out,
+        "--chains",
+        "500",
+        "--quiet",
+    ]);
+    assert!(!ok && err.contains("column `L_flag`"), "{err}");
+}

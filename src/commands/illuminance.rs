@@ -388,6 +388,18 @@ impl Job {
     }
 }
 
+/// Refuse an input column that has the name of a result column.
+fn reserved_columns(headers: &[String], results: &[String], input: &str) -> anyhow::Result<()> {
+    if let Some(h) = headers.iter().find(|h| results.contains(h)) {
+        let input = if input == "-" { "<stdin>" } else { input };
+        anyhow::bail!(
+            "{input}: column `{h}` has the name of a result column, which the output adds \
+             (the output would have two `{h}` columns); rename it"
+        );
+    }
+    Ok(())
+}
+
 /// The rows-in, rows-out line of the run summary for one list.
 fn rows_line(
     what: &str,
@@ -514,6 +526,16 @@ pub(crate) fn measure_with(
         )?,
         None => Job::new(&scene, points.map(|p| p.0), views.map(|v| v.0))?,
     };
+    // The output repeats the input columns and adds the result columns: an
+    // input column named like a result column would appear twice.
+    if let (Some((input, _)), Some(t)) = (points, &job.points) {
+        reserved_columns(&t.headers, &result_headers("E", cfg.orders), input)?;
+    }
+    if let (Some((input, _)), Some((t, _))) = (views, &job.views) {
+        let mut names = result_headers("L", cfg.orders);
+        names.extend(["sx", "sy", "sz"].map(String::from));
+        reserved_columns(&t.headers, &names, input)?;
+    }
     eprintln!(
         "lumest: scene {}: {}",
         scene_path.display(),

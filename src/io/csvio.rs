@@ -84,7 +84,7 @@ fn blank_at(text: &str, at: usize) -> bool {
 /// Comments: lines whose first character is `#` are comments only before
 /// the header (a file's preamble); after the header every non-blank line is
 /// a row, so an id such as `#12` is data, never dropped. Blank lines are
-/// skipped anywhere.
+/// skipped anywhere. A column name given twice in the header is an error.
 pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
     let file = display_name(path);
     let text = read_all(path)?;
@@ -113,6 +113,21 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
         .iter()
         .map(str::to_string)
         .collect();
+    for (k, h) in headers.iter().enumerate() {
+        if let Some(j) = headers[..k].iter().position(|g| g == h) {
+            return Err(InputError::Field {
+                file: file.clone(),
+                line: start_line,
+                field: h.clone(),
+                message: format!(
+                    "column `{h}` appears twice in the header (columns {} and {}); \
+                     every column name must be unique",
+                    j + 1,
+                    k + 1
+                ),
+            });
+        }
+    }
     let mut rows = Vec::new();
     let mut lines = Vec::new();
     // Line numbers from byte offsets, counted on from the previous record
@@ -385,6 +400,26 @@ mod line_tests {
         assert_eq!(t.lines, vec![5, 7, 8]);
         let ids: Vec<&str> = t.rows.iter().map(|r| r[0].as_str()).collect();
         assert_eq!(ids, ["a", "#b", "# c"]);
+    }
+
+    #[test]
+    fn duplicated_column_names_are_rejected() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("dup.csv");
+        std::fs::write(&p, "# note\nid,x,y,z,nx,ny,nz,x\na,0,0,0,0,0,1,5\n").unwrap();
+        let e = super::read_points(p.to_str().unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("dup.csv:2: field `x`") && e.contains("columns 2 and 8"),
+            "{e}"
+        );
+        let p = dir.path().join("dupv.csv");
+        std::fs::write(&p, "x,y,z,dx,dy,dz,dz\n0,0,0,0,0,1,1\n").unwrap();
+        let e = super::read_views(p.to_str().unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("dupv.csv:1: field `dz`"), "{e}");
     }
 
     #[test]
