@@ -138,3 +138,102 @@ fn duplicated_or_reserved_column_names_are_refused() {
     ]);
     assert!(!ok && err.contains("column `L_flag`"), "{err}");
 }
+
+/// Requests too large to hold are refused before anything is allocated,
+/// with the limit in the message.
+#[test]
+fn unbounded_requests_are_refused_with_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = write(dir.path(), "scene.toml", SCENE);
+    let p = write(dir.path(), "p.csv", POINTS);
+    let out = dir.path().join("o.csv").to_string_lossy().into_owned();
+    let (ok, err) = run(&[
+        "luminance",
+        "--scene",
+        &s,
+        "--fan-at",
+        "0,0,0,0,0,1",
+        "--fan",
+        "0.01,0.01",
+        "--out",
+        &out,
+        "--quiet",
+    ]);
+    assert!(
+        !ok && err.contains("9000 x 36000 = 324000000 views; at most 4000000"),
+        "{err}"
+    );
+    let (ok, err) = run(&[
+        "illuminance",
+        "--scene",
+        &s,
+        "--points",
+        &p,
+        "--out",
+        &out,
+        "--orders",
+        "4294967295",
+        "--quiet",
+    ]);
+    assert!(!ok && err.contains("--orders must be at most 100"), "{err}");
+    let (ok, err) = run(&[
+        "render",
+        "--scene",
+        &s,
+        "--eye",
+        "0,0,0.5",
+        "--look",
+        "1,0,0.5",
+        "--width",
+        "4294967296",
+        "--height",
+        "4294967296",
+        "--out",
+        &out,
+        "--quiet",
+    ]);
+    assert!(!ok && err.contains("at most 4 Mpixel"), "{err}");
+    let (ok, err) = run(&[
+        "render",
+        "--scene",
+        &s,
+        "--eye",
+        "0,0,0.5",
+        "--look",
+        "1,0,0.5",
+        "--width",
+        "2000",
+        "--height",
+        "2000",
+        "--aperture",
+        "0.01",
+        "--lens-samples",
+        "16",
+        "--out",
+        &out,
+        "--quiet",
+    ]);
+    assert!(
+        !ok && err.contains("64000000 views; at most 4000000"),
+        "{err}"
+    );
+    let mesh = write(
+        dir.path(),
+        "t.obj",
+        "v 1 1 1\nv 1 -1 -1\nv -1 1 -1\nv -1 -1 1\nf 1 2 3\nf 1 4 2\nf 1 3 4\nf 2 4 3\n",
+    );
+    let (ok, err) = run(&["sh-fit", &mesh, "--degree", "1000", "--out", &out]);
+    assert!(!ok && err.contains("--degree 1000: at most 100"), "{err}");
+    let (ok, err) = run(&[
+        "sh-fit",
+        &mesh,
+        "--degree",
+        "2",
+        "--samples",
+        "1000000000",
+        "--out",
+        &out,
+    ]);
+    assert!(!ok && err.contains("at most 2000000"), "{err}");
+    assert!(!Path::new(&out).exists());
+}

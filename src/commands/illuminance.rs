@@ -5,7 +5,7 @@
 //! `luminance --views V --out W --points P --points-out R`) scores both lists
 //! with the same chains.
 
-use super::{RunArgs, progress_bar, tick};
+use super::{MAX_VIEWS, RunArgs, check_tally_size, progress_bar, tick};
 use crate::estimator::local::run;
 use crate::estimator::{Receiver, Receivers, ViewTarget, emitted_luminance, view_target};
 use crate::io::csvio::write_csv_atomic;
@@ -440,6 +440,14 @@ pub fn run_job(
     result
 }
 
+/// Number of theta and phi steps of a fan with steps of `dt` and `dp` degrees.
+fn fan_steps(dt: f64, dp: f64) -> (u64, u64) {
+    (
+        (90.0 / dt).round().max(1.0) as u64,
+        (360.0 / dp).round().max(1.0) as u64,
+    )
+}
+
 /// Views over the hemisphere about `n` at `p`: theta at the centres of steps
 /// of `dt` degrees in [0, 90), phi at multiples of `dp` degrees in [0, 360).
 /// Columns `theta_deg,phi_deg,x,y,z,dx,dy,dz`.
@@ -451,10 +459,8 @@ pub fn fan_views(p: glam::DVec3, n: glam::DVec3, dt: f64, dp: f64) -> ViewTable 
             .to_vec(),
         ..ViewTable::default()
     };
-    let (nt, np) = (
-        (90.0 / dt).round().max(1.0) as usize,
-        (360.0 / dp).round().max(1.0) as usize,
-    );
+    let (nt, np) = fan_steps(dt, dp);
+    let (nt, np) = (nt as usize, np as usize);
     for i in 0..nt {
         let theta = (i as f64 + 0.5) * 90.0 / nt as f64;
         for k in 0..np {
@@ -526,6 +532,11 @@ pub(crate) fn measure_with(
         )?,
         None => Job::new(&scene, points.map(|p| p.0), views.map(|v| v.0))?,
     };
+    check_tally_size(
+        cfg.orders,
+        job.points.as_ref().map_or(0, |t| t.rows.len())
+            + job.views.as_ref().map_or(0, |v| v.0.rows.len()),
+    )?;
     // The output repeats the input columns and adds the result columns: an
     // input column named like a result column would appear twice.
     if let (Some((input, _)), Some(t)) = (points, &job.points) {
@@ -627,6 +638,12 @@ pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
         anyhow::ensure!(
             st.iter().all(|&x| x > 0.0 && x <= 90.0),
             "--fan: steps must lie in (0, 90] degrees"
+        );
+        let (nt, np) = fan_steps(st[0], st[1]);
+        anyhow::ensure!(
+            nt * np <= MAX_VIEWS,
+            "--fan {steps}: {nt} x {np} = {} views; at most {MAX_VIEWS} (take larger steps)",
+            nt * np
         );
         let n = glam::DVec3::new(v[3], v[4], v[5]);
         anyhow::ensure!(n.length() > 0.0, "--fan-at: the normal has zero length");

@@ -108,9 +108,20 @@ pub fn camera_views(
         "--fov must lie in (0, 180) degrees"
     );
     anyhow::ensure!(
-        w > 0 && h > 0 && w * h <= 4_000_000,
-        "image size must be positive and at most 4 Mpixel"
+        w > 0 && h > 0 && w.checked_mul(h).is_some_and(|n| n <= 4_000_000),
+        "image size must be positive and at most 4 Mpixel, got {w} x {h}"
     );
+    if let Some(l) = lens {
+        let m = (l.k as f64).sqrt().round().max(1.0) as u64;
+        let views = (w * h) as u64 * m * m;
+        anyhow::ensure!(
+            views <= super::MAX_VIEWS,
+            "{w} x {h} pixels with {} lens samples each make {views} views; at most {} \
+             (fewer pixels or lens samples)",
+            m * m,
+            super::MAX_VIEWS
+        );
+    }
     let cam_up = right.cross(fwd);
     let tx = (0.5 * fov_deg).to_radians().tan();
     let ty = tx * h as f64 / w as f64;
