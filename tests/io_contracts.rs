@@ -237,3 +237,127 @@ fn unbounded_requests_are_refused_with_the_limit() {
     assert!(!ok && err.contains("at most 2000000"), "{err}");
     assert!(!Path::new(&out).exists());
 }
+
+/// Every output is checked before the scene is even loaded: a missing
+/// folder, a folder as the output, an output over an input (however the
+/// path is spelt) or over another output.
+#[test]
+fn outputs_are_checked_before_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_string_lossy().into_owned();
+    let s = write(dir.path(), "scene.toml", SCENE);
+    let p = write(dir.path(), "p.csv", POINTS);
+    let v = write(dir.path(), "v.csv", "x,y,z,dx,dy,dz\n0,0,0.5,0,0,1\n");
+    let base = [
+        "illuminance",
+        "--scene",
+        &s,
+        "--points",
+        &p,
+        "--chains",
+        "500",
+        "--quiet",
+    ];
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec!["--out".into(), format!("{d}/missing/E.csv")],
+            "does not exist",
+        ),
+        (vec!["--out".into(), d.clone()], "is a folder"),
+        (
+            vec!["--out".into(), format!("{d}/./p.csv")],
+            "would overwrite the input",
+        ),
+        (
+            vec![
+                "--out".into(),
+                format!(
+                    "{d}/../{}/scene.toml",
+                    dir.path().file_name().unwrap().to_string_lossy()
+                ),
+            ],
+            "would overwrite the input",
+        ),
+        (
+            vec![
+                "--out".into(),
+                format!("{d}/E.csv"),
+                "--views".into(),
+                v.clone(),
+                "--views-out".into(),
+                format!("{d}/./E.csv"),
+            ],
+            "--views-out",
+        ),
+        (
+            vec![
+                "--out".into(),
+                "-".into(),
+                "--views".into(),
+                v.clone(),
+                "--views-out".into(),
+                "-".into(),
+            ],
+            "both write to standard output",
+        ),
+    ];
+    for (extra, want) in cases {
+        let mut args: Vec<&str> = base.to_vec();
+        args.extend(extra.iter().map(String::as_str));
+        let (ok, err) = run(&args);
+        assert!(!ok && err.contains(want), "{extra:?}: {err}");
+        // Refused before the scene was loaded, let alone run.
+        assert!(!err.contains("lumest: scene"), "{extra:?}: {err}");
+    }
+    assert_eq!(std::fs::read_to_string(&p).unwrap(), POINTS);
+    assert_eq!(std::fs::read_to_string(&s).unwrap(), SCENE);
+    assert!(!dir.path().join("E.csv").exists());
+    // The luminance and render outputs too.
+    let (ok, err) = run(&[
+        "luminance",
+        "--scene",
+        &s,
+        "--views",
+        &v,
+        "--out",
+        &v,
+        "--quiet",
+    ]);
+    assert!(!ok && err.contains("would overwrite the input"), "{err}");
+    let (ok, err) = run(&[
+        "render",
+        "--scene",
+        &s,
+        "--eye",
+        "0,0,0.5",
+        "--look",
+        "1,0,0.5",
+        "--out",
+        &format!("{d}/scene"),
+        "--width",
+        "8",
+        "--height",
+        "6",
+        "--chains",
+        "500",
+        "--quiet",
+    ]);
+    // `--out DIR/scene` writes DIR/scene.png, .hdr, _false.png and .csv: none is the scene file.
+    assert!(ok, "{err}");
+    let (ok, err) = run(&[
+        "render",
+        "--scene",
+        &s,
+        "--eye",
+        "0,0,0.5",
+        "--look",
+        "1,0,0.5",
+        "--out",
+        &format!("{d}/nowhere/img.png"),
+        "--quiet",
+    ]);
+    assert!(
+        !ok && err.contains("does not exist") && !err.contains("lumest: scene"),
+        "{err}"
+    );
+}

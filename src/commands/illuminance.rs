@@ -5,6 +5,7 @@
 //! `luminance --views V --out W --points P --points-out R`) scores both lists
 //! with the same chains.
 
+use super::outputs::check_outputs;
 use super::{MAX_VIEWS, RunArgs, check_tally_size, progress_bar, tick};
 use crate::estimator::local::run;
 use crate::estimator::{Receiver, Receivers, ViewTarget, emitted_luminance, view_target};
@@ -15,7 +16,7 @@ use crate::scene::{self, Scene};
 use crate::tally::{figure_of_merit, relative_error, t_factor};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Which estimator computes the reflected light.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -620,6 +621,13 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
 /// Run `lumest illuminance`.
 pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
     let views = a.views.as_deref().zip(a.views_out.as_deref());
+    let mut inputs = vec![a.scene.as_path(), Path::new(&a.points)];
+    let mut outputs = vec![("--out", Path::new(&a.out))];
+    if let Some((v, out)) = views {
+        inputs.push(Path::new(v));
+        outputs.push(("--views-out", Path::new(out)));
+    }
+    check_outputs(&inputs, &outputs)?;
     measure(
         &a.scene,
         Some((&a.points, &a.out)),
@@ -632,6 +640,17 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
 /// Run `lumest luminance`.
 pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
     let points = a.points.as_deref().zip(a.points_out.as_deref());
+    let mut inputs = vec![a.scene.as_path()];
+    inputs.extend(a.views.as_deref().map(Path::new));
+    let mut outputs = vec![("--out", Path::new(&a.out))];
+    if let Some((p, out)) = points {
+        inputs.push(Path::new(p));
+        outputs.push(("--points-out", Path::new(out)));
+    }
+    if let Some(plot) = &a.plot {
+        outputs.push(("--plot", Path::new(plot)));
+    }
+    check_outputs(&inputs, &outputs)?;
     if let (Some(at), Some(steps)) = (&a.fan_at, &a.fan) {
         let v = numbers(at, 6, "--fan-at")?;
         let st = numbers(steps, 2, "--fan")?;

@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod illuminance;
+pub mod outputs;
 pub mod photometry;
 pub mod render;
 pub mod shfit;

@@ -213,6 +213,20 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<()> {
     };
     let base = a.out.strip_suffix(".png").unwrap_or(&a.out).to_string();
     let csv = format!("{base}.csv");
+    let mut outs = vec![
+        format!("{base}.png"),
+        format!("{base}.hdr"),
+        format!("{base}_false.png"),
+        csv.clone(),
+    ];
+    if per_pixel > 1 {
+        outs.push(format!("{base}_pixels.csv"));
+    }
+    let outputs: Vec<(&str, &std::path::Path)> = outs
+        .iter()
+        .map(|o| ("--out", std::path::Path::new(o)))
+        .collect();
+    super::outputs::check_outputs(&[a.scene.as_path()], &outputs)?;
     let (job, r) = measure_with(
         &a.scene,
         None,

@@ -118,6 +118,7 @@ pub fn sh_fit(a: &ShFitArgs) -> anyhow::Result<()> {
             "--samples {n}: at most {MAX_SAMPLES} (the check uses four times as many rays)"
         );
     }
+    super::outputs::check_outputs(&[a.mesh.as_path()], &[("--out", a.out.as_path())])?;
     let t0 = Instant::now();
     let mesh = Mesh::load_obj(&a.mesh).map_err(|e| anyhow::anyhow!("{e}"))?;
     let load_s = t0.elapsed().as_secs_f64();
