@@ -344,6 +344,26 @@ fn outputs_are_checked_before_the_run() {
     ]);
     // `--out DIR/scene` writes DIR/scene.png, .hdr, _false.png and .csv: none is the scene file.
     assert!(ok, "{err}");
+    // Existing outputs are replaced: a second run over them is no clash.
+    for _ in 0..2 {
+        let (ok, err) = run(&[
+            "illuminance",
+            "--scene",
+            &s,
+            "--points",
+            &p,
+            "--chains",
+            "500",
+            "--quiet",
+            "--out",
+            &format!("{d}/E.csv"),
+            "--views",
+            &v,
+            "--views-out",
+            &format!("{d}/L.csv"),
+        ]);
+        assert!(ok, "{err}");
+    }
     let (ok, err) = run(&[
         "render",
         "--scene",

@@ -78,20 +78,22 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[(&str, &Path)]) -> anyhow::Res
                 )
             })?;
         let _ = std::fs::remove_file(&probe);
-        for id in identities(path) {
-            if let Some((_, input)) = input_ids.iter().find(|(i, _)| *i == id) {
+        let mut ids = identities(path);
+        ids.dedup();
+        for id in &ids {
+            if let Some((_, input)) = input_ids.iter().find(|(i, _)| i == id) {
                 anyhow::bail!(
                     "{opt} {shown} would overwrite the input {}; write the output elsewhere",
                     input.display()
                 );
             }
-            if let Some((_, other)) = seen.iter().find(|(s, _)| *s == id) {
+            if let Some((_, other)) = seen.iter().find(|(s, _)| s == id) {
                 anyhow::bail!(
                     "{opt} {shown} is the same file as {other}; give each output its own file"
                 );
             }
-            seen.push((id, opt));
         }
+        seen.extend(ids.into_iter().map(|id| (id, opt)));
     }
     Ok(())
 }
