@@ -579,10 +579,10 @@ pub(crate) fn measure_with(
         eprintln!("lumest: {line}");
         anyhow::ensure!(*whole, "{line}: rows were lost");
     }
-    if let Some(t) = &job.points {
-        if let Some(line) = grid_summary(&result, t.rows.len()) {
-            eprintln!("lumest: {line}");
-        }
+    if let Some(t) = &job.points
+        && let Some(line) = grid_summary(&result, t.rows.len())
+    {
+        eprintln!("lumest: {line}");
     }
     Ok((job, result))
 }
