@@ -71,6 +71,8 @@ pub(crate) struct RawTable {
     pub lines: Vec<u64>,
     /// Comment lines (first character `#`) before the header.
     pub comment_lines: u64,
+    /// Line number of the header (1-based).
+    pub header_line: u64,
 }
 
 /// Whether a line (from `at` in `text`) is blank: nothing before its end.
@@ -84,7 +86,7 @@ fn blank_at(text: &str, at: usize) -> bool {
 /// Comments: lines whose first character is `#` are comments only before
 /// the header (a file's preamble); after the header every non-blank line is
 /// a row, so an id such as `#12` is data, never dropped. Blank lines are
-/// skipped anywhere. A column name given twice in the header is an error.
+/// skipped anywhere.
 pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
     let file = display_name(path);
     let text = read_all(path)?;
@@ -113,21 +115,6 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
         .iter()
         .map(str::to_string)
         .collect();
-    for (k, h) in headers.iter().enumerate() {
-        if let Some(j) = headers[..k].iter().position(|g| g == h) {
-            return Err(InputError::Field {
-                file: file.clone(),
-                line: start_line,
-                field: h.clone(),
-                message: format!(
-                    "column `{h}` appears twice in the header (columns {} and {}); \
-                     every column name must be unique",
-                    j + 1,
-                    k + 1
-                ),
-            });
-        }
-    }
     let mut rows = Vec::new();
     let mut lines = Vec::new();
     // Line numbers from byte offsets, counted on from the previous record
@@ -173,6 +160,7 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
         rows,
         lines,
         comment_lines,
+        header_line: start_line,
     })
 }
 
@@ -197,6 +185,28 @@ pub(crate) fn columns(
                 })
         })
         .collect()
+}
+
+/// Refuse a header that names a column twice (after [`columns`] found the
+/// wanted ones, so a file without a header reports the missing columns).
+pub(crate) fn unique_columns(t: &RawTable, file: &str) -> Result<(), InputError> {
+    let headers = &t.headers;
+    for (k, h) in headers.iter().enumerate() {
+        if let Some(j) = headers[..k].iter().position(|g| g == h) {
+            return Err(InputError::Field {
+                file: display_name(file),
+                line: t.header_line,
+                field: h.clone(),
+                message: format!(
+                    "column `{h}` appears twice in the header (columns {} and {}); \
+                     every column name must be unique",
+                    j + 1,
+                    k + 1
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Parse a finite number from a cell.
@@ -238,6 +248,7 @@ fn read_rays(
 ) -> Result<(RawTable, Vec<(DVec3, DVec3)>), InputError> {
     let t = read_table(path)?;
     let cols = columns(&t.headers, &names, path)?;
+    unique_columns(&t, path)?;
     let mut rays = Vec::with_capacity(t.rows.len());
     for (row, &line) in t.rows.iter().zip(&t.lines) {
         let mut v = [0.0; 6];
