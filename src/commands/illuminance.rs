@@ -9,7 +9,7 @@ use super::outputs::check_outputs;
 use super::{MAX_VIEWS, RunArgs, check_tally_size, progress_bar, tick};
 use crate::estimator::local::run;
 use crate::estimator::{Receiver, Receivers, ViewTarget, emitted_luminance, view_target};
-use crate::io::csvio::write_csv_atomic;
+use crate::io::csvio::{Staged, stage_csv};
 use crate::io::{PointTable, ViewTable, format_number, read_points, read_views};
 use crate::run::{RunConfig, RunResult};
 use crate::scene::{self, Scene};
@@ -346,11 +346,17 @@ impl Job {
         })
     }
 
-    /// Stream the points' results to `out` (input columns, then result
-    /// columns); returns the number of rows written.
-    pub fn write_points(&self, r: &RunResult, orders: u32, out: &str) -> anyhow::Result<usize> {
+    /// Stream the points' results to the temporary file of `out` (input
+    /// columns, then result columns); returns it staged, with the number of
+    /// rows written (None without points).
+    pub fn write_points(
+        &self,
+        r: &RunResult,
+        orders: u32,
+        out: &str,
+    ) -> anyhow::Result<Option<(Staged, usize)>> {
         let Some(t) = self.points.as_ref() else {
-            return Ok(0);
+            return Ok(None);
         };
         let mut headers = t.headers.clone();
         headers.extend(result_headers("E", orders));
@@ -360,14 +366,22 @@ impl Job {
             c.extend(result_cells(r, j));
             c
         });
-        write_csv_atomic(out, &headers, rows).with_context(|| format!("writing {out}"))
+        stage_csv(out, &headers, rows)
+            .map(Some)
+            .with_context(|| format!("writing {out}"))
     }
 
-    /// Stream the views' results to `out`, with the sub-point `sx,sy,sz`
-    /// (empty when the ray leaves the scene); returns the number of rows written.
-    pub fn write_views(&self, r: &RunResult, orders: u32, out: &str) -> anyhow::Result<usize> {
+    /// Stream the views' results to the temporary file of `out`, with the
+    /// sub-point `sx,sy,sz` (empty when the ray leaves the scene); returns it
+    /// staged, with the number of rows written (None without views).
+    pub fn write_views(
+        &self,
+        r: &RunResult,
+        orders: u32,
+        out: &str,
+    ) -> anyhow::Result<Option<(Staged, usize)>> {
         let Some((t, targets)) = self.views.as_ref() else {
-            return Ok(0);
+            return Ok(None);
         };
         let mut headers = t.headers.clone();
         headers.extend(result_headers("L", orders));
@@ -385,7 +399,9 @@ impl Job {
             }
             c
         });
-        write_csv_atomic(out, &headers, rows).with_context(|| format!("writing {out}"))
+        stage_csv(out, &headers, rows)
+            .map(Some)
+            .with_context(|| format!("writing {out}"))
     }
 }
 
@@ -557,27 +573,39 @@ pub(crate) fn measure_with(
         eprintln!("lumest: {note}");
     }
     let result = run_job(&scene, &job, &cfg, estimator, run_args.quiet);
+    // Every output is staged before any is renamed into place: all or none.
     let mut rows = Vec::new();
-    if let (Some((input, out)), Some(t)) = (points, &job.points) {
-        let n = job.write_points(&result, cfg.orders, out)?;
-        rows.push((
-            rows_line("points", input, t.rows.len(), t.comment_lines, out, n),
-            n == t.rows.len(),
-        ));
+    let mut staged = Vec::new();
+    if let (Some((input, out)), Some(t)) = (points, &job.points)
+        && let Some((file, n)) = job.write_points(&result, cfg.orders, out)?
+    {
+        let line = rows_line("points", input, t.rows.len(), t.comment_lines, out, n);
+        rows.push((line, n == t.rows.len()));
+        staged.push((file, out));
     }
-    if let (Some((input, out)), Some((t, _))) = (views, &job.views) {
-        let n = job.write_views(&result, cfg.orders, out)?;
-        rows.push((
-            rows_line("views", input, t.rows.len(), t.comment_lines, out, n),
-            n == t.rows.len(),
-        ));
+    if let (Some((input, out)), Some((t, _))) = (views, &job.views)
+        && let Some((file, n)) = job.write_views(&result, cfg.orders, out)?
+    {
+        let line = rows_line("views", input, t.rows.len(), t.comment_lines, out, n);
+        rows.push((line, n == t.rows.len()));
+        staged.push((file, out));
+    }
+    anyhow::ensure!(
+        rows.iter().all(|r| r.1),
+        "rows were lost: {}",
+        rows.iter()
+            .map(|r| r.0.as_str())
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
+    for (file, out) in staged {
+        file.commit().with_context(|| format!("writing {out}"))?;
     }
     for line in summary(&result).lines() {
         eprintln!("lumest: {line}");
     }
-    for (line, whole) in &rows {
+    for (line, _) in &rows {
         eprintln!("lumest: {line}");
-        anyhow::ensure!(*whole, "{line}: rows were lost");
     }
     if let Some(t) = &job.points
         && let Some(line) = grid_summary(&result, t.rows.len())

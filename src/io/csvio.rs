@@ -365,15 +365,45 @@ pub(crate) fn temp_path(target: &Path) -> PathBuf {
     dir.join(format!(".{name}.{}.tmp", std::process::id()))
 }
 
-/// Stream a CSV table to `path` atomically (see [`write_atomic_with`]):
-/// the header, then each row as it is produced. Returns the number of rows
-/// written.
-pub fn write_csv_atomic(
+/// An output written to its temporary file and not yet renamed onto its
+/// name: [`Staged::commit`] renames it; dropping it uncommitted removes the
+/// temporary file. Several outputs staged first and committed after are
+/// written all or none (short of a failure between renames).
+#[derive(Debug)]
+pub struct Staged {
+    tmp: Option<PathBuf>,
+    target: PathBuf,
+}
+
+impl Staged {
+    /// Rename the temporary file onto the output's name.
+    pub fn commit(mut self) -> std::io::Result<()> {
+        match self.tmp.take() {
+            Some(tmp) => std::fs::rename(&tmp, &self.target).inspect_err(|_| {
+                let _ = std::fs::remove_file(&tmp);
+            }),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if let Some(tmp) = self.tmp.take() {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+}
+
+/// Stream a CSV table to the temporary file of `path` (header, then each
+/// row as it is produced) and return it staged, with the number of rows.
+/// `-` is written to standard output at once (nothing to stage).
+pub fn stage_csv(
     path: &str,
     headers: &[String],
     rows: impl IntoIterator<Item = Vec<String>>,
-) -> std::io::Result<usize> {
-    write_atomic_with(path, |out| {
+) -> std::io::Result<(Staged, usize)> {
+    let write = |out: &mut dyn Write| -> std::io::Result<usize> {
         let mut w = csv::Writer::from_writer(out);
         w.write_record(headers)?;
         let mut n = 0;
@@ -383,7 +413,22 @@ pub fn write_csv_atomic(
         }
         w.flush()?;
         Ok(n)
-    })
+    };
+    if path == "-" {
+        let n = write_atomic_with(path, write)?;
+        let target = PathBuf::from(path);
+        return Ok((Staged { tmp: None, target }, n));
+    }
+    let target = PathBuf::from(path);
+    let staged = Staged {
+        tmp: Some(temp_path(&target)),
+        target,
+    };
+    let tmp = staged.tmp.clone().expect("just set");
+    let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+    let n = write(&mut f)?;
+    f.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+    Ok((staged, n))
 }
 
 /// Build CSV text from headers and rows of cells.
@@ -431,6 +476,28 @@ mod line_tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("dupv.csv:1: field `dz`"), "{e}");
+    }
+
+    #[test]
+    fn staged_outputs_are_written_all_or_none() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("a.csv");
+        let b = dir.path().join("b.csv");
+        let h = vec!["x".to_string()];
+        let (sa, n) = super::stage_csv(a.to_str().unwrap(), &h, vec![vec!["1".into()]]).unwrap();
+        assert_eq!(n, 1);
+        assert!(!a.exists(), "staged output visible before commit");
+        // The second output fails (its folder is gone): the first is dropped too.
+        let bad = dir.path().join("gone").join("b.csv");
+        assert!(super::stage_csv(bad.to_str().unwrap(), &h, vec![]).is_err());
+        drop(sa);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        let (sa, _) = super::stage_csv(a.to_str().unwrap(), &h, vec![vec!["1".into()]]).unwrap();
+        let (sb, _) = super::stage_csv(b.to_str().unwrap(), &h, vec![vec!["2".into()]]).unwrap();
+        sa.commit().unwrap();
+        sb.commit().unwrap();
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "x\n2\n");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
     }
 
     #[test]
