@@ -5,17 +5,18 @@
 //! `luminance --views V --out W --points P --points-out R`) scores both lists
 //! with the same chains.
 
-use super::{RunArgs, progress_bar, tick};
+use super::outputs::check_outputs;
+use super::{MAX_VIEWS, RunArgs, check_tally_size, progress_bar, tick};
 use crate::estimator::local::run;
 use crate::estimator::{Receiver, Receivers, ViewTarget, emitted_luminance, view_target};
-use crate::io::csvio::to_csv;
-use crate::io::{PointTable, ViewTable, format_number, read_points, read_views, write_atomic};
+use crate::io::csvio::{Staged, stage_csv};
+use crate::io::{PointTable, ViewTable, format_number, read_points, read_views};
 use crate::run::{RunConfig, RunResult};
 use crate::scene::{self, Scene};
 use crate::tally::{figure_of_merit, relative_error, t_factor};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Which estimator computes the reflected light.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -383,51 +384,94 @@ impl Job {
         })
     }
 
-    /// CSV text of the points' results.
-    pub fn points_csv(&self, r: &RunResult, orders: u32) -> Option<Vec<u8>> {
-        let t = self.points.as_ref()?;
+    /// Stream the points' results to the temporary file of `out` (input
+    /// columns, then result columns); returns it staged, with the number of
+    /// rows written (None without points).
+    pub fn write_points(
+        &self,
+        r: &RunResult,
+        orders: u32,
+        out: &str,
+    ) -> anyhow::Result<Option<(Staged, usize)>> {
+        let Some(t) = self.points.as_ref() else {
+            return Ok(None);
+        };
         let mut headers = t.headers.clone();
         headers.extend(result_headers("E", orders));
-        let rows: Vec<Vec<String>> = t
-            .rows
-            .iter()
-            .enumerate()
-            .map(|(j, row)| {
-                let mut c = row.clone();
-                c.resize(t.headers.len(), String::new());
-                c.extend(result_cells(r, j));
-                c
-            })
-            .collect();
-        Some(to_csv(&headers, &rows))
+        let rows = t.rows.iter().enumerate().map(|(j, row)| {
+            let mut c = row.clone();
+            c.resize(t.headers.len(), String::new());
+            c.extend(result_cells(r, j));
+            c
+        });
+        stage_csv(out, &headers, rows)
+            .map(Some)
+            .with_context(|| format!("writing {out}"))
     }
 
-    /// CSV text of the views' results, with the sub-point `sx,sy,sz` (empty when the ray leaves the scene).
-    pub fn views_csv(&self, r: &RunResult, orders: u32) -> Option<Vec<u8>> {
-        let (t, targets) = self.views.as_ref()?;
+    /// Stream the views' results to the temporary file of `out`, with the
+    /// sub-point `sx,sy,sz` (empty when the ray leaves the scene); returns it
+    /// staged, with the number of rows written (None without views).
+    pub fn write_views(
+        &self,
+        r: &RunResult,
+        orders: u32,
+        out: &str,
+    ) -> anyhow::Result<Option<(Staged, usize)>> {
+        let Some((t, targets)) = self.views.as_ref() else {
+            return Ok(None);
+        };
         let mut headers = t.headers.clone();
         headers.extend(result_headers("L", orders));
         headers.extend(["sx", "sy", "sz"].map(String::from));
-        let rows: Vec<Vec<String>> = t
-            .rows
-            .iter()
-            .enumerate()
-            .map(|(k, row)| {
-                let mut c = row.clone();
-                c.resize(t.headers.len(), String::new());
-                match self.view_receiver[k] {
-                    Some(j) => c.extend(result_cells_plus(r, j, self.emitted[k])),
-                    None => c.extend(exact_cells(self.emitted[k], orders)),
-                }
-                match targets[k].sub_point() {
-                    Some(s) => c.extend([s.x, s.y, s.z].map(format_number)),
-                    None => c.extend(["", "", ""].map(String::from)),
-                }
-                c
-            })
-            .collect();
-        Some(to_csv(&headers, &rows))
+        let rows = t.rows.iter().enumerate().map(|(k, row)| {
+            let mut c = row.clone();
+            c.resize(t.headers.len(), String::new());
+            match self.view_receiver[k] {
+                Some(j) => c.extend(result_cells_plus(r, j, self.emitted[k])),
+                None => c.extend(exact_cells(self.emitted[k], orders)),
+            }
+            match targets[k].sub_point() {
+                Some(s) => c.extend([s.x, s.y, s.z].map(format_number)),
+                None => c.extend(["", "", ""].map(String::from)),
+            }
+            c
+        });
+        stage_csv(out, &headers, rows)
+            .map(Some)
+            .with_context(|| format!("writing {out}"))
     }
+}
+
+/// Refuse an input column that has the name of a result column.
+fn reserved_columns(headers: &[String], results: &[String], input: &str) -> anyhow::Result<()> {
+    if let Some(h) = headers.iter().find(|h| results.contains(h)) {
+        let input = if input == "-" { "<stdin>" } else { input };
+        anyhow::bail!(
+            "{input}: column `{h}` has the name of a result column, which the output adds \
+             (the output would have two `{h}` columns); rename it"
+        );
+    }
+    Ok(())
+}
+
+/// The rows-in, rows-out line of the run summary for one list.
+fn rows_line(
+    what: &str,
+    input: &str,
+    rows_in: usize,
+    comments: u64,
+    out: &str,
+    rows_out: usize,
+) -> String {
+    let input = if input == "-" { "<stdin>" } else { input };
+    let out = if out == "-" { "<stdout>" } else { out };
+    let comments = match comments {
+        0 => String::new(),
+        1 => " (and 1 comment line before the header)".to_string(),
+        n => format!(" (and {n} comment lines before the header)"),
+    };
+    format!("{what}: {rows_in} rows read from {input}{comments}, {rows_out} rows written to {out}")
 }
 
 /// Run a job with the chosen estimator.
@@ -453,6 +497,14 @@ pub fn run_job(
     result
 }
 
+/// Number of theta and phi steps of a fan with steps of `dt` and `dp` degrees.
+fn fan_steps(dt: f64, dp: f64) -> (u64, u64) {
+    (
+        (90.0 / dt).round().max(1.0) as u64,
+        (360.0 / dp).round().max(1.0) as u64,
+    )
+}
+
 /// Views over the hemisphere about `n` at `p`: theta at the centres of steps
 /// of `dt` degrees in [0, 90), phi at multiples of `dp` degrees in [0, 360).
 /// Columns `theta_deg,phi_deg,x,y,z,dx,dy,dz`.
@@ -464,10 +516,8 @@ pub fn fan_views(p: glam::DVec3, n: glam::DVec3, dt: f64, dp: f64) -> ViewTable 
             .to_vec(),
         ..ViewTable::default()
     };
-    let (nt, np) = (
-        (90.0 / dt).round().max(1.0) as usize,
-        (360.0 / dp).round().max(1.0) as usize,
-    );
+    let (nt, np) = fan_steps(dt, dp);
+    let (nt, np) = (nt as usize, np as usize);
     for i in 0..nt {
         let theta = (i as f64 + 0.5) * 90.0 / nt as f64;
         for k in 0..np {
@@ -539,6 +589,21 @@ pub(crate) fn measure_with(
         )?,
         None => Job::new(&scene, points.map(|p| p.0), views.map(|v| v.0))?,
     };
+    check_tally_size(
+        cfg.orders,
+        job.points.as_ref().map_or(0, |t| t.rows.len())
+            + job.views.as_ref().map_or(0, |v| v.0.rows.len()),
+    )?;
+    // The output repeats the input columns and adds the result columns: an
+    // input column named like a result column would appear twice.
+    if let (Some((input, _)), Some(t)) = (points, &job.points) {
+        reserved_columns(&t.headers, &result_headers("E", cfg.orders), input)?;
+    }
+    if let (Some((input, _)), Some((t, _))) = (views, &job.views) {
+        let mut names = result_headers("L", cfg.orders);
+        names.extend(["sx", "sy", "sz"].map(String::from));
+        reserved_columns(&t.headers, &names, input)?;
+    }
     eprintln!(
         "lumest: scene {}: {}",
         scene_path.display(),
@@ -561,19 +626,44 @@ pub(crate) fn measure_with(
             result.chains
         );
     }
-    if let (Some((_, out)), Some(csv)) = (points, job.points_csv(&result, cfg.orders)) {
-        write_atomic(out, &csv).with_context(|| format!("writing {out}"))?;
+    // Every output is staged before any is renamed into place: all or none.
+    let mut rows = Vec::new();
+    let mut staged = Vec::new();
+    if let (Some((input, out)), Some(t)) = (points, &job.points)
+        && let Some((file, n)) = job.write_points(&result, cfg.orders, out)?
+    {
+        let line = rows_line("points", input, t.rows.len(), t.comment_lines, out, n);
+        rows.push((line, n == t.rows.len()));
+        staged.push((file, out));
     }
-    if let (Some((_, out)), Some(csv)) = (views, job.views_csv(&result, cfg.orders)) {
-        write_atomic(out, &csv).with_context(|| format!("writing {out}"))?;
+    if let (Some((input, out)), Some((t, _))) = (views, &job.views)
+        && let Some((file, n)) = job.write_views(&result, cfg.orders, out)?
+    {
+        let line = rows_line("views", input, t.rows.len(), t.comment_lines, out, n);
+        rows.push((line, n == t.rows.len()));
+        staged.push((file, out));
+    }
+    anyhow::ensure!(
+        rows.iter().all(|r| r.1),
+        "rows were lost: {}",
+        rows.iter()
+            .map(|r| r.0.as_str())
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
+    for (file, out) in staged {
+        file.commit().with_context(|| format!("writing {out}"))?;
     }
     for line in summary(&result).lines() {
         eprintln!("lumest: {line}");
     }
-    if let Some(t) = &job.points {
-        if let Some(line) = grid_summary(&result, t.rows.len()) {
-            eprintln!("lumest: {line}");
-        }
+    for (line, _) in &rows {
+        eprintln!("lumest: {line}");
+    }
+    if let Some(t) = &job.points
+        && let Some(line) = grid_summary(&result, t.rows.len())
+    {
+        eprintln!("lumest: {line}");
     }
     Ok((job, result))
 }
@@ -631,6 +721,13 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
 /// Run `lumest illuminance`.
 pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
     let views = a.views.as_deref().zip(a.views_out.as_deref());
+    let mut inputs = vec![a.scene.as_path(), Path::new(&a.points)];
+    let mut outputs = vec![("--out", Path::new(&a.out))];
+    if let Some((v, out)) = views {
+        inputs.push(Path::new(v));
+        outputs.push(("--views-out", Path::new(out)));
+    }
+    check_outputs(&inputs, &outputs)?;
     measure(
         &a.scene,
         Some((&a.points, &a.out)),
@@ -643,12 +740,29 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
 /// Run `lumest luminance`.
 pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
     let points = a.points.as_deref().zip(a.points_out.as_deref());
+    let mut inputs = vec![a.scene.as_path()];
+    inputs.extend(a.views.as_deref().map(Path::new));
+    let mut outputs = vec![("--out", Path::new(&a.out))];
+    if let Some((p, out)) = points {
+        inputs.push(Path::new(p));
+        outputs.push(("--points-out", Path::new(out)));
+    }
+    if let Some(plot) = &a.plot {
+        outputs.push(("--plot", Path::new(plot)));
+    }
+    check_outputs(&inputs, &outputs)?;
     if let (Some(at), Some(steps)) = (&a.fan_at, &a.fan) {
         let v = numbers(at, 6, "--fan-at")?;
         let st = numbers(steps, 2, "--fan")?;
         anyhow::ensure!(
             st.iter().all(|&x| x > 0.0 && x <= 90.0),
             "--fan: steps must lie in (0, 90] degrees"
+        );
+        let (nt, np) = fan_steps(st[0], st[1]);
+        anyhow::ensure!(
+            nt * np <= MAX_VIEWS,
+            "--fan {steps}: {nt} x {np} = {} views; at most {MAX_VIEWS} (take larger steps)",
+            nt * np
         );
         let n = glam::DVec3::new(v[3], v[4], v[5]);
         anyhow::ensure!(n.length() > 0.0, "--fan-at: the normal has zero length");

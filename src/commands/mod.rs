@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod illuminance;
+pub mod outputs;
 pub mod photometry;
 pub mod render;
 pub mod shfit;
@@ -12,6 +13,28 @@ pub mod validate;
 use crate::chain::ChainParams;
 use crate::run::{RunConfig, Stop};
 use clap::Args;
+
+/// Most reflection orders `--orders` resolves.
+pub const MAX_ORDERS: u32 = 100;
+
+/// Most order tallies a run keeps, `(orders + 2) x receivers` (about 3 GB at
+/// 32 bytes a tally on one thread).
+pub const MAX_ORDER_TALLIES: u64 = 100_000_000;
+
+/// Most views a generated view list (`--fan`, a camera) may have.
+pub const MAX_VIEWS: u64 = 4_000_000;
+
+/// Refuse a run whose order tallies would not fit: `(orders + 2)` tallies
+/// per receiver, checked before anything is allocated.
+pub(crate) fn check_tally_size(orders: u32, receivers: usize) -> anyhow::Result<()> {
+    let tallies = (u64::from(orders) + 2).saturating_mul(receivers as u64);
+    anyhow::ensure!(
+        tallies <= MAX_ORDER_TALLIES,
+        "--orders {orders} with {receivers} receivers needs {tallies} tallies; at most \
+         {MAX_ORDER_TALLIES} (resolve fewer orders or split the points)"
+    );
+    Ok(())
+}
 
 /// Run controls shared by every Monte Carlo command.
 #[derive(Args, Clone, Debug)]
@@ -96,6 +119,12 @@ impl RunArgs {
         if let Some(c) = stop.chains {
             anyhow::ensure!(c > 0, "--chains must be positive");
         }
+        anyhow::ensure!(
+            self.orders <= MAX_ORDERS,
+            "--orders must be at most {MAX_ORDERS} (each resolved order adds a tally per \
+             receiver and two output columns), got {}",
+            self.orders
+        );
         if stop == Stop::default() {
             stop.chains = Some(100_000);
         }

@@ -108,9 +108,20 @@ pub fn camera_views(
         "--fov must lie in (0, 180) degrees"
     );
     anyhow::ensure!(
-        w > 0 && h > 0 && w * h <= 4_000_000,
-        "image size must be positive and at most 4 Mpixel"
+        w > 0 && h > 0 && w.checked_mul(h).is_some_and(|n| n <= 4_000_000),
+        "image size must be positive and at most 4 Mpixel, got {w} x {h}"
     );
+    if let Some(l) = lens {
+        let m = (l.k as f64).sqrt().round().max(1.0) as u64;
+        let views = (w * h) as u64 * m * m;
+        anyhow::ensure!(
+            views <= super::MAX_VIEWS,
+            "{w} x {h} pixels with {} lens samples each make {views} views; at most {} \
+             (fewer pixels or lens samples)",
+            m * m,
+            super::MAX_VIEWS
+        );
+    }
     let cam_up = right.cross(fwd);
     let tx = (0.5 * fov_deg).to_radians().tan();
     let ty = tx * h as f64 / w as f64;
@@ -202,6 +213,20 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<()> {
     };
     let base = a.out.strip_suffix(".png").unwrap_or(&a.out).to_string();
     let csv = format!("{base}.csv");
+    let mut outs = vec![
+        format!("{base}.png"),
+        format!("{base}.hdr"),
+        format!("{base}_false.png"),
+        csv.clone(),
+    ];
+    if per_pixel > 1 {
+        outs.push(format!("{base}_pixels.csv"));
+    }
+    let outputs: Vec<(&str, &std::path::Path)> = outs
+        .iter()
+        .map(|o| ("--out", std::path::Path::new(o)))
+        .collect();
+    super::outputs::check_outputs(&[a.scene.as_path()], &outputs)?;
     let (job, r) = measure_with(
         &a.scene,
         None,

@@ -13,7 +13,7 @@ use crate::estimator::local::run;
 use crate::estimator::{Receiver, Receivers};
 use crate::geometry::Plane;
 use crate::geometry::mesh::Mesh;
-use crate::geometry::sh::{ShSurface, fit, write_coefficients};
+use crate::geometry::sh::{MAX_DEGREE, ShSurface, fit, write_coefficients};
 use crate::light::Light;
 use crate::material::Material;
 use crate::run::RunConfig;
@@ -50,6 +50,9 @@ pub struct ShFitArgs {
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
 }
+
+/// Most sample directions `--samples` may ask for.
+pub const MAX_SAMPLES: usize = 2_000_000;
 
 /// Volume centroid of a closed mesh (divergence theorem); the bounding-box
 /// centre when the enclosed volume is (nearly) zero.
@@ -102,6 +105,20 @@ fn parse_vec(s: &str) -> anyhow::Result<DVec3> {
 
 /// Run `lumest sh-fit`.
 pub fn sh_fit(a: &ShFitArgs) -> anyhow::Result<()> {
+    // Sizes first: the samples, the check spiral and the least-squares
+    // matrix grow with (L + 1)^2.
+    anyhow::ensure!(
+        a.degree <= MAX_DEGREE,
+        "--degree {}: at most {MAX_DEGREE}",
+        a.degree
+    );
+    if let Some(n) = a.samples {
+        anyhow::ensure!(
+            n <= MAX_SAMPLES,
+            "--samples {n}: at most {MAX_SAMPLES} (the check uses four times as many rays)"
+        );
+    }
+    super::outputs::check_outputs(&[a.mesh.as_path()], &[("--out", a.out.as_path())])?;
     let t0 = Instant::now();
     let mesh = Mesh::load_obj(&a.mesh).map_err(|e| anyhow::anyhow!("{e}"))?;
     let load_s = t0.elapsed().as_secs_f64();

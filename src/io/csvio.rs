@@ -33,6 +33,8 @@ pub struct PointTable {
     pub rows: Vec<Vec<String>>,
     /// Line number of each row in the file (1-based).
     pub lines: Vec<u64>,
+    /// Comment lines before the header (not rows).
+    pub comment_lines: u64,
     /// Position [m] and unit normal of each row (normal normalised here).
     pub points: Vec<(DVec3, DVec3)>,
 }
@@ -67,15 +69,43 @@ pub(crate) struct RawTable {
     pub headers: Vec<String>,
     pub rows: Vec<Vec<String>>,
     pub lines: Vec<u64>,
+    /// Comment lines (first character `#`) before the header.
+    pub comment_lines: u64,
+    /// Line number of the header (1-based).
+    pub header_line: u64,
 }
 
+/// Whether a line (from `at` in `text`) is blank: nothing before its end.
+fn blank_at(text: &str, at: usize) -> bool {
+    let rest = &text[at..];
+    rest.is_empty() || rest.starts_with('\n') || rest.starts_with("\r\n")
+}
+
+/// Read a CSV table with a header row.
+///
+/// Comments: lines whose first character is `#` are comments only before
+/// the header (a file's preamble); after the header every non-blank line is
+/// a row, so an id such as `#12` is data, never dropped. Blank lines are
+/// skipped anywhere.
 pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
     let file = display_name(path);
     let text = read_all(path)?;
+    // The preamble: comment and blank lines before the header.
+    let (mut start, mut start_line, mut comment_lines) = (0usize, 1u64, 0u64);
+    while start < text.len() && (text[start..].starts_with('#') || blank_at(&text, start)) {
+        comment_lines += u64::from(text[start..].starts_with('#'));
+        match text[start..].find('\n') {
+            Some(k) => {
+                start += k + 1;
+                start_line += 1;
+            }
+            None => start = text.len(),
+        }
+    }
+    let body = &text[start..];
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
-        .comment(Some(b'#'))
-        .from_reader(text.as_bytes());
+        .from_reader(body.as_bytes());
     let headers: Vec<String> = rdr
         .headers()
         .map_err(|e| InputError::File {
@@ -87,24 +117,28 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
         .collect();
     let mut rows = Vec::new();
     let mut lines = Vec::new();
-    // Line numbers from byte offsets. A record's position is where the
-    // reader started on it, before the comment lines it skipped, so those are
-    // stepped over here (the csv crate's own line count is off the same way).
-    let line_of = |byte: u64| -> u64 {
-        let mut at = (byte as usize).min(text.len());
-        let mut line = text.as_bytes()[..at]
-            .iter()
-            .filter(|&&c| c == b'\n')
-            .count() as u64
-            + 1;
-        while text[at..].starts_with('#') {
-            match text[at..].find('\n') {
-                Some(k) => {
-                    at += k + 1;
-                    line += 1;
-                }
-                None => break,
-            }
+    // Line numbers from byte offsets, counted on from the previous record
+    // (records come in file order), so reading is linear in the file size.
+    // A record's position is where the reader started on it, before the
+    // blank lines it skipped, so those are stepped over here (the csv
+    // crate's own line count is off the same way).
+    let mut cursor = (0usize, start_line);
+    let mut line_of = |byte: u64| -> u64 {
+        let mut at = (byte as usize).min(body.len());
+        let (from, from_line) = if at >= cursor.0 {
+            cursor
+        } else {
+            (0, start_line)
+        };
+        let mut line = from_line
+            + body.as_bytes()[from..at]
+                .iter()
+                .filter(|&&c| c == b'\n')
+                .count() as u64;
+        cursor = (at, line);
+        while at < body.len() && blank_at(body, at) {
+            at += body[at..].find('\n').map_or(body.len() - at, |k| k + 1);
+            line += 1;
         }
         line
     };
@@ -125,6 +159,8 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
         headers,
         rows,
         lines,
+        comment_lines,
+        header_line: start_line,
     })
 }
 
@@ -151,6 +187,28 @@ pub(crate) fn columns(
         .collect()
 }
 
+/// Refuse a header that names a column twice (after [`columns`] found the
+/// wanted ones, so a file without a header reports the missing columns).
+pub(crate) fn unique_columns(t: &RawTable, file: &str) -> Result<(), InputError> {
+    let headers = &t.headers;
+    for (k, h) in headers.iter().enumerate() {
+        if let Some(j) = headers[..k].iter().position(|g| g == h) {
+            return Err(InputError::Field {
+                file: display_name(file),
+                line: t.header_line,
+                field: h.clone(),
+                message: format!(
+                    "column `{h}` appears twice in the header (columns {} and {}); \
+                     every column name must be unique",
+                    j + 1,
+                    k + 1
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Parse a finite number from a cell.
 pub(crate) fn number(cell: &str, file: &str, line: u64, field: &str) -> Result<f64, InputError> {
     let err = |m: String| InputError::Field {
@@ -175,6 +233,7 @@ pub fn read_points(path: &str) -> Result<PointTable, InputError> {
         headers: t.headers,
         rows: t.rows,
         lines: t.lines,
+        comment_lines: t.comment_lines,
         points,
     })
 }
@@ -189,6 +248,7 @@ fn read_rays(
 ) -> Result<(RawTable, Vec<(DVec3, DVec3)>), InputError> {
     let t = read_table(path)?;
     let cols = columns(&t.headers, &names, path)?;
+    unique_columns(&t, path)?;
     let mut rays = Vec::with_capacity(t.rows.len());
     for (row, &line) in t.rows.iter().zip(&t.lines) {
         let mut v = [0.0; 6];
@@ -225,6 +285,8 @@ pub struct ViewTable {
     pub rows: Vec<Vec<String>>,
     /// Line number of each row (1-based).
     pub lines: Vec<u64>,
+    /// Comment lines before the header (not rows).
+    pub comment_lines: u64,
     /// Observer position [m] and unit viewing direction of each row.
     pub views: Vec<(DVec3, DVec3)>,
 }
@@ -242,6 +304,7 @@ pub fn read_views(path: &str) -> Result<ViewTable, InputError> {
         headers: t.headers,
         rows: t.rows,
         lines: t.lines,
+        comment_lines: t.comment_lines,
         views,
     })
 }
@@ -259,12 +322,39 @@ pub fn format_number(x: f64) -> String {
 /// Write `contents` to `path` atomically (temporary file in the same folder,
 /// then rename), or to standard output for `-`.
 pub fn write_atomic(path: &str, contents: &[u8]) -> std::io::Result<()> {
+    write_atomic_with(path, |w| w.write_all(contents))
+}
+
+/// Write to `path` atomically through `fill`, which streams into a buffered
+/// writer (temporary file in the same folder, then rename; nothing is left
+/// behind when `fill` fails), or to standard output for `-`.
+pub fn write_atomic_with<T>(
+    path: &str,
+    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<T>,
+) -> std::io::Result<T> {
     if path == "-" {
-        let mut out = std::io::stdout().lock();
-        out.write_all(contents)?;
-        return out.flush();
+        let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+        let v = fill(&mut out)?;
+        out.flush()?;
+        return Ok(v);
     }
     let target = Path::new(path);
+    let tmp = temp_path(target);
+    let written = (|| {
+        let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        let v = fill(&mut f)?;
+        f.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        std::fs::rename(&tmp, target)?;
+        Ok(v)
+    })();
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
+}
+
+/// The temporary file next to `target` that an atomic write goes through.
+pub(crate) fn temp_path(target: &Path) -> PathBuf {
     let dir = target
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
@@ -272,15 +362,73 @@ pub fn write_atomic(path: &str, contents: &[u8]) -> std::io::Result<()> {
     let name = target
         .file_name()
         .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-    let tmp: PathBuf = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(contents)?;
-        f.sync_all()?;
+    dir.join(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// An output written to its temporary file and not yet renamed onto its
+/// name: [`Staged::commit`] renames it; dropping it uncommitted removes the
+/// temporary file. Several outputs staged first and committed after are
+/// written all or none (short of a failure between renames).
+#[derive(Debug)]
+pub struct Staged {
+    tmp: Option<PathBuf>,
+    target: PathBuf,
+}
+
+impl Staged {
+    /// Rename the temporary file onto the output's name.
+    pub fn commit(mut self) -> std::io::Result<()> {
+        match self.tmp.take() {
+            Some(tmp) => std::fs::rename(&tmp, &self.target).inspect_err(|_| {
+                let _ = std::fs::remove_file(&tmp);
+            }),
+            None => Ok(()),
+        }
     }
-    std::fs::rename(&tmp, target).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if let Some(tmp) = self.tmp.take() {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+}
+
+/// Stream a CSV table to the temporary file of `path` (header, then each
+/// row as it is produced) and return it staged, with the number of rows.
+/// `-` is written to standard output at once (nothing to stage).
+pub fn stage_csv(
+    path: &str,
+    headers: &[String],
+    rows: impl IntoIterator<Item = Vec<String>>,
+) -> std::io::Result<(Staged, usize)> {
+    let write = |out: &mut dyn Write| -> std::io::Result<usize> {
+        let mut w = csv::Writer::from_writer(out);
+        w.write_record(headers)?;
+        let mut n = 0;
+        for r in rows {
+            w.write_record(&r)?;
+            n += 1;
+        }
+        w.flush()?;
+        Ok(n)
+    };
+    if path == "-" {
+        let n = write_atomic_with(path, write)?;
+        let target = PathBuf::from(path);
+        return Ok((Staged { tmp: None, target }, n));
+    }
+    let target = PathBuf::from(path);
+    let staged = Staged {
+        tmp: Some(temp_path(&target)),
+        target,
+    };
+    let tmp = staged.tmp.clone().expect("just set");
+    let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+    let n = write(&mut f)?;
+    f.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+    Ok((staged, n))
 }
 
 /// Build CSV text from headers and rows of cells.
@@ -301,8 +449,94 @@ mod line_tests {
     fn line_numbers_count_comment_lines() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("t.csv");
-        std::fs::write(&p, "# top\nx,y\n1,2\n# mid\n# mid2\n3,4\n5,6\n").unwrap();
+        std::fs::write(&p, "# top\n\n# more\nid,y\na,2\n\n#b,4\n# c,6\n").unwrap();
         let t = read_table(p.to_str().unwrap()).unwrap();
-        assert_eq!(t.lines, vec![3, 6, 7]);
+        // Comments only before the header: `#b` and `# c` are rows.
+        assert_eq!(t.comment_lines, 2);
+        assert_eq!(t.lines, vec![5, 7, 8]);
+        let ids: Vec<&str> = t.rows.iter().map(|r| r[0].as_str()).collect();
+        assert_eq!(ids, ["a", "#b", "# c"]);
+    }
+
+    #[test]
+    fn duplicated_column_names_are_rejected() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("dup.csv");
+        std::fs::write(&p, "# note\nid,x,y,z,nx,ny,nz,x\na,0,0,0,0,0,1,5\n").unwrap();
+        let e = super::read_points(p.to_str().unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("dup.csv:2: field `x`") && e.contains("columns 2 and 8"),
+            "{e}"
+        );
+        let p = dir.path().join("dupv.csv");
+        std::fs::write(&p, "x,y,z,dx,dy,dz,dz\n0,0,0,0,0,1,1\n").unwrap();
+        let e = super::read_views(p.to_str().unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("dupv.csv:1: field `dz`"), "{e}");
+    }
+
+    #[test]
+    fn staged_outputs_are_written_all_or_none() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("a.csv");
+        let b = dir.path().join("b.csv");
+        let h = vec!["x".to_string()];
+        let (sa, n) = super::stage_csv(a.to_str().unwrap(), &h, vec![vec!["1".into()]]).unwrap();
+        assert_eq!(n, 1);
+        assert!(!a.exists(), "staged output visible before commit");
+        // The second output fails (its folder is gone): the first is dropped too.
+        let bad = dir.path().join("gone").join("b.csv");
+        assert!(super::stage_csv(bad.to_str().unwrap(), &h, vec![]).is_err());
+        drop(sa);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        let (sa, _) = super::stage_csv(a.to_str().unwrap(), &h, vec![vec!["1".into()]]).unwrap();
+        let (sb, _) = super::stage_csv(b.to_str().unwrap(), &h, vec![vec!["2".into()]]).unwrap();
+        sa.commit().unwrap();
+        sb.commit().unwrap();
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "x\n2\n");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    #[test]
+    fn blank_lines_are_counted() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        std::fs::write(&p, "x,y\n1,2\n\n\n3,4\n5,6\n").unwrap();
+        let t = read_table(p.to_str().unwrap()).unwrap();
+        assert_eq!(t.lines, vec![2, 5, 6]);
+    }
+
+    /// Line numbers stay exact deep in a large file (they are counted on
+    /// from the previous record, not from the start of the file for each).
+    #[test]
+    fn line_numbers_deep_in_a_large_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("big.csv");
+        let n = 30_000;
+        let mut text = String::from("id,x,y,z,nx,ny,nz\n");
+        for k in 0..n {
+            if k % 1000 == 999 {
+                text.push('\n');
+            }
+            text.push_str(&format!("p{k},{k},0.5,0.25,0,0,1\n"));
+        }
+        std::fs::write(&p, &text).unwrap();
+        let t = read_table(p.to_str().unwrap()).unwrap();
+        assert_eq!(t.rows.len(), n);
+        // Row k sits on line 2 + k + (blank lines before it).
+        for k in [0, 998, 999, 12_345, n - 1] {
+            assert_eq!(t.lines[k], 2 + k as u64 + (k as u64 + 1) / 1000, "row {k}");
+        }
+        // A bad cell near the end is reported on its own line.
+        let bad = text.replacen("p29990,29990,", "p29990,29x90,", 1);
+        std::fs::write(&p, &bad).unwrap();
+        let e = super::read_points(p.to_str().unwrap())
+            .unwrap_err()
+            .to_string();
+        let line = 2 + 29_990 + 29_991 / 1000;
+        assert!(e.contains(&format!("big.csv:{line}: field `x`")), "{e}");
     }
 }

@@ -450,7 +450,7 @@ impl ColourScale {
             let (k0, k1) = ((a - 1e-9).ceil() as i32, (b + 1e-9).floor() as i32);
             let decades = (k1 - k0 + 1).max(0) as usize;
             let every = decades.div_ceil(n).max(1);
-            for k in (k0..=k1).filter(|k| (k - k0) as usize % every == 0) {
+            for k in (k0..=k1).filter(|k| ((k - k0) as usize).is_multiple_of(every)) {
                 t.push(10f64.powi(k));
             }
             if t.len() < 3 {

@@ -24,8 +24,8 @@ fn index_cell(cell: &str, file: &str, line: u64, field: &str) -> Result<usize, I
 }
 
 /// Read SH coefficients from a CSV file with the header columns `k,m,a,b`
-/// (any order; other columns ignored; `#` starts a comment; `-` is
-/// standard input). `a`, `b` in local units.
+/// (any order; other columns ignored, each name once; lines starting with
+/// `#` before the header are comments; `-` is standard input). `a`, `b` in local units.
 ///
 /// Errors name the file, the line and the field: a missing column, a
 /// non-integer `k` or `m`, `k > max_degree`, `m > k`, a non-finite `a` or
@@ -35,6 +35,7 @@ pub fn read_coefficients(path: &Path, max_degree: usize) -> Result<Vec<ShCoeff>,
     let name = name.as_ref();
     let table = csvio::read_table(name)?;
     let cols = csvio::columns(&table.headers, &["k", "m", "a", "b"], name)?;
+    csvio::unique_columns(&table, name)?;
     let field_err = |line: u64, field: &str, message: String| InputError::Field {
         file: display_name(name),
         line,

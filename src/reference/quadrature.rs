@@ -247,7 +247,7 @@ pub fn j0_phase(j: u64, rf: u32, t: f64, x: f64) -> f64 {
 // same 1e-16, an error that does not cancel in the alternating panel sum.
 fn rot(m: u64, rf: u32) -> (f64, f64) {
     let rf = rf as u64;
-    if (2 * m) % rf == 0 {
+    if (2 * m).is_multiple_of(rf) {
         return match (2 * m / rf) % 4 {
             0 => (0.0, 1.0),
             1 => (1.0, 0.0),

@@ -186,7 +186,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         3 => (3 * mc / 4 + 1, 3 * mc / 4 + 1 + mc / 2),
         _ => (1, mc / 4 + 1),
     };
-    if isym >= 2 && mc % 4 != 0 && !(isym == 2 && mc % 2 == 0) {
+    if isym >= 2 && !mc.is_multiple_of(4) && !(isym == 2 && mc.is_multiple_of(2)) {
         return Err(l.err(
             4,
             "Mc (number of C-planes)",
