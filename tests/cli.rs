@@ -619,3 +619,47 @@ fn bench_reports_only_what_it_measures() {
         "ratio {ratio} vs {want} from the FOM columns: {out}"
     );
 }
+
+/// Smaller input items of issue 12: counts in scientific notation, negative
+/// times and zero point counts with plain messages, a hint for
+/// semicolon-separated CSV files.
+#[test]
+fn plain_messages_for_odd_numbers_and_separators() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts = dir.path().join("p.csv");
+    std::fs::write(&pts, "x,y,z,nx,ny,nz\n0,0,0,0,0,1\n").unwrap();
+    let out = dir.path().join("E.csv");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "illuminance",
+            "--scene",
+            "data/sobolev.toml",
+            "--points",
+            pts.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ];
+        args.extend_from_slice(extra);
+        let o = lumest().args(&args).output().unwrap();
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stderr).to_string(),
+        )
+    };
+    let (ok, err) = run(&["--chains", "1e4"]);
+    assert!(ok, "{err}");
+    let (ok, err) = run(&["--chains", "1.5"]);
+    assert!(!ok && err.contains("not a whole number of chains"), "{err}");
+    let (ok, err) = run(&["--time", "-1"]);
+    assert!(
+        !ok && err.contains("--time must be a positive number"),
+        "{err}"
+    );
+    std::fs::write(&pts, "x;y;z;nx;ny;nz\n0;0;0;0;0;1\n").unwrap();
+    let (ok, err) = run(&["--chains", "1000"]);
+    assert!(!ok && err.contains("seems to use `;`"), "{err}");
+    let o = lumest().args(["bench", "--points", "0"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("at least 1"), "{err}");
+}

@@ -195,6 +195,11 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
         .into_iter()
         .map(|x| x as usize)
         .collect();
+    anyhow::ensure!(
+        counts.iter().all(|&n| n >= 1),
+        "--points: every count must be at least 1, got {}",
+        a.points
+    );
     let times: Vec<f64> = match &a.time {
         Some(t) => parse_list(t)?,
         None => counts

@@ -41,10 +41,10 @@ pub(crate) fn check_tally_size(orders: u32, receivers: usize) -> anyhow::Result<
 pub struct RunArgs {
     /// Number of chains (rounded up to whole batches). Default 100000 when no
     /// other stopping rule is given.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_count)]
     pub chains: Option<u64>,
     /// Wall-clock limit [s].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub time: Option<f64>,
     /// Stop when the largest relative standard error of E over the points is below this.
     #[arg(long = "rel-error")]
@@ -93,6 +93,19 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+/// A count given as a whole number, also in scientific notation (`1e5`).
+fn parse_count(s: &str) -> Result<u64, String> {
+    if let Ok(n) = s.parse::<u64>() {
+        return Ok(n);
+    }
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 && x.fract() == 0.0 && x < 1.8e19 => Ok(x as u64),
+        _ => Err(format!(
+            "`{s}` is not a whole number of chains (like 100000 or 1e5)"
+        )),
+    }
 }
 
 impl RunArgs {

@@ -179,8 +179,14 @@ pub(crate) fn columns(
                 .ok_or_else(|| InputError::File {
                     file: display_name(file),
                     message: format!(
-                        "missing column `{w}` in the header (found: {})",
-                        headers.join(",")
+                        "missing column `{w}` in the header (found: {}){}",
+                        headers.join(","),
+                        if headers.len() == 1 && headers[0].contains(';') {
+                            "; the file seems to use `;` between columns: lumest reads comma-separated \
+                             files with a decimal point (12.5, not 12,5)"
+                        } else {
+                            ""
+                        }
                     ),
                 })
         })
