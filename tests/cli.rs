@@ -663,3 +663,53 @@ fn plain_messages_for_odd_numbers_and_separators() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("at least 1"), "{err}");
 }
+
+/// Render refuses `-` as its output prefix (it wrote files named `-.png`)
+/// and a lens-sample count that is not a square (2 silently became 1).
+#[test]
+fn render_refuses_a_dash_prefix_and_non_square_lens_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = [
+        "render",
+        "--scene",
+        "data/sobolev.toml",
+        "--eye",
+        "0,0,0.5",
+        "--look",
+        "1,0,0.5",
+        "--width",
+        "8",
+        "--height",
+        "6",
+        "--chains",
+        "1000",
+        "--quiet",
+    ];
+    let o = lumest()
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(base)
+        .args(["--out", "-"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("prefix"), "{err}");
+    assert!(!Path::new(env!("CARGO_MANIFEST_DIR")).join("-.png").exists());
+    let prefix = dir.path().join("r");
+    let o = lumest()
+        .args(base)
+        .args([
+            "--out",
+            prefix.to_str().unwrap(),
+            "--aperture",
+            "0.01",
+            "--lens-samples",
+            "2",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("square number"),
+        "{err}"
+    );
+}

@@ -175,10 +175,21 @@ fn vec3(s: &str, what: &str) -> anyhow::Result<DVec3> {
 
 /// Run `lumest render`.
 pub fn render(a: &RenderArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        a.out != "-",
+        "--out is the prefix of the image and table files render writes (PREFIX.png, PREFIX.hdr, ...): \
+         `-` (standard output) cannot hold them"
+    );
     let (eye, look) = (vec3(&a.eye, "--eye")?, vec3(&a.look, "--look")?);
     anyhow::ensure!(
         a.aperture.is_finite() && a.aperture >= 0.0,
         "--aperture must be >= 0"
+    );
+    let side = (a.lens_samples as f64).sqrt().round() as usize;
+    anyhow::ensure!(
+        a.lens_samples >= 1 && side * side == a.lens_samples,
+        "--lens-samples must be a square number (1, 4, 9, 16, ...: a stratified square grid), got {}",
+        a.lens_samples
     );
     let lens = (a.aperture > 0.0).then(|| Lens {
         aperture: a.aperture,
