@@ -659,6 +659,31 @@ fn plain_messages_for_odd_numbers_and_separators() {
     std::fs::write(&pts, "x;y;z;nx;ny;nz\n0;0;0;0;0;1\n").unwrap();
     let (ok, err) = run(&["--chains", "1000"]);
     assert!(!ok && err.contains("seems to use `;`"), "{err}");
+    // Huge numbers are shown in scientific notation, not with 301 digits.
+    let scene = dir.path().join("s.toml");
+    let text = std::fs::read_to_string("data/sobolev.toml").unwrap();
+    std::fs::write(
+        &scene,
+        text.replace("intensity = 1.0", "intensity = -1e300"),
+    )
+    .unwrap();
+    let o = lumest()
+        .args([
+            "illuminance",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--points",
+            "data/sobolev_points.csv",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("-1e300") && !err.contains("0000000000"),
+        "{err}"
+    );
     let o = lumest().args(["bench", "--points", "0"]).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("at least 1"), "{err}");

@@ -120,13 +120,15 @@ impl RunArgs {
         if let Some(t) = stop.time {
             anyhow::ensure!(
                 t.is_finite() && t > 0.0,
-                "--time must be a positive number of seconds, got {t}"
+                "--time must be a positive number of seconds, got {}",
+                crate::io::format_number(t)
             );
         }
         if let Some(r) = stop.rel_error {
             anyhow::ensure!(
                 r.is_finite() && r > 0.0,
-                "--rel-error must be positive, got {r}"
+                "--rel-error must be positive, got {}",
+                crate::io::format_number(r)
             );
         }
         if let Some(c) = stop.chains {

@@ -101,7 +101,14 @@ impl SourceCtx<'_> {
         if x.is_finite() && x >= 0.0 {
             Ok(x)
         } else {
-            Err(self.invalid(v.span(), field, format!("must be finite and >= 0, got {x}")))
+            Err(self.invalid(
+                v.span(),
+                field,
+                format!(
+                    "must be finite and >= 0, got {}",
+                    crate::io::format_number(x)
+                ),
+            ))
         }
     }
 }
@@ -265,7 +272,14 @@ fn positive(v: &Spanned<f64>, field: &str, ctx: &SourceCtx) -> Result<f64, Scene
     if x.is_finite() && x > 0.0 {
         Ok(x)
     } else {
-        Err(ctx.invalid(v.span(), field, format!("must be finite and > 0, got {x}")))
+        Err(ctx.invalid(
+            v.span(),
+            field,
+            format!(
+                "must be finite and > 0, got {}",
+                crate::io::format_number(x)
+            ),
+        ))
     }
 }
 
@@ -478,7 +492,7 @@ fn material(m: &Spanned<MaterialDesc>, ctx: &SourceCtx) -> Result<Material, Scen
                 return Err(ctx.invalid(
                     r.span(),
                     "reflectance",
-                    format!("must lie in [0, 1], got {rho}"),
+                    format!("must lie in [0, 1], got {}", crate::io::format_number(rho)),
                 ));
             }
             Ok(Material::Lambertian { rho })
@@ -624,7 +638,7 @@ fn light(
                 return Err(ctx.invalid(
                     rs.span(),
                     "radius",
-                    format!("must be finite and > 0, got {r}"),
+                    format!("must be finite and > 0, got {}", crate::io::format_number(r)),
                 ));
             }
             if let Some(k) = planes
@@ -653,7 +667,7 @@ fn light(
                 let a = ctx.required(v, l.span(), field)?;
                 let x = *a.get_ref();
                 if !(x.is_finite() && (0.0..=180.0).contains(&x)) {
-                    return Err(ctx.invalid(a.span(), field, format!("must lie in [0, 180] degrees, got {x}")));
+                    return Err(ctx.invalid(a.span(), field, format!("must lie in [0, 180] degrees, got {}", crate::io::format_number(x))));
                 }
                 Ok(x)
             };
