@@ -519,7 +519,7 @@ pub fn closed_form_rows(dir: &Path) -> anyhow::Result<Vec<ClosedFormRow>> {
                     3.0 - p.z,
                 )
             };
-            max_rel = max_rel.max(rel(rec.direct()[j], exact));
+            max_rel = crate::tally::zcheck::max_abs(max_rel, rel(rec.direct()[j], exact));
         }
         rows.push(ClosedFormRow {
             case: format!("panel on a {name}: contour integral vs configuration factors"),
@@ -552,7 +552,7 @@ pub fn closed_form_rows(dir: &Path) -> anyhow::Result<Vec<ClosedFormRow>> {
             p,
             n,
         );
-        max_rel = max_rel.max(rel(rec.direct()[j], exact));
+        max_rel = crate::tally::zcheck::max_abs(max_rel, rel(rec.direct()[j], exact));
     }
     rows.push(ClosedFormRow {
         case: "uniform disc, tilted receivers (some cut by the horizon): closed form vs 2-D quadrature".into(),
@@ -573,7 +573,10 @@ pub fn closed_form_rows(dir: &Path) -> anyhow::Result<Vec<ClosedFormRow>> {
     let mut max_rel: f64 = 0.0;
     for (j, &(p, _)) in pts.iter().enumerate() {
         let d = (DVec3::new(0.0, 0.0, 2.5) - p).length();
-        max_rel = max_rel.max(rel(rec.direct()[j], cosine_intensity_plane(720.0, 2.5, d)));
+        max_rel = crate::tally::zcheck::max_abs(
+            max_rel,
+            rel(rec.direct()[j], cosine_intensity_plane(720.0, 2.5, d)),
+        );
     }
     rows.push(ClosedFormRow {
         case: "cosine luminaire (IES table, 0.5 deg steps): bilinear table vs I0 h^2 / d^4".into(),
