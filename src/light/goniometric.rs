@@ -7,7 +7,9 @@
 //! Type C (every EULUMDAT file, most IES files): the photometric nadir
 //! (`gamma = 0`) points along `-z`, the C0 plane contains `+x` and C90
 //! contains `+y`; a unit direction `d` has `gamma = acos(-d_z)` and
-//! `C = atan2(d_y, d_x)` in `[0, 360)`. Type B (floodlights): the beam axis
+//! `C = atan2(d_y, d_x)` in `[0, 360)` (at the poles, where the azimuth is
+//! undefined, C0, or C180 when `d_x` is a negative zero, as `atan2` has
+//! it). Type B (floodlights): the beam axis
 //! is `-z` and the B-planes turn about the transverse axis `y`; `H` is the
 //! plane's angle from the axis towards `+x` and `V` the angle out of the
 //! `xz` plane towards `+y`: `d = (cos V sin H, sin V, -cos V cos H)`. Type A
@@ -33,6 +35,7 @@
 //! in solid angle within it. The density is positive wherever the
 //! interpolant is, so the weight `I(d) / pdf(d)` is exact and unbiased.
 
+use super::angle_grid::{AngleGrid, AngleKind};
 use crate::io::photometry::{PhotometricType, Photometry, Symmetry};
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -57,9 +60,9 @@ pub struct Goniometric {
     /// symmetry of a type C table): the intensity depends on gamma alone,
     /// and no azimuth is computed.
     rotational: bool,
-    /// The vertical angles are evenly spaced: `(v[0], 1 / step)` to locate
-    /// a cell without a search.
-    v_even: Option<(f64, f64)>,
+    /// Type C: the vertical and horizontal angles located from a
+    /// direction's components without `acos`/`atan2` ([`AngleGrid`]).
+    grids: Option<(AngleGrid, Option<AngleGrid>)>,
 }
 
 /// A direction drawn from [`Goniometric::sample`].
@@ -91,19 +94,22 @@ impl Goniometric {
             weight_total: 0.0,
             power: 0.0,
             rotational: false,
-            v_even: None,
+            grids: None,
         };
         g.rotational = p.kind == PhotometricType::C
             && !g.h.is_empty()
             && (0..g.h.len()).all(|a| (0..nv).all(|k| g.at(a, k) == g.at(0, k)));
-        if nv >= 2 {
-            let step = (g.v[nv - 1] - g.v[0]) / (nv - 1) as f64;
-            let even = step > 0.0
-                && g.v
-                    .iter()
-                    .enumerate()
-                    .all(|(k, &x)| (x - (g.v[0] + step * k as f64)).abs() <= 1e-12 * step);
-            g.v_even = even.then_some((g.v[0], 1.0 / step));
+        if p.kind == PhotometricType::C
+            && let Some(vg) = AngleGrid::new(AngleKind::Polar, &g.v)
+        {
+            let hg = if g.rotational {
+                None
+            } else {
+                AngleGrid::new(AngleKind::Azimuth, &g.h)
+            };
+            if g.rotational || hg.is_some() {
+                g.grids = Some((vg, hg));
+            }
         }
         let mut acc = 0.0;
         let mut power = 0.0;
@@ -211,44 +217,50 @@ impl Goniometric {
         }
     }
 
-    /// Intensity [cd] towards unit direction `d` (luminaire frame).
-    #[inline]
+    /// Intensity [cd] towards unit direction `d` (luminaire frame): the
+    /// bilinear rule of [`Self::intensity_at`], with type C cells found
+    /// without inverse trigonometry ([`AngleGrid`]).
+    #[inline(always)]
     pub fn intensity(&self, d: DVec3) -> f64 {
-        if self.rotational {
-            // The same as `intensity_at(any C, gamma)`, without the azimuth.
-            let g = (-d.z).clamp(-1.0, 1.0).acos();
-            return self.intensity_gamma(g);
-        }
-        let (h, v) = self.angles(d);
-        self.intensity_at(h, v)
-    }
-
-    /// Intensity [cd] of a rotationally symmetric table at vertical angle
-    /// `v` [rad]: linear in `v` between the measured angles, zero outside.
-    #[inline]
-    fn intensity_gamma(&self, v: f64) -> f64 {
+        let Some((vg, hg)) = &self.grids else {
+            let (h, v) = self.angles(d);
+            return self.intensity_at(h, v);
+        };
+        // sin gamma from the transverse components: accurate at the poles,
+        // where sqrt(1 - cos^2) loses half the digits.
+        let (c, r) = (-d.z, (d.x * d.x + d.y * d.y).sqrt());
         let nv = self.v.len();
-        if nv == 0 || v < self.v[0] || v > self.v[nv - 1] {
-            return 0.0;
+        match hg {
+            // Rotational symmetry: gamma alone, no azimuth.
+            None => match vg.locate(c, r) {
+                Some((k, t)) => self.i[k] + t * (self.i[k + 1] - self.i[k]),
+                None => 0.0,
+            },
+            Some(hg) => {
+                let Some((k, tv)) = vg.locate(c, r) else {
+                    return 0.0;
+                };
+                // At the poles (r = 0) the azimuth is atan2's: C180 for a
+                // negative zero d_x, else C0.
+                let (cc, sc) = if r > 0.0 {
+                    let inv = r.recip();
+                    (d.x * inv, d.y * inv)
+                } else if d.x.is_sign_negative() {
+                    (-1.0, 0.0)
+                } else {
+                    (1.0, 0.0)
+                };
+                let Some((a, th)) = hg.locate(cc, sc) else {
+                    return 0.0;
+                };
+                let row = |a: usize| {
+                    let x = &self.i[a * nv + k..a * nv + k + 2];
+                    x[0] + tv * (x[1] - x[0])
+                };
+                let (lo, hi) = (row(a), row(a + 1));
+                lo + th * (hi - lo)
+            }
         }
-        let (k, t) = self.locate_v(v);
-        let k1 = (k + 1).min(nv - 1);
-        self.i[k] + t * (self.i[k1] - self.i[k])
-    }
-
-    /// Cell and fraction of vertical angle `v` (inside the measured range).
-    #[inline]
-    fn locate_v(&self, v: f64) -> (usize, f64) {
-        let nv = self.v.len();
-        if let Some((v0, inv)) = self.v_even
-            && nv >= 2
-        {
-            let x = (v - v0) * inv;
-            let k = (x.max(0.0) as usize).min(nv - 2);
-            // The fraction within the cell (to rounding, what the search gives).
-            return (k, (x - k as f64).clamp(0.0, 1.0));
-        }
-        locate(&self.v, v)
     }
 
     /// Intensity [cd] at angles `(h, v)` [rad]: bilinear, zero outside the
@@ -265,7 +277,7 @@ impl Goniometric {
             return 0.0;
         }
         let (a, th) = locate(&self.h, h);
-        let (k, tv) = self.locate_v(v);
+        let (k, tv) = locate(&self.v, v);
         let a1 = (a + 1).min(nh - 1);
         let k1 = (k + 1).min(nv - 1);
         let lo = self.at(a, k) + tv * (self.at(a, k1) - self.at(a, k));
@@ -430,7 +442,7 @@ mod tests {
         sum * (2.0 / n as f64) * (PI / n as f64)
     }
 
-    fn table(
+    pub(super) fn table(
         kind: PhotometricType,
         h: &[f64],
         v: &[f64],
@@ -451,7 +463,7 @@ mod tests {
         }
     }
 
-    fn tables() -> Vec<(&'static str, Photometry)> {
+    pub(super) fn tables() -> Vec<(&'static str, Photometry)> {
         let g: Vec<f64> = (0..=18).map(|k| k as f64 * 5.0).collect(); // downlight 0-90
         let full: Vec<f64> = (0..=36).map(|k| k as f64 * 5.0).collect();
         let asym = |c: f64, gm: f64| 100.0 + 50.0 * (c.to_radians()).cos() + gm;
@@ -630,28 +642,57 @@ mod tests {
 #[cfg(test)]
 mod fast_path_tests {
     use super::*;
-    use crate::io::photometry::ies;
     use crate::sampling::Philox4x32;
 
-    /// The rotational and evenly spaced shortcuts give the general
-    /// bilinear rule's values (to rounding), including on uneven tables.
+    /// The type C shortcut (cells without inverse trigonometry, no azimuth
+    /// for rotational tables) gives the general bilinear rule's values to
+    /// rounding, on every test table, at random directions and at the
+    /// nodes, the poles and the edges of the measured range. The reference
+    /// takes its angles by `atan2` (accurate at the poles, where
+    /// `acos(-d_z)` loses half the digits).
     #[test]
     fn shortcuts_agree_with_the_general_rule() {
-        let pendant = Goniometric::new(&ies::parse(ies::tests::PENDANT, "p.ies").unwrap(), 1.0);
-        assert!(pendant.rotational && pendant.v_even.is_some());
-        let mut uneven = pendant.clone();
-        uneven.v_even = None;
-        uneven.rotational = false;
-        let mut rng = Philox4x32::new(3, 0);
-        for _ in 0..20_000 {
-            let d = crate::sampling::warp::sample_uniform_sphere(rng.next_2d()).w;
-            let (h, v) = pendant.angles(d);
-            let fast = pendant.intensity(d);
-            let general = uneven.intensity_at(h, v);
-            assert!(
-                (fast - general).abs() <= 1e-12 * general.abs().max(1.0),
-                "{d}: {fast} vs {general}"
-            );
+        let mut checked = 0;
+        for (name, p) in super::tests::tables() {
+            let fast = Goniometric::new(&p, 1.0);
+            assert_eq!(fast.grids.is_some(), p.kind == PhotometricType::C, "{name}");
+            let mut dirs: Vec<DVec3> = Vec::new();
+            let mut rng = Philox4x32::new(3, 0);
+            for _ in 0..20_000 {
+                dirs.push(crate::sampling::warp::sample_uniform_sphere(rng.next_2d()).w);
+            }
+            for &h in &fast.h {
+                for &v in &fast.v {
+                    for e in [-1e-9, 0.0, 1e-9] {
+                        dirs.push(fast.direction(h + e, v + e));
+                    }
+                }
+            }
+            dirs.extend([
+                DVec3::Z,
+                -DVec3::Z,
+                DVec3::X,
+                -DVec3::X,
+                DVec3::Y,
+                -DVec3::Y,
+            ]);
+            for d in dirs {
+                let (h, v) = match p.kind {
+                    PhotometricType::C => {
+                        let c = d.y.atan2(d.x);
+                        let c = if c < 0.0 { c + 2.0 * PI } else { c };
+                        (c, (d.x * d.x + d.y * d.y).sqrt().atan2(-d.z))
+                    }
+                    _ => fast.angles(d),
+                };
+                let (a, b) = (fast.intensity(d), fast.intensity_at(h, v));
+                assert!(
+                    (a - b).abs() <= 1e-12 * b.abs().max(1.0),
+                    "{name} {d}: {a} vs {b}"
+                );
+                checked += 1;
+            }
         }
+        assert!(checked > 100_000);
     }
 }

@@ -13,6 +13,7 @@
 //!   globe; for a small luminaire the difference from an opaque body is
 //!   negligible). Seen from outside it has luminance `L`.
 
+pub mod angle_grid;
 pub mod area;
 pub mod goniometric;
 pub mod lambert;

@@ -1,0 +1,373 @@
+//! An ascending grid of angles located from a direction's cosine and sine,
+//! without inverse trigonometry: the cell and the fraction of the way
+//! through it that bilinear interpolation of a photometric table needs.
+//!
+//! `acos` and `atan2` cost about as much as the whole direct term of a point
+//! light, so the goniometric direct term finds its angle this way:
+//!
+//! - A *key* rises strictly with the angle and costs no inverse
+//!   trigonometry. A polar angle `gamma` in `[0, pi]` (sine `s >= 0`) has
+//!   `k = s` while `c > h`, `k = 2h - c` while `|c| <= h`, and `k = 4h - s`
+//!   while `c < -h` (`h = sqrt(1/2)`): continuous, no division, and
+//!   `|dgamma/dk| <= sqrt 2`. An azimuth in `[0, 2 pi)` has the
+//!   pseudo-angle `q + s'/(c' + s')` in quadrant `q`, with `(c', s')` the
+//!   vector turned back by `q` right angles: one division, `q` at `q` right
+//!   angles, and `dphi/dk <= 2`.
+//! - Buckets of equal width in the key each keep a reference angle `g`, the
+//!   angle of their lower edge, with `cos g`, `sin g` and the cell holding
+//!   `g`. Then `theta = g + asin(s cos g - c sin g)`, and the buckets are narrow
+//!   enough ([`BUCKET_MAX_ANGLE`]) that the asin series to `x^7` is exact to
+//!   rounding: the first term left out, `35 x^9 / 1152`, is below 2e-17 for
+//!   `|x| <= 0.02`.
+//! - Buckets are also no wider than the narrowest cell, so one compare finds
+//!   the cell (past [`MAX_BUCKETS`], a short scan).
+//!
+//! The angle agrees with `atan2(s, c)` to rounding, so the cell and fraction
+//! are those of the inverse-trigonometric rule (a test compares them).
+
+use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
+
+/// Widest angle [rad] a bucket may span (the asin series' range).
+pub const BUCKET_MAX_ANGLE: f64 = 0.02;
+
+/// Most buckets of a grid's table.
+const MAX_BUCKETS: usize = 1 << 14;
+
+/// Which angle a grid holds, and so its key (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AngleKind {
+    /// A polar angle in `[0, pi]` (the sine is never negative).
+    Polar,
+    /// An azimuth in `[0, 2 pi]`.
+    Azimuth,
+}
+
+impl AngleKind {
+    /// The key of the angle with `(cos, sin) = (c, s)` (unit for
+    /// [`AngleKind::Polar`], any positive scale for [`AngleKind::Azimuth`]).
+    #[inline(always)]
+    fn key(self, c: f64, s: f64) -> f64 {
+        match self {
+            AngleKind::Polar => polar_key(c, s),
+            AngleKind::Azimuth => pseudo_angle(c, s),
+        }
+    }
+
+    /// The angle [rad] of a key.
+    fn angle(self, k: f64) -> f64 {
+        match self {
+            AngleKind::Polar => {
+                let h = FRAC_1_SQRT_2;
+                if k <= h {
+                    k.asin()
+                } else if k <= 3.0 * h {
+                    (2.0 * h - k).clamp(-1.0, 1.0).acos()
+                } else {
+                    PI - (4.0 * h - k).clamp(0.0, 1.0).asin()
+                }
+            }
+            AngleKind::Azimuth => {
+                let q = k.floor().clamp(0.0, 3.0);
+                let f = k - q;
+                q * FRAC_PI_2 + f.atan2(1.0 - f)
+            }
+        }
+    }
+
+    /// The key of an angle [rad], with right angles exact for an azimuth.
+    fn key_of(self, a: f64) -> f64 {
+        match self {
+            AngleKind::Polar => {
+                let (s, c) = a.sin_cos();
+                polar_key(c, s.max(0.0))
+            }
+            AngleKind::Azimuth => {
+                let q = (a / FRAC_PI_2).floor();
+                let r = a - q * FRAC_PI_2;
+                let (s, c) = r.sin_cos();
+                q + if r <= 0.0 { 0.0 } else { s / (c + s) }
+            }
+        }
+    }
+
+    /// The range of angles [rad] the kind covers.
+    fn range(self) -> f64 {
+        match self {
+            AngleKind::Polar => PI,
+            AngleKind::Azimuth => 2.0 * PI,
+        }
+    }
+
+    /// Largest `|dangle/dkey|`.
+    fn max_slope(self) -> f64 {
+        match self {
+            AngleKind::Polar => std::f64::consts::SQRT_2,
+            AngleKind::Azimuth => 2.0,
+        }
+    }
+}
+
+/// The polar key of unit `(c, s)`, `s >= 0` (module docs), in `[0, 4h]`.
+#[inline(always)]
+fn polar_key(c: f64, s: f64) -> f64 {
+    let h = FRAC_1_SQRT_2;
+    // Selects, not branches: receivers lie on all sides of a luminaire.
+    let mid = 2.0 * h - c;
+    let k = if c > h { s } else { mid };
+    if c < -h { 4.0 * h - s } else { k }
+}
+
+/// Pseudo-angle of the direction `(c, s)` in the plane (module docs):
+/// strictly increasing in its angle over `[0, 2 pi)`, in `[0, 4)`; for the
+/// zero vector 2 (pi) when `c` is a negative zero, else 0, as `atan2`.
+#[inline(always)]
+pub fn pseudo_angle(c: f64, s: f64) -> f64 {
+    // Selects rather than branches on the quadrant (which a receiver's
+    // azimuth makes unpredictable): in the upper half plane q = |s| / (|c| +
+    // |s|) gives q or 2 - q, and the lower half mirrors it.
+    let den = c.abs() + s.abs();
+    let q = if den > 0.0 { s.abs() / den } else { 0.0 };
+    let upper = if c > 0.0 { q } else { 2.0 - q };
+    let zero = if c.is_sign_negative() { 2.0 } else { 0.0 };
+    let upper = if den > 0.0 { upper } else { zero };
+    if s < 0.0 { 4.0 - upper } else { upper }
+}
+
+/// `asin x` for `|x| <= sin(BUCKET_MAX_ANGLE)` by its Maclaurin series.
+#[inline(always)]
+fn asin_small(x: f64) -> f64 {
+    // Coefficients (2n)! / (4^n (n!)^2 (2n + 1)), n = 1..3; plain products
+    // (`mul_add` is a library call without FMA).
+    let x2 = x * x;
+    let p = 1.0 / 6.0 + x2 * (3.0 / 40.0 + x2 * (5.0 / 112.0));
+    x + x * (x2 * p)
+}
+
+/// A bucket's reference angle and the cell that holds it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Bucket {
+    /// `cos g`, `sin g` of the reference angle `g` [rad].
+    cos: f64,
+    sin: f64,
+    /// `g` [rad].
+    g: f64,
+    /// The cell holding `g`.
+    cell: u32,
+}
+
+/// An ascending grid of angles `a_0 < ... < a_n` [rad].
+#[derive(Clone, Debug, PartialEq)]
+pub struct AngleGrid {
+    kind: AngleKind,
+    /// Node `a_k` [rad] and `1 / (a_{k+1} - a_k)` [1/rad] (0 for the last).
+    nodes: Vec<(f64, f64)>,
+    /// Keys of the first and last node.
+    k0: f64,
+    k1: f64,
+    /// Buckets of equal width in the key over `[k0, k1]`.
+    bucket: Vec<Bucket>,
+    /// Buckets per unit of the key.
+    per_unit: f64,
+    /// Every bucket holds at most one node: no scan.
+    one_node: bool,
+}
+
+impl AngleGrid {
+    /// The grid of ascending angles `a` [rad] (at least two, within
+    /// `[0, pi]` for a polar angle and `[0, 2 pi]` for an azimuth); `None`
+    /// otherwise.
+    pub fn new(kind: AngleKind, a: &[f64]) -> Option<Self> {
+        let n = a.len();
+        if n < 2 || a[0] < 0.0 || a[n - 1] > kind.range() || a.windows(2).any(|w| w[1] <= w[0]) {
+            return None;
+        }
+        let keys: Vec<f64> = a.iter().map(|&x| kind.key_of(x)).collect();
+        if keys.windows(2).any(|w| w[1] <= w[0]) {
+            return None;
+        }
+        let cells = n - 1;
+        let span = keys[n - 1] - keys[0];
+        let narrowest = a
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .fold(f64::INFINITY, f64::min);
+        // A bucket spans at most max_slope times its key width in angle.
+        let width = BUCKET_MAX_ANGLE.min(narrowest) / kind.max_slope();
+        let buckets = ((span / width).ceil() as usize + 1).clamp(16, MAX_BUCKETS);
+        let per_unit = buckets as f64 / span;
+        let edge = |b: usize| kind.angle(keys[0] + b as f64 / per_unit);
+        let mut bucket = Vec::with_capacity(buckets);
+        let mut k = 0;
+        for b in 0..buckets {
+            // The reference angle: the bucket's lower edge.
+            let g = edge(b).clamp(a[0], a[n - 1]);
+            while k + 1 < cells && a[k + 1] <= g {
+                k += 1;
+            }
+            let (sin, cos) = g.sin_cos();
+            bucket.push(Bucket {
+                cos,
+                sin,
+                g,
+                cell: k as u32,
+            });
+        }
+        let one_node = (0..buckets).all(|b| {
+            let (lo, hi) = (edge(b), edge(b + 1));
+            a.iter().filter(|&&x| x > lo && x <= hi).count() <= 1
+        });
+        Some(Self {
+            kind,
+            nodes: (0..n)
+                .map(|k| {
+                    (
+                        a[k],
+                        if k + 1 < n {
+                            1.0 / (a[k + 1] - a[k])
+                        } else {
+                            0.0
+                        },
+                    )
+                })
+                .collect(),
+            k0: keys[0],
+            k1: keys[n - 1],
+            bucket,
+            per_unit,
+            one_node,
+        })
+    }
+
+    /// Cell `k` and fraction `t` in `[0, 1]` of the angle whose unit
+    /// `(cos, sin)` is `(c, s)`; `None` outside `[a_0, a_n]`.
+    #[inline(always)]
+    pub fn locate(&self, c: f64, s: f64) -> Option<(usize, f64)> {
+        let key = self.kind.key(c, s);
+        if !(key >= self.k0 && key <= self.k1) {
+            return None;
+        }
+        // (A 32-bit conversion is cheaper than a saturating one to usize.)
+        let b = (((key - self.k0) * self.per_unit) as u32 as usize).min(self.bucket.len() - 1);
+        let r = self.bucket[b];
+        let theta = r.g + asin_small(s * r.cos - c * r.sin);
+        let n = self.nodes.len();
+        // theta is at least g (to rounding), and one node at most lies
+        // between them (branch-free); a scan where a bucket holds more.
+        let mut k = r.cell as usize;
+        k += (k + 2 < n && theta >= self.nodes[k + 1].0) as usize;
+        if !self.one_node {
+            while k + 2 < n && theta >= self.nodes[k + 1].0 {
+                k += 1;
+            }
+        }
+        let (a, inv) = self.nodes[k];
+        // (Rounding may put theta a hair below g at a node: t = 0 there.)
+        Some((k, ((theta - a) * inv).clamp(0.0, 1.0)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_rise_with_the_angle_and_invert() {
+        for kind in [AngleKind::Polar, AngleKind::Azimuth] {
+            let m = 100_000;
+            let mut last = -1.0;
+            for j in 0..m {
+                let a = kind.range() * j as f64 / m as f64;
+                let (s, c) = a.sin_cos();
+                let k = kind.key(c, s.max(if kind == AngleKind::Polar { 0.0 } else { -1.0 }));
+                assert!(k > last, "{kind:?} {a}: {k} <= {last}");
+                assert!((k - kind.key_of(a)).abs() < 1e-12, "{kind:?} {a}");
+                assert!((kind.angle(k) - a).abs() < 1e-7, "{kind:?} {a}");
+                last = k;
+            }
+        }
+        assert_eq!(pseudo_angle(1.0, 0.0), 0.0);
+        assert_eq!(pseudo_angle(0.0, 1.0), 1.0);
+        assert_eq!(pseudo_angle(-1.0, 0.0), 2.0);
+        assert_eq!(pseudo_angle(0.0, -1.0), 3.0);
+        assert_eq!(pseudo_angle(0.0, 0.0), 0.0);
+        assert_eq!(pseudo_angle(-0.0, 0.0), 2.0);
+        assert_eq!(pseudo_angle(-0.0, -0.0), 2.0);
+        assert_eq!(AngleKind::Azimuth.key_of(PI), 2.0);
+        assert_eq!(AngleKind::Azimuth.key_of(1.5 * PI), 3.0);
+        // Scale-free (to rounding).
+        assert!((pseudo_angle(3.0, 4.0) - pseudo_angle(0.6, 0.8)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn asin_series_is_exact_to_rounding_on_its_range() {
+        let xmax = BUCKET_MAX_ANGLE.sin();
+        for k in 0..=10_000 {
+            let x = -xmax + 2.0 * xmax * k as f64 / 10_000.0;
+            assert!((asin_small(x) - x.asin()).abs() <= 3e-17, "{x}");
+        }
+    }
+
+    /// Cell and fraction against `atan2` and a search, on even and uneven
+    /// grids, cells wider than pi, and cells so narrow that the buckets
+    /// hold several nodes (the scan).
+    #[test]
+    fn cells_and_fractions_match_the_inverse_trigonometric_rule() {
+        let deg = |v: &[f64]| v.iter().map(|x| x.to_radians()).collect::<Vec<f64>>();
+        let step = |d: f64, n: usize| (0..=n).map(|k| d * k as f64).collect::<Vec<f64>>();
+        let grids = [
+            (AngleKind::Polar, deg(&step(2.5, 72))),
+            (AngleKind::Polar, deg(&step(5.0, 18))),
+            (
+                AngleKind::Polar,
+                deg(&[10.0, 11.0, 15.0, 40.0, 41.0, 42.0, 43.0, 120.0]),
+            ),
+            (
+                AngleKind::Polar,
+                deg(&[0.0, 1e-4, 2e-4, 3e-4, 90.0, 90.0001, 180.0]),
+            ),
+            (AngleKind::Polar, deg(&[0.0, 180.0])),
+            (AngleKind::Azimuth, deg(&step(5.0, 72))),
+            (
+                AngleKind::Azimuth,
+                deg(&[0.0, 30.0, 45.0, 90.0, 180.0, 270.0, 360.0]),
+            ),
+            (AngleKind::Azimuth, deg(&[0.0, 200.0, 360.0])),
+            (
+                AngleKind::Azimuth,
+                deg(&[0.0, 1e-4, 2e-4, 3e-4, 90.0, 90.0001, 360.0]),
+            ),
+        ];
+        for (kind, a) in &grids {
+            let g = AngleGrid::new(*kind, a).unwrap();
+            assert_eq!(g.one_node, a[1] > 1e-3, "{a:?}");
+            let n = a.len();
+            for j in 0..200_000 {
+                let th = kind.range() * (j as f64 + 0.37) / 200_000.0;
+                let (s, c) = th.sin_cos();
+                let got = g.locate(c, s);
+                if th < a[0] || th > a[n - 1] {
+                    assert!(got.is_none(), "{th} outside {:?}", (a[0], a[n - 1]));
+                    continue;
+                }
+                let (k, t) = got.unwrap();
+                let kk = a.partition_point(|&x| x <= th).clamp(1, n - 1) - 1;
+                let tt = (th - a[kk]) / (a[kk + 1] - a[kk]);
+                // The same point of the piecewise-linear interpolant.
+                let (x, y) = (k as f64 + t, kk as f64 + tt);
+                assert!(
+                    (x - y).abs() < 1e-12,
+                    "{kind:?} {th}: ({k}, {t}) vs ({kk}, {tt})"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn bad_grids_are_refused() {
+        assert!(AngleGrid::new(AngleKind::Azimuth, &[0.0]).is_none());
+        assert!(AngleGrid::new(AngleKind::Azimuth, &[0.0, 0.0]).is_none());
+        assert!(AngleGrid::new(AngleKind::Azimuth, &[-0.1, 1.0]).is_none());
+        assert!(AngleGrid::new(AngleKind::Azimuth, &[0.0, 7.0]).is_none());
+        assert!(AngleGrid::new(AngleKind::Polar, &[0.0, 3.5]).is_none());
+    }
+}
