@@ -591,7 +591,7 @@ fn next_event(
             let wi = v / t2.sqrt();
             let cos_x = h.n.dot(wi);
             if cos_x > 0.0 && scene.visible(h.p, from, y) {
-                let i = dist.intensity(frame.to_local(-wi));
+                let i = dist.intensity_world(frame, -wi);
                 nee += m.eval(f_frame.to_local(wi), wo) * i * cos_x / t2;
             }
             continue;

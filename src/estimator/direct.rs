@@ -181,7 +181,7 @@ fn light_sample(
         if r <= 0.0 || !scene.visible(x, None, y) {
             return (0.0, p_a, wi, false);
         }
-        let i = dist.intensity(lf.to_local(-wi));
+        let i = dist.intensity_world(lf, -wi);
         return (i / area * r / t2, p_a, wi, false);
     }
     let (f, p, wi) = match light {

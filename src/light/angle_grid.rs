@@ -242,7 +242,19 @@ impl AngleGrid {
     /// `(cos, sin)` is `(c, s)`; `None` outside `[a_0, a_n]`.
     #[inline(always)]
     pub fn locate(&self, c: f64, s: f64) -> Option<(usize, f64)> {
-        let key = self.kind.key(c, s);
+        self.locate_key(self.kind.key(c, s), c, s)
+    }
+
+    /// [`Self::locate`] for a grid known to be [`AngleKind::Polar`] (the
+    /// caller's promise; debug builds check it).
+    #[inline(always)]
+    pub fn locate_polar(&self, c: f64, s: f64) -> Option<(usize, f64)> {
+        debug_assert_eq!(self.kind, AngleKind::Polar);
+        self.locate_key(polar_key(c, s), c, s)
+    }
+
+    #[inline(always)]
+    fn locate_key(&self, key: f64, c: f64, s: f64) -> Option<(usize, f64)> {
         if !(key >= self.k0 && key <= self.k1) {
             return None;
         }

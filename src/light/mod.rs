@@ -262,7 +262,7 @@ impl Light {
             Light::Point { i, .. } => *i,
             Light::Spot(sp) => sp.intensity(w),
             Light::Sphere { .. } | Light::Area(_) => 0.0,
-            Light::Gonio { frame, dist, .. } => dist.intensity(frame.to_local(w)),
+            Light::Gonio { frame, dist, .. } => dist.intensity_world(frame, w),
         }
     }
 
@@ -470,7 +470,21 @@ impl Light {
             Light::Gonio {
                 opening: Some(_), ..
             } => f64::NAN,
-            Light::Point { p, .. } | Light::Gonio { p, .. } | Light::Spot(Spot { p, .. }) => {
+            Light::Gonio {
+                p,
+                ref frame,
+                ref dist,
+                opening: None,
+            } => {
+                let d = p - x;
+                let c = n.dot(d);
+                if c <= 0.0 {
+                    0.0
+                } else {
+                    dist.direct_term(frame, -d, c)
+                }
+            }
+            Light::Point { p, .. } | Light::Spot(Spot { p, .. }) => {
                 let d = p - x;
                 let d2 = d.length_squared();
                 let c = n.dot(d);
