@@ -220,18 +220,14 @@ impl Goniometric {
     /// The direct term `I(w) c / |w|^3` [lx] of a luminaire whose axes are
     /// `frame`, towards a receiver at offset `w` [m] from it (not
     /// normalised), where `c = n . (-w)` [m] is the receiver normal's
-    /// projection (0 for a receiver on the luminaire). For a rotationally
-    /// symmetric table the two square roots it needs, `|w|` and the
-    /// distance from the nadir axis, are taken together in one packed
-    /// instruction.
+    /// projection (0 for a receiver on the luminaire). A rotationally
+    /// symmetric table needs only `|w|` and the distance from the nadir axis.
     #[inline(always)]
     pub fn direct_term(&self, frame: &super::LuminaireFrame, w: DVec3, c: f64) -> f64 {
         if let Some((vg, None)) = &self.grids {
             let wz = w.dot(frame.z);
             let perp = w - frame.z * wz;
-            let [len, r] = wide::f64x2::new([w.length_squared(), perp.length_squared()])
-                .sqrt()
-                .to_array();
+            let (len, r) = (w.length(), perp.length());
             if len == 0.0 {
                 return 0.0;
             }
