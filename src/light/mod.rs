@@ -18,7 +18,9 @@ pub mod area;
 pub mod goniometric;
 pub mod lambert;
 pub mod radial_profile;
+pub mod sky;
 pub mod spot;
+pub mod sun_position;
 
 use crate::math::quadrature::panel;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
