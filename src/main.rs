@@ -1,7 +1,7 @@
 //! The `lumest` command line: arguments in, library calls, exit code out.
 
 use clap::{Parser, Subcommand};
-use lumest::commands::{bench, illuminance, photometry, render, shfit, sobolev, validate};
+use lumest::commands::{bench, illuminance, merge, photometry, render, shfit, sobolev, validate};
 use std::process::ExitCode;
 
 /// Monte Carlo illumination by local estimation, with exact references.
@@ -32,6 +32,8 @@ enum Command {
     ShFit(shfit::ShFitArgs),
     /// Summary and polar candela plot of an IES or EULUMDAT file.
     Photometry(photometry::PhotometryArgs),
+    /// Merge the shard states of a sharded `illuminance` run into its CSV.
+    Merge(merge::MergeArgs),
 }
 
 fn main() -> ExitCode {
@@ -45,6 +47,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => bench::bench(a),
         Command::ShFit(a) => shfit::sh_fit(a),
         Command::Photometry(a) => photometry::photometry(a),
+        Command::Merge(a) => merge::merge(a),
     };
     match res {
         Ok(()) => ExitCode::SUCCESS,

@@ -46,8 +46,8 @@
 //! error with `B - 1` degrees of freedom.
 
 use crate::chain::ChainParams;
-pub use crate::tally::Tallies;
 use crate::tally::bucket_count;
+pub use crate::tally::{Batch, Tallies};
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc;
@@ -106,6 +106,11 @@ pub struct RunConfig {
     /// ([`crate::estimator::Receivers::with_auto_near_field`]), with
     /// `near.1` paths.
     pub near_auto: bool,
+    /// Run only shard `i` of `m` (batches `i, i + m, i + 2m, ...` of a
+    /// `--chains` run) and keep the batches unfolded in
+    /// [`RunResult::batches`], for [`fold_batches`] to merge later; `None`:
+    /// the whole run.
+    pub shard: Option<(u64, u64)>,
 }
 
 /// The command line's defaults: 100,000 chains, stratified, the near/far
@@ -126,6 +131,7 @@ impl Default for RunConfig {
             stratify: true,
             near: (0.0, 16),
             near_auto: true,
+            shard: None,
         }
     }
 }
@@ -201,6 +207,11 @@ pub struct RunResult {
     /// How a `--time` run sized its batches from a timing probe, if it did
     /// (see [`time_batch_size`]).
     pub time_sizing: Option<TimeSizing>,
+    /// A shard's batches, unfolded, in index order (empty unless
+    /// [`RunConfig::shard`]); its tallies are then empty but for the checks.
+    pub batches: Vec<Batch>,
+    /// Batches of the whole run a shard belongs to (0 for a whole run).
+    pub total_batches: u64,
 }
 
 /// The timing probe of a `--time` run: batches are sized so that at least
@@ -274,31 +285,6 @@ impl RunResult {
             elapsed: self.wall,
         }
     }
-}
-
-/// The sums of one batch, produced by a [`BatchWork`].
-pub struct Batch {
-    /// Batch index.
-    pub index: u64,
-    /// Chains (or paths) traced in the batch.
-    pub chains: u64,
-    /// `sums[k * n + j]`: sum over the batch's chains of bucket `k`'s score at receiver `j`.
-    pub sums: Vec<f64>,
-    /// Surface collisions (or path vertices) in the batch.
-    pub collisions: u64,
-    /// Receiver scores evaluated in the batch.
-    pub scores: u64,
-    /// Per receiver: the batch's sampled direct light times its chains
-    /// (summed like `sums`; see [`crate::estimator::Receivers::sampled_direct`]);
-    /// empty when no receiver has any.
-    pub direct_sums: Vec<f64>,
-    /// Per receiver: events counted for the `sparse` check
-    /// ([`crate::tally::Diagnostics::near_hits`]); empty when it does not
-    /// apply. Length `3 n` when some receiver has [`Checks::near_reach`]:
-    /// then `near_hits[n + j]` and `near_hits[2 n + j]` are the near part's
-    /// exposed and reached path vertices at receiver `j`
-    /// ([`crate::tally::Diagnostics::near_reach`]).
-    pub near_hits: Vec<u64>,
 }
 
 /// Per-receiver checks a work item knows before it runs (see
@@ -454,6 +440,8 @@ fn no_light(direct: &[f64], cfg: &RunConfig) -> RunResult {
         reason: StopReason::NoLight,
         pilot: None,
         time_sizing: None,
+        batches: Vec::new(),
+        total_batches: 0,
     }
 }
 
@@ -468,6 +456,11 @@ pub fn drive(
     }
     let start = Instant::now();
     let stop = cfg.stop;
+    assert!(
+        cfg.shard.is_none()
+            || (stop.chains.is_some() && stop.time.is_none() && stop.rel_error.is_none()),
+        "a shard needs a run of a fixed number of chains"
+    );
     let mut bs = cfg
         .batch_size
         .unwrap_or_else(|| work.default_batch_size(stop.chains))
@@ -576,6 +569,17 @@ fn drive_batches(
         reason: StopReason::Chains,
         pilot: None,
         time_sizing: None,
+        batches: Vec::new(),
+        total_batches: 0,
+    };
+    // A shard runs every m-th batch from i: the k-th of its batches is
+    // batch i + k m of the whole run.
+    let (first, step) = cfg.shard.unwrap_or((0, 1));
+    let max_batches = if cfg.shard.is_some() {
+        result.total_batches = max_batches;
+        max_batches.saturating_sub(first).div_ceil(step)
+    } else {
+        max_batches
     };
     let next = AtomicU64::new(0);
     let halt = AtomicBool::new(false);
@@ -591,11 +595,11 @@ fn drive_batches(
                     if halt.load(Ordering::Relaxed) {
                         break;
                     }
-                    let b = next.fetch_add(1, Ordering::Relaxed);
-                    if b >= max_batches {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    if k >= max_batches {
                         break;
                     }
-                    let batch = work.run_batch(cfg, b, bs, buckets, &mut acc);
+                    let batch = work.run_batch(cfg, first + k * step, bs, buckets, &mut acc);
                     if tx.send(batch).is_err() {
                         break;
                     }
@@ -610,7 +614,7 @@ fn drive_batches(
         loop {
             match rx.recv_timeout(Duration::from_millis(50)) {
                 Ok(b) => {
-                    pending.insert(b.index, b);
+                    pending.insert((b.index - first) / step, b);
                 }
                 Err(mpsc::RecvTimeoutError::Timeout) => {}
                 Err(mpsc::RecvTimeoutError::Disconnected) => break,
@@ -628,18 +632,18 @@ fn drive_batches(
                 result.reason = StopReason::Time;
             }
             while let Some(b) = pending.remove(&folded) {
-                if b.index >= keep_until {
+                if folded >= keep_until {
                     folded += 1;
                     continue;
-                }
-                tallies.fold(&b.sums, &b.direct_sums, bs, &b.near_hits, &mut batch_means);
-                let folded_batches = tallies.batches();
-                if folded_batches >= 32 && folded_batches.is_power_of_two() {
-                    tallies.snapshot(&direct);
                 }
                 result.chains += b.chains;
                 result.collisions += b.collisions;
                 result.scores += b.scores;
+                if cfg.shard.is_some() {
+                    result.batches.push(b);
+                } else {
+                    fold_batch(&mut tallies, &direct, &b, bs, &mut batch_means);
+                }
                 folded += 1;
                 let progress = Progress {
                     tallies: &tallies,
@@ -660,4 +664,29 @@ fn drive_batches(
     result.tallies = tallies;
     result.wall = start.elapsed().as_secs_f64();
     result
+}
+
+/// Fold one batch of `bs` chains into the tallies, with the snapshots of
+/// the FOM check at 32, 64, 128, ... batches: the one place batches are
+/// folded, by a run and by [`fold_batches`] alike.
+fn fold_batch(tallies: &mut Tallies, direct: &[f64], b: &Batch, bs: u64, means: &mut [f64]) {
+    tallies.fold(&b.sums, &b.direct_sums, bs, &b.near_hits, means);
+    let folded = tallies.batches();
+    if folded >= 32 && folded.is_power_of_two() {
+        tallies.snapshot(direct);
+    }
+}
+
+/// The tallies of a whole run from its batches (the shards' batches in
+/// index order `0, 1, 2, ...`) of `bs` chains: `tallies` holds the
+/// per-receiver checks and nothing folded yet. Folded as a run folds them,
+/// so the result is bit-identical to the run's.
+pub fn fold_batches(mut tallies: Tallies, direct: &[f64], bs: u64, batches: &[Batch]) -> Tallies {
+    let n = tallies.estimated.len();
+    let buckets = batches.first().map_or(1, |b| b.sums.len() / n.max(1));
+    let mut means = vec![0.0; buckets * n];
+    for b in batches {
+        fold_batch(&mut tallies, direct, b, bs, &mut means);
+    }
+    tallies
 }

@@ -58,6 +58,11 @@ pub struct IlluminanceArgs {
     /// Estimator of the reflected light.
     #[arg(long, value_enum, default_value_t = EstimatorKind::Local)]
     pub estimator: EstimatorKind,
+    /// Run shard `I/M` of a `--chains` run (batches I, I+M, I+2M, ...) and
+    /// write its state to `--out` for `lumest merge` (shards 0 to M-1 merge
+    /// into the single run's CSV, byte for byte).
+    #[arg(long, conflicts_with_all = ["views", "time", "rel_error"], requires = "chains")]
+    pub shard: Option<String>,
     #[command(flatten)]
     pub run: RunArgs,
 }
@@ -720,6 +725,9 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
 
 /// Run `lumest illuminance`.
 pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
+    if let Some(shard) = &a.shard {
+        return super::merge::run_shard(a, shard);
+    }
     let views = a.views.as_deref().zip(a.views_out.as_deref());
     let mut inputs = vec![a.scene.as_path(), Path::new(&a.points)];
     let mut outputs = vec![("--out", Path::new(&a.out))];

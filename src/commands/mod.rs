@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod illuminance;
+pub mod merge;
 pub mod outputs;
 pub mod photometry;
 pub mod render;
@@ -179,6 +180,7 @@ impl RunArgs {
             stratify: !self.no_stratify,
             near: (near_radius, self.near_paths.unwrap_or(16)),
             near_auto,
+            shard: None,
         })
     }
 }

@@ -81,7 +81,10 @@
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 pub mod zcheck;
 
+mod batch;
+pub mod shard;
 mod tallies;
+pub use batch::Batch;
 pub use tallies::{Tallies, bucket, bucket_count};
 
 /// Mergeable running mean, variance, third and fourth central moments and

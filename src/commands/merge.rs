@@ -1,0 +1,260 @@
+//! Runs beyond one machine: `lumest illuminance ... --chains N --seed K
+//! --shard I/M --out PART` runs batches `I, I+M, ...` of the run and writes
+//! their state ([`crate::tally::shard`]); `lumest merge PART... --out R.csv`
+//! folds the shards' batches in index order, as a single run folds them,
+//! and writes the single run's CSV byte for byte.
+
+use super::illuminance::{EstimatorKind, IlluminanceArgs, result_cells, result_headers, run_job};
+use super::outputs::check_outputs;
+use crate::io::csvio::{stage_csv, write_atomic_with};
+use crate::run::{RunResult, StopReason, Tallies, fold_batches};
+use crate::tally::shard::{RunIdentity, ShardState, fnv1a};
+use anyhow::Context;
+use clap::Args;
+use std::path::Path;
+
+/// Most shards of one run.
+pub const MAX_SHARDS: u64 = 1_000_000;
+
+/// Arguments of `lumest merge`.
+#[derive(Args, Clone, Debug)]
+pub struct MergeArgs {
+    /// Shard states written by `lumest illuminance ... --shard I/M --out PART`
+    /// (every shard of the run, in any order).
+    #[arg(required = true)]
+    pub parts: Vec<String>,
+    /// Output CSV (`-`: standard output): the single run's, byte for byte.
+    #[arg(long)]
+    pub out: String,
+}
+
+/// `I/M` with `0 <= I < M <= MAX_SHARDS`.
+fn parse_shard(s: &str) -> anyhow::Result<(u64, u64)> {
+    let parsed = s
+        .split_once('/')
+        .and_then(|(i, m)| Some((i.trim().parse::<u64>().ok()?, m.trim().parse::<u64>().ok()?)));
+    match parsed {
+        Some((i, m)) if m >= 1 && i < m && m <= MAX_SHARDS => Ok((i, m)),
+        _ => anyhow::bail!(
+            "--shard must be I/M with 0 <= I < M <= {MAX_SHARDS} (shard I of M), got `{s}`"
+        ),
+    }
+}
+
+/// Run one shard (`lumest illuminance ... --shard I/M`) and write its state.
+pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
+    let (i, m) = parse_shard(shard)?;
+    anyhow::ensure!(
+        a.points != "-",
+        "--shard reads the points from a file (every shard must read the same one), not standard input"
+    );
+    check_outputs(
+        &[a.scene.as_path(), Path::new(&a.points)],
+        &[("--out", Path::new(&a.out))],
+    )?;
+    let mut cfg = a.run.config()?;
+    if a.estimator == EstimatorKind::Backward {
+        a.run.check_local_only("backward")?;
+    }
+    let chains = cfg.stop.chains.context("--shard needs --chains")?;
+    let scene = crate::scene::load(&a.scene)?;
+    let job = super::illuminance::Job::new(&scene, Some(&a.points), None)?;
+    let table = job.points.as_ref().context("no points")?;
+    let identity_cfg = crate::run::RunConfig {
+        threads: 0,
+        ..cfg.clone()
+    };
+    cfg.shard = Some((i, m));
+    eprintln!("lumest: scene {}: {}", a.scene.display(), scene.summary());
+    let r = run_job(&scene, &job, &cfg, a.estimator, a.run.quiet);
+    anyhow::ensure!(
+        !crate::io::interrupt::interrupted(),
+        "interrupted: a shard is written whole or not at all (run it again)"
+    );
+    let points_hash = {
+        let mut text = table.headers.join("\u{1f}");
+        for row in &table.rows {
+            text.push('\u{1e}');
+            text.push_str(&row.join("\u{1f}"));
+        }
+        fnv1a(text.as_bytes())
+    };
+    let state = ShardState {
+        run: RunIdentity {
+            batches: r.total_batches,
+            batch_size: r.batch_size,
+            chains,
+            seed: cfg.seed,
+            orders: cfg.orders,
+            receivers: r.direct.len() as u64,
+            scene: fnv1a(format!("{scene:?}").as_bytes()),
+            points: points_hash,
+            config: format!(
+                "lumest {} estimator {:?} {:?}",
+                env!("CARGO_PKG_VERSION"),
+                a.estimator,
+                identity_cfg
+            ),
+        },
+        shard: (i, m),
+        wall: r.wall,
+        direct: r.direct.clone(),
+        checks: [
+            r.tallies.watched.clone(),
+            r.tallies.near_plain.clone(),
+            r.tallies.near_reach.clone(),
+            r.tallies.enclosed.clone(),
+        ],
+        headers: table.headers.clone(),
+        rows: table.rows.clone(),
+        comment_lines: table.comment_lines,
+        batches: r.batches,
+    };
+    write_atomic_with(&a.out, |w| state.write(w)).with_context(|| format!("writing {}", a.out))?;
+    eprintln!(
+        "lumest: shard {i}/{m}: {} of {} batches ({} chains each), {:.3} s; state written to {}",
+        state.batches.len(),
+        state.run.batches,
+        state.run.batch_size,
+        state.wall,
+        a.out
+    );
+    Ok(())
+}
+
+/// Run `lumest merge`.
+pub fn merge(a: &MergeArgs) -> anyhow::Result<()> {
+    let inputs: Vec<&Path> = a.parts.iter().map(Path::new).collect();
+    check_outputs(&inputs, &[("--out", Path::new(&a.out))])?;
+    let mut states = Vec::new();
+    for p in &a.parts {
+        let bytes = std::fs::read(p).with_context(|| format!("reading {p}"))?;
+        let s = ShardState::read(&bytes).with_context(|| p.to_string())?;
+        states.push((p.as_str(), s));
+    }
+    let (first_name, first) = &states[0];
+    let m = first.shard.1;
+    let mut seen: Vec<Option<&str>> = vec![None; m as usize];
+    for (name, s) in &states {
+        let same = |what: &str, ok: bool| -> anyhow::Result<()> {
+            anyhow::ensure!(
+                ok,
+                "{name} and {first_name} are shards of different runs: their {what} differ"
+            );
+            Ok(())
+        };
+        let (r, f) = (&s.run, &first.run);
+        same("scenes", r.scene == f.scene)?;
+        same(
+            "points",
+            r.points == f.points && s.headers == first.headers && s.rows == first.rows,
+        )?;
+        same("seeds", r.seed == f.seed)?;
+        same(
+            "chain counts",
+            r.chains == f.chains && r.batches == f.batches && r.batch_size == f.batch_size,
+        )?;
+        same(
+            "settings",
+            r.config == f.config && r.orders == f.orders && r.receivers == f.receivers,
+        )?;
+        same("shard counts", s.shard.1 == m)?;
+        let slot = &mut seen[s.shard.0 as usize];
+        if let Some(other) = slot {
+            anyhow::bail!("{name} and {other} are both shard {}/{m}", s.shard.0);
+        }
+        *slot = Some(name);
+    }
+    let missing: Vec<String> = seen
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.is_none())
+        .map(|(k, _)| format!("{k}/{m}"))
+        .collect();
+    anyhow::ensure!(
+        missing.is_empty(),
+        "shard(s) {} of the run are missing",
+        missing.join(", ")
+    );
+    // Every batch of the run once, in index order.
+    let run = first.run.clone();
+    let n = run.receivers as usize;
+    let mut batches = Vec::with_capacity(run.batches as usize);
+    let mut wall = 0.0;
+    for (_, s) in &mut states {
+        wall += s.wall;
+        batches.append(&mut s.batches);
+    }
+    batches.sort_by_key(|b| b.index);
+    for (k, b) in batches.iter().enumerate() {
+        anyhow::ensure!(
+            b.index == k as u64 && b.sums.len() % n.max(1) == 0,
+            "the shards do not hold batches 0 to {} once each (found batch {} at position {k})",
+            run.batches - 1,
+            b.index
+        );
+    }
+    anyhow::ensure!(
+        batches.len() as u64 == run.batches,
+        "the shards hold {} batches of the run's {}",
+        batches.len(),
+        run.batches
+    );
+    let (_, first) = &states[0];
+    let mut tallies = Tallies::new(n, run.orders);
+    [
+        tallies.watched,
+        tallies.near_plain,
+        tallies.near_reach,
+        tallies.enclosed,
+    ] = first.checks.clone();
+    let tallies = fold_batches(tallies, &first.direct, run.batch_size, &batches);
+    let result = RunResult {
+        direct: first.direct.clone(),
+        tallies,
+        chains: batches.iter().map(|b| b.chains).sum(),
+        batch_size: run.batch_size,
+        collisions: batches.iter().map(|b| b.collisions).sum(),
+        scores: batches.iter().map(|b| b.scores).sum(),
+        wall,
+        threads: 0,
+        reason: StopReason::Chains,
+        pilot: None,
+        time_sizing: None,
+        batches: Vec::new(),
+        total_batches: 0,
+    };
+    let mut headers = first.headers.clone();
+    headers.extend(result_headers("E", run.orders));
+    let width = first.headers.len();
+    let rows = first.rows.iter().enumerate().map(|(j, row)| {
+        let mut c = row.clone();
+        c.resize(width, String::new());
+        c.extend(result_cells(&result, j));
+        c
+    });
+    let (staged, written) =
+        stage_csv(&a.out, &headers, rows).with_context(|| format!("writing {}", a.out))?;
+    anyhow::ensure!(
+        written == first.rows.len(),
+        "rows were lost: {} of {} written",
+        written,
+        first.rows.len()
+    );
+    staged
+        .commit()
+        .with_context(|| format!("writing {}", a.out))?;
+    eprintln!(
+        "lumest: merged {m} shard(s): {} batches of {} chains, seed {}; {} rows written to {} \
+         (the shards' wall times add up to {wall:.3} s)",
+        run.batches,
+        run.batch_size,
+        run.seed,
+        written,
+        if a.out == "-" { "<stdout>" } else { &a.out }
+    );
+    for line in super::illuminance::summary(&result).lines() {
+        eprintln!("lumest: {line}");
+    }
+    Ok(())
+}

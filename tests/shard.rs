@@ -1,0 +1,220 @@
+//! Sharded runs: `lumest illuminance ... --shard I/M --out PART` and
+//! `lumest merge PART... --out R.csv` give the single run's CSV byte for
+//! byte, and mismatched, missing, repeated or damaged shards are refused.
+
+use assert_cmd::Command;
+use std::path::{Path, PathBuf};
+
+fn data(f: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data")
+        .join(f)
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn lumest(args: &[&str]) -> std::process::Output {
+    Command::cargo_bin("lumest")
+        .unwrap()
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// One whole run and its shards (each with its own thread count), merged
+/// in a scrambled order; returns (whole CSV, merged CSV).
+fn whole_and_merged(
+    scene: &str,
+    points: &str,
+    extra: &[&str],
+    m: u64,
+    dir: &Path,
+) -> (Vec<u8>, Vec<u8>) {
+    let full = dir.join("full.csv");
+    let mut args = vec![
+        "illuminance",
+        "--scene",
+        scene,
+        "--points",
+        points,
+        "--quiet",
+    ];
+    args.extend(extra);
+    let f = full.to_str().unwrap();
+    let mut a = args.clone();
+    a.extend(["--out", f, "--threads", "2"]);
+    let o = lumest(&a);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut parts: Vec<PathBuf> = Vec::new();
+    for i in 0..m {
+        let p = dir.join(format!("part{i}.state"));
+        let shard = format!("{i}/{m}");
+        let threads = (1 + i % 3).to_string();
+        let mut a = args.clone();
+        a.extend([
+            "--shard",
+            &shard,
+            "--out",
+            p.to_str().unwrap(),
+            "--threads",
+            &threads,
+        ]);
+        let o = lumest(&a);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        parts.push(p);
+    }
+    // Any order: last, first, then the rest.
+    parts.rotate_right(1);
+    let merged = dir.join("merged.csv");
+    let mut a = vec!["merge".to_string()];
+    a.extend(parts.iter().map(|p| p.to_string_lossy().into_owned()));
+    a.extend(["--out".to_string(), merged.to_string_lossy().into_owned()]);
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    let o = lumest(&a);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    (std::fs::read(full).unwrap(), std::fs::read(merged).unwrap())
+}
+
+#[test]
+fn merged_shards_are_the_single_run_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    // Two planes, resolved orders, an uneven shard count.
+    let (full, merged) = whole_and_merged(
+        &data("sobolev.toml"),
+        &data("sobolev_points.csv"),
+        &["--chains", "30000", "--seed", "11", "--orders", "2"],
+        3,
+        dir.path(),
+    );
+    assert!(full.len() > 1000);
+    assert!(
+        full == merged,
+        "sharded Sobolev run differs from the single run"
+    );
+    // The furnished office: luminaires, a mesh, the near/far split where
+    // needed, more shards than threads.
+    let (full, merged) = whole_and_merged(
+        &data("office.toml"),
+        &data("office_grid.csv"),
+        &["--chains", "20000", "--seed", "3"],
+        5,
+        dir.path(),
+    );
+    assert!(
+        full == merged,
+        "sharded office run differs from the single run"
+    );
+    // The backward estimator, one shard (the whole run in one state).
+    let (full, merged) = whole_and_merged(
+        &data("sobolev.toml"),
+        &data("sobolev_points.csv"),
+        &["--chains", "4000", "--seed", "2", "--estimator", "backward"],
+        1,
+        dir.path(),
+    );
+    assert!(full == merged, "backward run through one shard differs");
+}
+
+/// Writes shard `i/m` of a Sobolev run with `seed` (and `extra`) to `name`.
+fn shard(dir: &Path, name: &str, i: u64, m: u64, seed: &str, scene: &str) -> String {
+    let p = dir.join(name).to_string_lossy().into_owned();
+    let s = format!("{i}/{m}");
+    let o = lumest(&[
+        "illuminance",
+        "--scene",
+        &data(scene),
+        "--points",
+        &data("sobolev_points.csv"),
+        "--chains",
+        "8000",
+        "--seed",
+        seed,
+        "--shard",
+        &s,
+        "--out",
+        &p,
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    p
+}
+
+fn merge_err(parts: &[&str], out: &Path) -> String {
+    let mut a = vec!["merge"];
+    a.extend(parts);
+    let out = out.to_str().unwrap();
+    a.extend(["--out", out]);
+    let o = lumest(&a);
+    assert!(!o.status.success(), "merge of {parts:?} was accepted");
+    assert!(!Path::new(out).exists(), "a refused merge wrote {out}");
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn mismatched_missing_repeated_or_damaged_shards_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("r.csv");
+    let a0 = shard(d, "a0", 0, 2, "1", "sobolev.toml");
+    let a1 = shard(d, "a1", 1, 2, "1", "sobolev.toml");
+    let seed2 = shard(d, "b1", 1, 2, "2", "sobolev.toml");
+    let other = shard(d, "c1", 1, 2, "1", "sobolev_phong.toml");
+    let e = merge_err(&[&a0, &seed2], &out);
+    assert!(e.contains("different runs") && e.contains("seeds"), "{e}");
+    let e = merge_err(&[&a0, &other], &out);
+    assert!(e.contains("different runs") && e.contains("scenes"), "{e}");
+    let e = merge_err(&[&a0], &out);
+    assert!(e.contains("shard(s) 1/2 of the run are missing"), "{e}");
+    let e = merge_err(&[&a0, &a1, &a1], &out);
+    assert!(e.contains("both shard 1/2"), "{e}");
+    // A cut file and a flipped byte.
+    let bytes = std::fs::read(&a1).unwrap();
+    let cut = d.join("cut").to_string_lossy().into_owned();
+    std::fs::write(&cut, &bytes[..bytes.len() - 100]).unwrap();
+    let e = merge_err(&[&a0, &cut], &out);
+    assert!(e.contains("cut") && e.contains("damaged"), "{e}");
+    let mut flipped = bytes.clone();
+    let k = flipped.len() / 2;
+    flipped[k] ^= 1;
+    std::fs::write(&cut, &flipped).unwrap();
+    let e = merge_err(&[&a0, &cut], &out);
+    assert!(e.contains("checksum"), "{e}");
+    // A CSV is not a shard.
+    let e = merge_err(&[&a0, &data("sobolev_points.csv")], &out);
+    assert!(e.contains("not a lumest shard state"), "{e}");
+    // The good pair merges.
+    let o = lumest(&["merge", &a1, &a0, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn shard_options_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("p").to_string_lossy().into_owned();
+    let base = [
+        "illuminance",
+        "--scene",
+        &data("sobolev.toml"),
+        "--points",
+        &data("sobolev_points.csv"),
+        "--out",
+        &p,
+    ];
+    for (extra, want) in [
+        (vec!["--shard", "0/2"], "--chains"),
+        (vec!["--shard", "2/2", "--chains", "1000"], "0 <= I < M"),
+        (vec!["--shard", "0/0", "--chains", "1000"], "0 <= I < M"),
+        (vec!["--shard", "a", "--chains", "1000"], "I/M"),
+        (
+            vec!["--shard", "0/2", "--chains", "1000", "--time", "1"],
+            "--time",
+        ),
+    ] {
+        let mut a = base.to_vec();
+        a.extend(extra.iter());
+        let o = lumest(&a);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && e.contains(want), "{extra:?}: {e}");
+        assert!(!Path::new(&p).exists());
+    }
+}
