@@ -337,8 +337,7 @@ fn compare(f: &Furnished, seed: u64, s: f64, off: DVec3, n_rays: usize) -> Seen 
         }
     }
     // Observers standing on surfaces (and in the air), any direction.
-    for k in 0..surface_points.len().min(n_rays) {
-        let o = surface_points[k].0;
+    for &(o, _) in surface_points.iter().take(n_rays) {
         let d = unit(&mut rng);
         let (a, b) = (lin.first_hit_from(o, d), tree.first_hit_from(o, d));
         assert!(
@@ -356,10 +355,10 @@ fn compare(f: &Furnished, seed: u64, s: f64, off: DVec3, n_rays: usize) -> Seen 
                 o,
                 d: (*p - o).normalize(),
             };
-            if let Some(h) = check_ray(ray, None, "edge") {
-                if (h.p - *p).length() < 1e-9 * s {
-                    seen.edge_ties += 1;
-                }
+            if let Some(h) = check_ray(ray, None, "edge")
+                && (h.p - *p).length() < 1e-9 * s
+            {
+                seen.edge_ties += 1;
             }
         }
     }

@@ -1,5 +1,9 @@
-//! A bounding volume hierarchy over triangles, all in `f64`, with a
-//! watertight ray–triangle test.
+//! A bounding volume hierarchy over axis-aligned boxes, all in `f64`, and
+//! the ray query it is traversed with, including a watertight
+//! ray–triangle test. Two uses: [`TriangleBvh`], the triangles of a mesh,
+//! and the scene's top-level tree over its finite shapes
+//! (`scene/world/shape_tree.rs`), whose leaves are tested by the shapes'
+//! own code ([`Bvh::nearest`], [`Bvh::any`] hand over leaf positions).
 //!
 //! # Why our own BVH, in `f64`
 //!
@@ -17,7 +21,7 @@
 //! # Construction
 //!
 //! Top-down binned surface-area heuristic (16 bins on each axis, a box test
-//! costed like a triangle test), leaves of at most [`MAX_LEAF`] triangles,
+//! costed like a leaf test), leaves of at most [`MAX_LEAF`] boxes,
 //! nodes flattened depth first (left child right after its parent). Where the centroids of a node coincide (no
 //! binned split exists) the node is halved by index, so the depth stays
 //! below the traversal stack size whatever the input.

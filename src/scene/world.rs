@@ -6,7 +6,13 @@
 //! A planes-only scene has no BVH, no SH machinery and takes the bit-mask
 //! visibility fast path ([`Scene::planes_only`]); the mesh BVH is built only
 //! for meshes and the spherical-harmonic root finder only for SH objects.
-//! [`Scene::summary`] reports it.
+//! A scene with [`AUTO_MIN_SHAPES`] or more finite shapes puts them in a
+//! top-level BVH (`world/shape_tree.rs`; [`Accel`]), so that the nearest-hit
+//! and visibility queries cost `log n`; fewer are tested in loops, which is
+//! faster then. Both give the same answers bit for bit: every shape is
+//! tested by the same code, and the nearest hit is decided from the set of
+//! hits by rules that do not depend on the order (`world/nearest.rs`).
+//! [`Scene::summary`] reports what was built.
 //!
 //! **Sides.** Every shape has a *geometric* normal (a plane's, rectangle's or
 //! disc's given normal, outward for spheres, boxes and SH objects, the

@@ -166,7 +166,8 @@ mod tests {
     fn answer_is_independent_of_the_order_and_follows_the_rules() {
         // (t, key, class: 0 flat, 1 emitter, 2 solid), expected winner key.
         let tie = 0.5 * EMITTER_TIE;
-        let cases: Vec<(Vec<(f64, u32, u8)>, Option<u32>)> = vec![
+        type Hits = Vec<(f64, u32, u8)>;
+        let cases: Vec<(Hits, Option<u32>)> = vec![
             (vec![], None),
             (vec![(2.0, 3, 0), (1.0, 5, 0)], Some(5)),
             // Equal t: the smaller key.
@@ -186,7 +187,6 @@ mod tests {
             (vec![(1.0 + tie, 9, 1), (1.0, 8, 1), (1.0, 1, 0)], Some(8)),
         ];
         for (hits, want) in cases {
-            let n = hits.len();
             for p in permutations(hits.len()) {
                 let mut acc = Nearest::new();
                 for &i in &p {
