@@ -689,6 +689,62 @@ fn plain_messages_for_odd_numbers_and_separators() {
     assert!(!o.status.success() && err.contains("at least 1"), "{err}");
 }
 
+/// `bench --shapes`: the bare room, then each count with its shapes in
+/// loops and in the BVH; the ratio column follows from the chains/s column,
+/// the default is the BVH from 12 shapes on; a count of 0 is refused.
+#[test]
+fn bench_shapes_measures_loops_and_tree_against_the_bare_room() {
+    let o = lumest()
+        .args([
+            "bench",
+            "--shapes",
+            "4,20",
+            "--time",
+            "0.1",
+            "--threads",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let mut lines = out.lines().skip(1);
+    let header: Vec<&str> = lines.next().unwrap().split_whitespace().collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split_whitespace().collect()).collect();
+    let col = |r: &Vec<&str>, name: &str| -> f64 {
+        r[header.iter().position(|h| *h == name).unwrap()]
+            .parse()
+            .unwrap()
+    };
+    let kinds: Vec<(&str, &str)> = rows.iter().map(|r| (r[0], r[1])).collect();
+    assert_eq!(
+        kinds,
+        [
+            ("0", "none"),
+            ("4", "none"),
+            ("4", "built"),
+            ("20", "none"),
+            ("20", "built")
+        ],
+        "{out}"
+    );
+    let bare = col(&rows[0], "chains/s");
+    for r in &rows {
+        let rate = col(r, "chains/s");
+        assert!(
+            rate > 0.0 && (col(r, "vs_bare") - rate / bare).abs() < 1e-4,
+            "{out}"
+        );
+        assert!(col(r, "E_avg_lx") > 0.0, "{out}");
+    }
+    // The default: loops below 12 shapes, the tree from 12 on.
+    let default: Vec<bool> = rows.iter().map(|r| r.len() == header.len()).collect();
+    assert_eq!(default, [true, true, false, false, true], "{out}");
+    let o = lumest().args(["bench", "--shapes", "0"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("at least 1"), "{err}");
+}
+
 /// Render refuses `-` as its output prefix (it wrote files named `-.png`)
 /// and a lens-sample count that is not a square (2 silently became 1).
 #[test]

@@ -13,3 +13,4 @@ pub mod plate;
 pub mod report;
 pub mod sobolev;
 pub mod stress;
+pub mod tiled_room;

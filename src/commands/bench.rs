@@ -44,6 +44,128 @@ pub struct BenchArgs {
     /// point light's.
     #[arg(long)]
     pub luminaires: bool,
+    /// Scene-size costs instead: chains/s in a room of six planes holding
+    /// each of these numbers of small rectangles (e.g. `57800` or
+    /// `1,4,16,64`), with the finite shapes in loops and in the BVH, against
+    /// the bare room (16 floor points, the plain local estimate; `--time`
+    /// per run, default 5 s, each run sized to it by two short probes).
+    #[arg(long)]
+    pub shapes: Option<String>,
+}
+
+/// `lumest bench --shapes N,...`: what scene size costs. For each count,
+/// the tiled room ([`crate::cases::tiled_room`]) runs once with its shapes
+/// in loops and once in the BVH (both give the same answers bit for bit),
+/// each for the same time; the bare room (the six planes alone) runs first.
+/// Prints chains/s and the ratio to the bare room, and which of the two
+/// the default ([`Accel::Auto`]) picks.
+pub fn shapes(a: &BenchArgs, list: &str) -> anyhow::Result<()> {
+    use crate::cases::tiled_room::tiled_room;
+    use crate::scene::{AUTO_MIN_SHAPES, Accel};
+    let counts: Vec<usize> = parse_list(list)?.into_iter().map(|x| x as usize).collect();
+    anyhow::ensure!(
+        counts.iter().all(|&n| n >= 1),
+        "--shapes: every count must be at least 1, got {list}"
+    );
+    let t = match &a.time {
+        Some(t) => {
+            let v = parse_list(t)?;
+            anyhow::ensure!(v.len() == 1, "--time: one value with --shapes");
+            v[0]
+        }
+        None => 5.0,
+    };
+    // Each run is sized to about `t` seconds by probes (a timed
+    // run keeps at least 32 batches of 256 chains, minutes at 50 chains/s).
+    // The plain local estimate (no near/far split, whose set-up traces a
+    // fixed number of paths and would dominate short runs): each chain
+    // costs one nearest hit per collision and one visibility test per
+    // collision and point.
+    let measure = |scene: &crate::scene::Scene, points: &[(glam::DVec3, glam::DVec3)]| {
+        let receivers = Receivers::new(scene, points).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let cfg = |chains: u64| RunConfig {
+            seed: a.seed,
+            threads: a.threads,
+            stop: crate::run::Stop {
+                chains: Some(chains),
+                ..Default::default()
+            },
+            near_auto: false,
+            ..RunConfig::default()
+        };
+        // Probes of 4x more chains each until one takes a quarter of the
+        // time; the pace comes from the last two, without the fixed cost per
+        // run (32 batches, each clearing and reducing one accumulator per
+        // surface and point: about 0.6 s in all with 57,800 rectangles).
+        let (mut c0, mut w0) = (0u64, 0.0);
+        let mut c = 64u64;
+        let pace = loop {
+            let w = run(scene, &receivers, &cfg(c), &mut |_| true).wall;
+            if w >= 0.25 * t || c >= 1 << 40 {
+                break if w > w0 {
+                    (c - c0) as f64 / (w - w0)
+                } else {
+                    c as f64 / w.max(1e-9)
+                };
+            }
+            (c0, w0, c) = (c, w, 4 * c);
+        };
+        let chains = ((pace * t) as u64).clamp(64, 1 << 42);
+        let r = run(scene, &receivers, &cfg(chains), &mut |_| true);
+        let n = points.len() as f64;
+        let e_avg = (0..points.len())
+            .map(|j| r.direct[j] + r.tallies.estimated[j].mean())
+            .sum::<f64>()
+            / n;
+        let se = (0..points.len())
+            .map(|j| r.tallies.estimated[j].std_error().powi(2))
+            .sum::<f64>()
+            .sqrt()
+            / n;
+        anyhow::Ok((
+            r.chains as f64 / r.wall,
+            r.chains,
+            r.wall,
+            r.threads,
+            e_avg,
+            se,
+        ))
+    };
+    let (scene, points) = tiled_room(0);
+    let (bare, chains, wall, threads, e_avg, se) = measure(&scene, &points)?;
+    println!(
+        "tiled room (10 x 8 x 3 m, six planes, one point light, 16 floor points), {t} s per run on {threads} thread(s); \
+         the default builds the BVH from {AUTO_MIN_SHAPES} finite shapes"
+    );
+    println!(
+        "{:>8} {:>6} {:>12} {:>8} {:>12} {:>9} {:>10} {:>9} {:>8}",
+        "shapes", "BVH", "chains/s", "time_s", "chains", "vs_bare", "E_avg_lx", "+-", "default"
+    );
+    println!(
+        "{:>8} {:>6} {:>12.4e} {:>8.2} {:>12} {:>9.4} {:>10.4} {:>9.2e} {:>8}",
+        0, "none", bare, wall, chains, 1.0, e_avg, se, "yes"
+    );
+    for &n in &counts {
+        let (scene, points) = tiled_room(n);
+        for (accel, name) in [(Accel::Never, "none"), (Accel::Always, "built")] {
+            let scene = scene.clone().with_accel(accel);
+            let (rate, chains, wall, _, e_avg, se) = measure(&scene, &points)?;
+            let default = (n >= AUTO_MIN_SHAPES) == (accel == Accel::Always);
+            println!(
+                "{:>8} {:>6} {:>12.4e} {:>8.2} {:>12} {:>9.4} {:>10.4} {:>9.2e} {:>8}",
+                n,
+                name,
+                rate,
+                wall,
+                chains,
+                rate / bare,
+                e_avg,
+                se,
+                if default { "yes" } else { "" }
+            );
+        }
+    }
+    Ok(())
 }
 
 /// `lumest bench --luminaires`: the load time of a 1000-luminaire scene
@@ -197,6 +319,9 @@ pub fn compare(a: &BenchArgs, counts: &[usize], times: &[f64]) -> anyhow::Result
 
 /// Run the benchmark and print a table.
 pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
+    if let Some(list) = &a.shapes {
+        return shapes(a, list);
+    }
     let counts: Vec<usize> = parse_list(&a.points)?
         .into_iter()
         .map(|x| x as usize)

@@ -1,5 +1,9 @@
-//! A bounding volume hierarchy over triangles, all in `f64`, with a
-//! watertight ray–triangle test.
+//! A bounding volume hierarchy over axis-aligned boxes, all in `f64`, and
+//! the ray query it is traversed with, including a watertight
+//! ray–triangle test. Two uses: [`TriangleBvh`], the triangles of a mesh,
+//! and the scene's top-level tree over its finite shapes
+//! (`scene/world/shape_tree.rs`), whose leaves are tested by the shapes'
+//! own code ([`Bvh::nearest`], [`Bvh::any`] hand over leaf positions).
 //!
 //! # Why our own BVH, in `f64`
 //!
@@ -17,7 +21,7 @@
 //! # Construction
 //!
 //! Top-down binned surface-area heuristic (16 bins on each axis, a box test
-//! costed like a triangle test), leaves of at most [`MAX_LEAF`] triangles,
+//! costed like a leaf test), leaves of at most [`MAX_LEAF`] boxes,
 //! nodes flattened depth first (left child right after its parent). Where the centroids of a node coincide (no
 //! binned split exists) the node is halved by index, so the depth stays
 //! below the traversal stack size whatever the input.
@@ -227,18 +231,28 @@ fn diff_of_products_fma(a: f64, b: f64, c: f64, d: f64) -> f64 {
     f + err
 }
 
-/// A BVH over a fixed set of triangles, answering nearest-hit and any-hit
-/// queries. Triangles are named by their index in the input slice.
+/// A bounding volume hierarchy over a fixed set of axis-aligned boxes (the
+/// bounds of triangles, of shapes): the tree and the traversals. What a
+/// leaf holds and how it is tested is the caller's: the traversals hand
+/// over leaf positions (see [`Bvh::ids`]).
 #[derive(Clone, Debug)]
 pub struct Bvh {
     nodes: Vec<Node>,
-    /// Triangle vertices [m] in leaf order.
-    tris: Vec<[DVec3; 3]>,
-    /// Input index of each triangle in leaf order.
+    /// Input index of each box in leaf order.
     ids: Vec<u32>,
 }
 
-/// A triangle reference during the build.
+/// A BVH over a fixed set of triangles, answering nearest-hit and any-hit
+/// queries with the watertight triangle test. Triangles are named by their
+/// index in the input slice.
+#[derive(Clone, Debug)]
+pub struct TriangleBvh {
+    tree: Bvh,
+    /// Triangle vertices [m] in leaf order.
+    tris: Vec<[DVec3; 3]>,
+}
+
+/// A box reference during the build.
 #[derive(Clone, Copy)]
 struct Item {
     lo: DVec3,
@@ -274,37 +288,37 @@ fn half_area(lo: DVec3, hi: DVec3) -> f64 {
 }
 
 impl Bvh {
-    /// Build over `tris` (vertices [m], finite; at most `u32::MAX` triangles).
-    pub fn build(tris: &[[DVec3; 3]]) -> Self {
-        assert!(tris.len() < u32::MAX as usize, "too many triangles");
-        let mut items: Vec<Item> = tris
+    /// Build over boxes `(lower, upper)` [m] (finite; at most `u32::MAX`).
+    /// Node boxes are padded by `BOX_PAD` of their largest coordinate; the
+    /// caller's boxes must hold everything its leaf test can report.
+    pub fn build(bounds: &[(DVec3, DVec3)]) -> Self {
+        assert!(bounds.len() < u32::MAX as usize, "too many boxes");
+        let mut items: Vec<Item> = bounds
             .iter()
             .enumerate()
-            .map(|(i, t)| {
-                let lo = t[0].min(t[1]).min(t[2]);
-                let hi = t[0].max(t[1]).max(t[2]);
-                Item {
-                    lo,
-                    hi,
-                    c: 0.5 * (lo + hi),
-                    id: i as u32,
-                }
+            .map(|(i, &(lo, hi))| Item {
+                lo,
+                hi,
+                c: 0.5 * (lo + hi),
+                id: i as u32,
             })
             .collect();
-        let mut nodes = Vec::with_capacity(2 * tris.len() / MAX_LEAF + 1);
+        let mut nodes = Vec::with_capacity(2 * bounds.len() / MAX_LEAF + 1);
         if !items.is_empty() {
             build_node(&mut items, 0, 0, &mut nodes);
         }
-        let ids: Vec<u32> = items.iter().map(|it| it.id).collect();
-        let tris = ids.iter().map(|&i| tris[i as usize]).collect();
-        Self { nodes, tris, ids }
+        let ids = items.iter().map(|it| it.id).collect();
+        Self { nodes, ids }
     }
 
-    /// Bytes held by the tree (nodes, leaf-ordered triangle copies, ids).
+    /// Input index of the box at each leaf position.
+    pub fn ids(&self) -> &[u32] {
+        &self.ids
+    }
+
+    /// Bytes held by the tree (nodes and ids).
     pub fn storage_bytes(&self) -> usize {
-        self.nodes.len() * size_of::<Node>()
-            + self.tris.len() * size_of::<[DVec3; 3]>()
-            + self.ids.len() * size_of::<u32>()
+        self.nodes.len() * size_of::<Node>() + self.ids.len() * size_of::<u32>()
     }
 
     /// Number of nodes.
@@ -312,19 +326,26 @@ impl Bvh {
         self.nodes.len()
     }
 
-    /// Nearest hit with `t` in `(t_min, t_max)`, skipping triangle `skip`:
-    /// `(t, input index, corners [m])`.
-    pub fn first_hit(
+    /// Nearest-first traversal for a nearest-hit query over `(t_min, t_max)`:
+    /// calls `leaf(position, bound)` for every leaf position whose boxes the
+    /// ray meets before the current bound, which `leaf` returns (lowered
+    /// when it found a nearer hit). Nodes entered beyond the bound are
+    /// skipped. Returns the final bound.
+    #[inline(always)]
+    pub fn nearest(
         &self,
         q: &RayQuery,
         t_min: f64,
         t_max: f64,
-        skip: Option<u32>,
-    ) -> Option<(f64, u32, [DVec3; 3])> {
-        let skip = skip.unwrap_or(u32::MAX);
+        mut leaf: impl FnMut(usize, f64) -> f64,
+    ) -> f64 {
         let mut best_t = t_max;
-        let mut best = None;
-        q.enter(self.nodes.first()?, t_min, best_t)?;
+        let Some(root) = self.nodes.first() else {
+            return best_t;
+        };
+        if q.enter(root, t_min, best_t).is_none() {
+            return best_t;
+        }
         let mut stack = [(0u32, 0.0f64); STACK];
         let mut sp = 0usize;
         let mut node = 0usize;
@@ -334,16 +355,7 @@ impl Bvh {
                 let start = n.first as usize;
                 let end = start + n.count as usize;
                 for pos in start..end {
-                    if self.ids[pos] == skip {
-                        continue;
-                    }
-                    if let Some(t) = q.triangle(&self.tris[pos])
-                        && t > t_min
-                        && t < best_t
-                    {
-                        best_t = t;
-                        best = Some(pos);
-                    }
+                    best_t = leaf(pos, best_t);
                 }
             } else {
                 let l = node + 1;
@@ -372,7 +384,7 @@ impl Bvh {
             // Pop the next node that may still hold a nearer hit.
             loop {
                 if sp == 0 {
-                    return best.map(|pos| (best_t, self.ids[pos], self.tris[pos]));
+                    return best_t;
                 }
                 sp -= 1;
                 let (i, t) = stack[sp];
@@ -384,9 +396,17 @@ impl Bvh {
         }
     }
 
-    /// Whether any triangle but `skip` is hit with `t` in `(t_min, t_max)`.
-    pub fn any_hit(&self, q: &RayQuery, t_min: f64, t_max: f64, skip: Option<u32>) -> bool {
-        let skip = skip.unwrap_or(u32::MAX);
+    /// Any-hit traversal over `(t_min, t_max)`: whether `leaf(position)` is
+    /// true for a leaf position whose boxes the ray meets (stops at the
+    /// first).
+    #[inline(always)]
+    pub fn any(
+        &self,
+        q: &RayQuery,
+        t_min: f64,
+        t_max: f64,
+        mut leaf: impl FnMut(usize) -> bool,
+    ) -> bool {
         let Some(root) = self.nodes.first() else {
             return false;
         };
@@ -401,14 +421,8 @@ impl Bvh {
             if n.count > 0 {
                 let start = n.first as usize;
                 let end = start + n.count as usize;
-                for (tri, &id) in self.tris[start..end].iter().zip(&self.ids[start..end]) {
-                    if id != skip
-                        && let Some(t) = q.triangle(tri)
-                        && t > t_min
-                        && t < t_max
-                    {
-                        return true;
-                    }
+                if (start..end).any(&mut leaf) {
+                    return true;
                 }
             } else {
                 let l = node + 1;
@@ -439,6 +453,67 @@ impl Bvh {
             sp -= 1;
             node = stack[sp] as usize;
         }
+    }
+}
+
+impl TriangleBvh {
+    /// Build over `tris` (vertices [m], finite; at most `u32::MAX` triangles).
+    pub fn build(tris: &[[DVec3; 3]]) -> Self {
+        let bounds: Vec<(DVec3, DVec3)> = tris
+            .iter()
+            .map(|t| (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2])))
+            .collect();
+        let tree = Bvh::build(&bounds);
+        let tris = tree.ids().iter().map(|&i| tris[i as usize]).collect();
+        Self { tree, tris }
+    }
+
+    /// Bytes held by the tree (nodes, leaf-ordered triangle copies, ids).
+    pub fn storage_bytes(&self) -> usize {
+        self.tree.storage_bytes() + self.tris.len() * size_of::<[DVec3; 3]>()
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.tree.node_count()
+    }
+
+    /// Nearest hit with `t` in `(t_min, t_max)`, skipping triangle `skip`:
+    /// `(t, input index, corners [m])`.
+    pub fn first_hit(
+        &self,
+        q: &RayQuery,
+        t_min: f64,
+        t_max: f64,
+        skip: Option<u32>,
+    ) -> Option<(f64, u32, [DVec3; 3])> {
+        let skip = skip.unwrap_or(u32::MAX);
+        let ids = self.tree.ids();
+        let mut best = None;
+        let best_t = self.tree.nearest(q, t_min, t_max, |pos, best_t| {
+            if ids[pos] != skip
+                && let Some(t) = q.triangle(&self.tris[pos])
+                && t > t_min
+                && t < best_t
+            {
+                best = Some(pos);
+                t
+            } else {
+                best_t
+            }
+        });
+        best.map(|pos| (best_t, ids[pos], self.tris[pos]))
+    }
+
+    /// Whether any triangle but `skip` is hit with `t` in `(t_min, t_max)`.
+    pub fn any_hit(&self, q: &RayQuery, t_min: f64, t_max: f64, skip: Option<u32>) -> bool {
+        let skip = skip.unwrap_or(u32::MAX);
+        let ids = self.tree.ids();
+        self.tree.any(q, t_min, t_max, |pos| {
+            ids[pos] != skip
+                && q.triangle(&self.tris[pos])
+                    .is_some_and(|t| t > t_min && t < t_max)
+        })
     }
 }
 
@@ -617,7 +692,7 @@ mod tests {
     fn depth_stays_bounded_for_coincident_boxes() {
         // 5000 copies of one triangle: no split by SAH, halved by index.
         let tris = vec![[DVec3::ZERO, DVec3::X, DVec3::Y]; 5000];
-        let bvh = Bvh::build(&tris);
+        let bvh = TriangleBvh::build(&tris);
         let q = RayQuery::new(DVec3::new(0.2, 0.2, 1.0), -DVec3::Z);
         let (t, id, _) = bvh.first_hit(&q, 0.0, f64::INFINITY, None).unwrap();
         assert_eq!(t, 1.0);

@@ -8,7 +8,7 @@
 //!
 //! # Acceleration: an own `f64` BVH, not `obvhs`
 //!
-//! The ray queries run on [`super::bvh::Bvh`], a binned-SAH BVH written for
+//! The ray queries run on [`super::bvh::TriangleBvh`], a binned-SAH BVH written for
 //! this crate in `f64`, with the watertight ray–triangle test of Woop,
 //! Benthin and Wald (2013). `obvhs` (f32) was faster in a crate survey, but
 //! an `f32` box around `f64` triangles and an `f32` slab test can cull a
@@ -46,7 +46,7 @@
 //! `(t_min, t_max)`; `skip` names the triangle a ray leaves (so a ray
 //! leaving a surface never re-hits it at `t ~ 0`).
 
-use super::bvh::{Bvh, RayQuery};
+use super::bvh::{RayQuery, TriangleBvh};
 use glam::{DMat3, DVec3};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -98,7 +98,7 @@ pub struct Mesh {
     hi: DVec3,
     /// Zero-area triangles dropped when built.
     dropped: usize,
-    bvh: Bvh,
+    bvh: TriangleBvh,
 }
 
 impl std::fmt::Debug for Mesh {
@@ -258,7 +258,7 @@ impl Mesh {
             lo = lo.min(*p);
             hi = hi.max(*p);
         }
-        let bvh = Bvh::build(&corners);
+        let bvh = TriangleBvh::build(&corners);
         Ok(Self {
             vertices,
             triangles: kept,

@@ -10,8 +10,8 @@ pub mod desc;
 pub mod world;
 
 pub use world::{
-    BuildError, MAX_COORD, MAX_INTENSITY, MAX_PLANES, MIN_INTENSITY, Scene, SceneSummary, ShapeRef,
-    Sides, Surface, SurfaceSpec,
+    AUTO_MIN_SHAPES, Accel, BuildError, MAX_COORD, MAX_INTENSITY, MAX_PLANES, MIN_INTENSITY, Scene,
+    SceneSummary, ShapeRef, Sides, Surface, SurfaceSpec,
 };
 
 use std::path::{Path, PathBuf};

@@ -6,13 +6,25 @@
 //! A planes-only scene has no BVH, no SH machinery and takes the bit-mask
 //! visibility fast path ([`Scene::planes_only`]); the mesh BVH is built only
 //! for meshes and the spherical-harmonic root finder only for SH objects.
-//! [`Scene::summary`] reports it.
+//! A scene with [`AUTO_MIN_SHAPES`] or more finite shapes puts them in a
+//! top-level BVH (`world/shape_tree.rs`; [`Accel`]), so that the nearest-hit
+//! and visibility queries cost `log n`; fewer are tested in loops, which is
+//! faster then. Both give the same answers bit for bit: every shape is
+//! tested by the same code, and the nearest hit is decided from the set of
+//! hits by rules that do not depend on the order (`world/nearest.rs`).
+//! [`Scene::summary`] reports what was built.
 //!
 //! **Sides.** Every shape has a *geometric* normal (a plane's, rectangle's or
 //! disc's given normal, outward for spheres, boxes and SH objects, the
 //! winding normal of mesh triangles). A surface reflects on the side(s) its
 //! [`Sides`] names; the other side is black. Every surface is opaque.
 
+mod nearest;
+mod shape_tree;
+
+pub use shape_tree::{AUTO_MIN_SHAPES, Accel};
+
+use crate::geometry::bvh::RayQuery;
 use crate::geometry::mesh::Mesh;
 use crate::geometry::sh::ShSurface;
 use crate::geometry::shapes::{AaBox, Disc, Flat, Inside, Rect, Sphere};
@@ -20,6 +32,8 @@ use crate::geometry::{Hit, Plane, Ray, SideMask};
 use crate::light::Light;
 use crate::material::Material;
 use glam::DVec3;
+use nearest::{Cand, Nearest};
+use shape_tree::ShapeTree;
 
 /// Largest accepted coordinate magnitude [m]: squares of lengths and of
 /// scores (the variance of the variance takes fourth powers) stay finite.
@@ -37,6 +51,22 @@ pub const MIN_INTENSITY: f64 = 1e-60;
 /// Relative tolerance within which an emitter's hit wins a tie with a
 /// coplanar surface ([`Scene::first_hit_from`], [`Scene::intersect`]).
 const EMITTER_TIE: f64 = 1e-9;
+
+/// Key of the first finite shape in the fixed order of the nearest-hit
+/// ties (`nearest.rs`): planes come first, keyed by their index.
+const FIRST_KEY: u32 = MAX_PLANES as u32;
+
+/// A finite shape: its kind and index in that kind's list (a leaf of the
+/// top-level BVH).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Prim {
+    Rect(u32),
+    Disc(u32),
+    Sphere(u32),
+    Box(u32),
+    Mesh(u32),
+    Sh(u32),
+}
 
 /// Which side(s) of a surface reflect, relative to its geometric normal.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -235,6 +265,8 @@ pub struct Scene {
     meshes: Vec<(Mesh, u32)>,
     /// Spherical-harmonic objects.
     shs: Vec<(ShSurface, u32)>,
+    /// The top-level BVH over the finite shapes, when built ([`Accel`]).
+    tree: Option<ShapeTree>,
     /// Light sources.
     pub lights: Vec<Light>,
     /// The lights' names, for messages and summaries (the scene file's
@@ -387,6 +419,7 @@ impl Scene {
             boxes: Vec::new(),
             meshes: Vec::new(),
             shs: Vec::new(),
+            tree: None,
             lights: Vec::new(),
             light_names: Vec::new(),
             notes: Vec::new(),
@@ -492,7 +525,7 @@ impl Scene {
         }
         scene.light_names = (1..=lights.len()).map(|k| format!("light #{k}")).collect();
         scene.set_lights(lights);
-        scene
+        scene.with_accel(Accel::Auto)
     }
 
     /// Name the lights (in their order) for messages and summaries.
@@ -676,7 +709,7 @@ impl Scene {
             spot_lights: count(|l| matches!(l, Light::Spot(_))),
             sphere_lights: count(|l| matches!(l, Light::Sphere { .. })),
             area_lights: count(|l| matches!(l, Light::Area(_))),
-            bvh: !self.meshes.is_empty(),
+            bvh: self.tree.is_some() || !self.meshes.is_empty(),
             sh: !self.shs.is_empty(),
         }
     }
@@ -725,93 +758,67 @@ impl Scene {
     fn nearest(&self, ray: &Ray, start: Start) -> Option<Hit> {
         let on = |s: u32| matches!(start, Start::On(x, _) if x == s);
         let observer = matches!(start, Start::Observer);
-        let mut best_t = f64::INFINITY;
-        // (surface, primitive, geometric normal or none yet)
-        let mut best: Option<(u32, u32)> = None;
+        // Every hit is collected; which one wins follows the rules of
+        // `nearest.rs`, whatever the order of the tests.
+        let mut acc = Nearest::new();
         for (i, pl) in self.planes.iter().enumerate() {
             let s = self.plane_surface[i];
             if on(s) || (observer && pl.side(ray.o) == 0) {
                 continue;
             }
-            if let Some(t) = pl.intersect(ray, best_t) {
-                (best_t, best) = (t, Some((s, 0)));
+            if let Some(t) = pl.intersect(ray, acc.bound) {
+                let c = Cand {
+                    t,
+                    key: i as u32,
+                    surface: s,
+                    prim: 0,
+                };
+                acc.flat(c, false);
             }
         }
-        // An emitter set into a surface (a panel in the ceiling's plane) is
-        // met where the two coincide: its hits win ties within a relative
-        // 1e-9, in either order of the lists.
-        let mut best_emitter = false;
-        let t_max = |s: u32, best_t: f64, best_emitter: bool| {
-            if self.surfaces[s as usize].emitter.is_some() {
-                best_t * (1.0 + EMITTER_TIE)
-            } else if best_emitter {
+        match &self.tree {
+            Some(tree) => {
+                let q = RayQuery::new(ray.o, ray.d);
+                let ids = tree.bvh.ids();
+                let bound = acc.bound;
+                tree.bvh.nearest(&q, 0.0, bound, |pos, _| {
+                    self.offer(tree.prims[pos], FIRST_KEY + ids[pos], ray, start, &mut acc);
+                    acc.bound
+                });
+            }
+            None => {
+                let mut key = FIRST_KEY;
+                let mut each = |p: Prim| {
+                    self.offer(p, key, ray, start, &mut acc);
+                    key += 1;
+                };
+                (0..self.rects.len()).for_each(|i| each(Prim::Rect(i as u32)));
+                (0..self.discs.len()).for_each(|i| each(Prim::Disc(i as u32)));
+                (0..self.spheres.len()).for_each(|i| each(Prim::Sphere(i as u32)));
+                (0..self.boxes.len()).for_each(|i| each(Prim::Box(i as u32)));
+                (0..self.meshes.len()).for_each(|i| each(Prim::Mesh(i as u32)));
+            }
+        }
+        let (mut best_t, mut best, emitter) = match acc.resolve() {
+            Some((c, e)) => (c.t, Some((c.surface, c.prim)), e),
+            None => (f64::INFINITY, None, false),
+        };
+        // SH objects last, in index order: a march's result depends on its
+        // interval, so each gets the same one in every path. They must
+        // beat an emitter's hit clearly, like the solids. A ray starting on
+        // an SH surface (a collision, an observer on it) leaves it on the
+        // side its direction points to: no self-hit at t = 0.
+        if !self.shs.is_empty() {
+            let mut t_max = if emitter {
                 best_t * (1.0 - EMITTER_TIE)
             } else {
                 best_t
-            }
-        };
-        for (r, s) in &self.rects {
-            if on(*s) || (observer && r.plane.side(ray.o) == 0) {
-                continue;
-            }
-            if let Some(t) = r.intersect(ray, t_max(*s, best_t, best_emitter)) {
-                (best_t, best) = (t, Some((*s, 0)));
-                best_emitter = self.surfaces[*s as usize].emitter.is_some();
-            }
-        }
-        for (dc, s) in &self.discs {
-            if on(*s) || (observer && dc.plane.side(ray.o) == 0) {
-                continue;
-            }
-            if let Some(t) = dc.intersect(ray, t_max(*s, best_t, best_emitter)) {
-                (best_t, best) = (t, Some((*s, 0)));
-                best_emitter = self.surfaces[*s as usize].emitter.is_some();
-            }
-        }
-        // Curved shapes and meshes must beat an emitter's hit clearly.
-        let emitter_hit = best_emitter.then_some((best_t, best));
-        if best_emitter {
-            best_t *= 1.0 - EMITTER_TIE;
-        }
-        for (sp, s) in &self.spheres {
-            let leaving = on(*s) || (observer && sp.classify(ray.o) == Inside::On);
-            if let Some(t) = sp.intersect(ray, best_t, leaving) {
-                (best_t, best) = (t, Some((*s, 0)));
-            }
-        }
-        for (b, s0) in &self.boxes {
-            let leaving = match start {
-                Start::On(x, _) if (*s0..*s0 + 6).contains(&x) => Some((x - s0) as usize),
-                Start::Observer if b.classify(ray.o) == Inside::On => {
-                    (0..6).find(|&f| b.face_plane(f).side(ray.o) == 0)
+            };
+            for (o, s) in &self.shs {
+                if let Some((t, _)) = o.first_hit(ray.o, ray.d, 0.0, t_max) {
+                    (t_max, best_t, best) = (t, t, Some((*s, 0)));
                 }
-                _ => None,
-            };
-            if let Some((t, f)) = b.intersect(ray, best_t, leaving) {
-                (best_t, best) = (t, Some((s0 + f as u32, 0)));
             }
-        }
-        for (m, s) in &self.meshes {
-            let (t_min, skip) = match start {
-                Start::On(x, p) if x == *s => (0.0, Some(p)),
-                Start::Observer => (MESH_REL * (m.bounds().1 - m.bounds().0).length(), None),
-                _ => (0.0, None),
-            };
-            if let Some((t, _, tri)) = m.first_hit(ray.o, ray.d, t_min, best_t, skip) {
-                (best_t, best) = (t, Some((*s, tri)));
-            }
-        }
-        // A ray starting on an SH surface (a collision, an observer on it)
-        // leaves it on the side its direction points to: no self-hit at t = 0.
-        for (o, s) in &self.shs {
-            if let Some((t, _)) = o.first_hit(ray.o, ray.d, 0.0, best_t) {
-                (best_t, best) = (t, Some((*s, 0)));
-            }
-        }
-        if let Some((t, b)) = emitter_hit
-            && b == best
-        {
-            best_t = t;
         }
         let (s, prim) = best?;
         let surf = &self.surfaces[s as usize];
@@ -852,6 +859,159 @@ impl Scene {
             surface: s,
             prim,
         })
+    }
+
+    /// Test finite shape `p` (key `key` in the fixed order) against `ray`
+    /// up to `acc.bound` and add its hit: the one per-shape test of both the
+    /// linear loops and the tree.
+    #[inline(always)]
+    fn offer(&self, p: Prim, key: u32, ray: &Ray, start: Start, acc: &mut Nearest) {
+        let on = |s: u32| matches!(start, Start::On(x, _) if x == s);
+        let observer = matches!(start, Start::Observer);
+        let emits = |s: u32| self.surfaces[s as usize].emitter.is_some();
+        let cand = |t, surface, prim| Cand {
+            t,
+            key,
+            surface,
+            prim,
+        };
+        match p {
+            Prim::Rect(i) => {
+                let (r, s) = &self.rects[i as usize];
+                if on(*s) || (observer && r.plane.side(ray.o) == 0) {
+                    return;
+                }
+                if let Some(t) = r.intersect(ray, acc.bound) {
+                    acc.flat(cand(t, *s, 0), emits(*s));
+                }
+            }
+            Prim::Disc(i) => {
+                let (dc, s) = &self.discs[i as usize];
+                if on(*s) || (observer && dc.plane.side(ray.o) == 0) {
+                    return;
+                }
+                if let Some(t) = dc.intersect(ray, acc.bound) {
+                    acc.flat(cand(t, *s, 0), emits(*s));
+                }
+            }
+            Prim::Sphere(i) => {
+                let (sp, s) = &self.spheres[i as usize];
+                let leaving = on(*s) || (observer && sp.classify(ray.o) == Inside::On);
+                if let Some(t) = sp.intersect(ray, acc.bound, leaving) {
+                    acc.solid(cand(t, *s, 0));
+                }
+            }
+            Prim::Box(i) => {
+                let (b, s0) = &self.boxes[i as usize];
+                let leaving = match start {
+                    Start::On(x, _) if (*s0..*s0 + 6).contains(&x) => Some((x - s0) as usize),
+                    Start::Observer if b.classify(ray.o) == Inside::On => {
+                        (0..6).find(|&f| b.face_plane(f).side(ray.o) == 0)
+                    }
+                    _ => None,
+                };
+                if let Some((t, f)) = b.intersect(ray, acc.bound, leaving) {
+                    acc.solid(cand(t, s0 + f as u32, 0));
+                }
+            }
+            Prim::Mesh(i) => {
+                let (m, s) = &self.meshes[i as usize];
+                let (t_min, skip) = match start {
+                    Start::On(x, p) if x == *s => (0.0, Some(p)),
+                    Start::Observer => (MESH_REL * (m.bounds().1 - m.bounds().0).length(), None),
+                    _ => (0.0, None),
+                };
+                if let Some((t, _, tri)) = m.first_hit(ray.o, ray.d, t_min, acc.bound, skip) {
+                    acc.solid(cand(t, *s, tri));
+                }
+            }
+            // Tested after the others, in index order (see `nearest`).
+            Prim::Sh(_) => {}
+        }
+    }
+
+    /// Whether finite shape `p` blocks the open segment `a b` (`seg`: its
+    /// unit direction and length); `from`, `inside_both` as in
+    /// [`Self::blocked_by_shapes`]. The one per-shape test of both the
+    /// linear loops and the tree.
+    #[inline(always)]
+    fn blocks(
+        &self,
+        p: Prim,
+        a: DVec3,
+        from: Option<(u32, u32)>,
+        b: DVec3,
+        (d, len): (DVec3, f64),
+        inside_both: u64,
+    ) -> bool {
+        let skip = |k: usize| k < 64 && inside_both & (1 << k) != 0;
+        match p {
+            Prim::Rect(i) => self.rects[i as usize].0.crosses(a, b),
+            Prim::Disc(i) => self.discs[i as usize].0.crosses(a, b),
+            Prim::Sphere(i) => !skip(i as usize) && self.spheres[i as usize].0.crosses(a, b),
+            Prim::Box(i) => {
+                !skip(self.spheres.len() + i as usize) && self.boxes[i as usize].0.crosses(a, b)
+            }
+            // A shadow ray over `(MESH_REL, 1 - MESH_REL)` of the segment,
+            // skipping the triangle `a` is on.
+            Prim::Mesh(i) => {
+                let (m, s) = &self.meshes[i as usize];
+                let skip = from.filter(|f| f.0 == *s).map(|f| f.1);
+                m.occluded(a, d, MESH_REL * len, (1.0 - MESH_REL) * len, skip)
+            }
+            Prim::Sh(i) => {
+                let o = &self.shs[i as usize].0;
+                // A segment within the inner bounding ball (end points on or
+                // inside it; the ball is convex) meets the surface, which lies
+                // outside that ball, at most at its end points: no crossing.
+                // Exact for a degree-0 object (a sphere seen from inside).
+                let r_in = o.bounds().0 * (1.0 + 1e-12);
+                let c = o.center();
+                if (a - c).length() <= r_in && (b - c).length() <= r_in {
+                    return false;
+                }
+                o.crosses(a, d, 0.0, len)
+            }
+        }
+    }
+
+    /// The finite shapes in the fixed order (rectangles, discs, spheres,
+    /// boxes, meshes, SH objects); a shape's key is [`FIRST_KEY`] plus its
+    /// place here.
+    fn finite_prims(&self) -> Vec<Prim> {
+        let n = |k: usize| 0..k as u32;
+        n(self.rects.len())
+            .map(Prim::Rect)
+            .chain(n(self.discs.len()).map(Prim::Disc))
+            .chain(n(self.spheres.len()).map(Prim::Sphere))
+            .chain(n(self.boxes.len()).map(Prim::Box))
+            .chain(n(self.meshes.len()).map(Prim::Mesh))
+            .chain(n(self.shs.len()).map(Prim::Sh))
+            .collect()
+    }
+
+    /// The same scene with its finite shapes in a BVH or not (see
+    /// [`Accel`]); the answers of every query are the same bit for bit,
+    /// only their cost differs. Scenes are built with [`Accel::Auto`].
+    pub fn with_accel(mut self, accel: Accel) -> Self {
+        let n = self.rects.len()
+            + self.discs.len()
+            + self.spheres.len()
+            + self.boxes.len()
+            + self.meshes.len()
+            + self.shs.len();
+        let build = match accel {
+            Accel::Never => false,
+            Accel::Always => true,
+            Accel::Auto => n >= AUTO_MIN_SHAPES,
+        };
+        self.tree = if build { ShapeTree::build(&self) } else { None };
+        self
+    }
+
+    /// Bytes held by the top-level BVH of the finite shapes (0 without one).
+    pub fn shape_tree_bytes(&self) -> usize {
+        self.tree.as_ref().map_or(0, ShapeTree::storage_bytes)
     }
 
     /// Visibility masks of a point against every infinite plane.
@@ -902,54 +1062,26 @@ impl Scene {
         b: DVec3,
         inside_both: u64,
     ) -> bool {
-        let ns = self.spheres.len();
-        let skip = |k: usize| k < 64 && inside_both & (1 << k) != 0;
-        self.rects.iter().any(|(r, _)| r.crosses(a, b))
-            || self.discs.iter().any(|(d, _)| d.crosses(a, b))
-            || self
-                .spheres
-                .iter()
-                .enumerate()
-                .any(|(k, (s, _))| !skip(k) && s.crosses(a, b))
-            || self
-                .boxes
-                .iter()
-                .enumerate()
-                .any(|(k, (x, _))| !skip(ns + k) && x.crosses(a, b))
-            || self.meshes_block(a, from, b)
-            || self.shs_block(a, b)
-    }
-
-    /// Whether an SH object blocks the open segment `a b` (end points on its
-    /// surface are not shadowed by it).
-    fn shs_block(&self, a: DVec3, b: DVec3) -> bool {
-        let Some((d, len)) = segment(a, b).filter(|_| !self.shs.is_empty()) else {
+        // Coinciding end points: nothing lies between them.
+        let Some(seg) = segment(a, b) else {
             return false;
         };
-        self.shs.iter().any(|(o, _)| {
-            // A segment within the inner bounding ball (end points on or
-            // inside it; the ball is convex) meets the surface, which lies
-            // outside that ball, at most at its end points: no crossing.
-            // Exact for a degree-0 object (a sphere seen from inside).
-            let r_in = o.bounds().0 * (1.0 + 1e-12);
-            let c = o.center();
-            if (a - c).length() <= r_in && (b - c).length() <= r_in {
-                return false;
+        let blocks = |p: Prim| self.blocks(p, a, from, b, seg, inside_both);
+        match &self.tree {
+            Some(tree) => {
+                let q = RayQuery::new(a, b - a);
+                tree.bvh.any(&q, 0.0, 1.0, |pos| blocks(tree.prims[pos]))
             }
-            o.crosses(a, d, 0.0, len)
-        })
-    }
-
-    /// Whether a mesh blocks the open segment `a b`: a shadow ray over
-    /// `(MESH_REL, 1 - MESH_REL)` of its length, skipping the triangle `a` is on.
-    fn meshes_block(&self, a: DVec3, from: Option<(u32, u32)>, b: DVec3) -> bool {
-        let Some((d, len)) = segment(a, b).filter(|_| !self.meshes.is_empty()) else {
-            return false;
-        };
-        self.meshes.iter().any(|(m, s)| {
-            let skip = from.filter(|f| f.0 == *s).map(|f| f.1);
-            m.occluded(a, d, MESH_REL * len, (1.0 - MESH_REL) * len, skip)
-        })
+            None => {
+                let n = |k: usize| 0..k as u32;
+                n(self.rects.len()).any(|i| blocks(Prim::Rect(i)))
+                    || n(self.discs.len()).any(|i| blocks(Prim::Disc(i)))
+                    || n(self.spheres.len()).any(|i| blocks(Prim::Sphere(i)))
+                    || n(self.boxes.len()).any(|i| blocks(Prim::Box(i)))
+                    || n(self.meshes.len()).any(|i| blocks(Prim::Mesh(i)))
+                    || n(self.shs.len()).any(|i| blocks(Prim::Sh(i)))
+            }
+        }
     }
 
     /// Whether `a` (on surface/primitive `from`, if any) and `b` see each other.

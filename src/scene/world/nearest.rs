@@ -1,0 +1,205 @@
+//! Which surface a ray meets first, from the set of its hits: the tie rules
+//! of the nearest-hit query, written so that the answer does not depend on
+//! the order in which the shapes were tested (the linear loops and the
+//! top-level BVH test them in different orders and must agree bit for bit).
+//!
+//! Hits fall in three classes: *flat* surfaces (planes, rectangles, discs)
+//! that do not emit, *emitters* (the rectangles and discs of area sources),
+//! and *solids* (spheres, boxes, meshes). In each class the nearest hit
+//! counts, ties in `t` going to the smaller key (the shape's place in the
+//! fixed order planes, rectangles, discs, spheres, boxes, meshes). Then:
+//!
+//! - an emitter set into a surface (a panel in the ceiling's plane) is met
+//!   where the two coincide: the nearest emitter wins over the nearest flat
+//!   surface unless that one is nearer by more than [`EMITTER_TIE`]
+//!   (relative): `t_e < t_f (1 + EMITTER_TIE)`;
+//! - a solid must beat the winning flat hit: strictly nearer, and nearer by
+//!   a relative [`EMITTER_TIE`] when that hit is an emitter's.
+//!
+//! (The loops this replaced applied the same thresholds in list order; they
+//! agree except where two emitters, or an emitter and two other flat
+//! surfaces, lie within 1e-9 of each other along the ray.) SH objects come
+//! after all of this, in index order ([`super::Scene`]).
+//!
+//! **Pruning.** The answer's `t` lies within a factor `1 / (1 -
+//! EMITTER_TIE)` of the nearest hit of any class, so a hit further than
+//! [`PRUNE`] (relative) beyond the nearest one found so far can change
+//! nothing: the queries test shapes only up to [`Nearest::bound`].
+
+use super::EMITTER_TIE;
+
+/// Relative margin beyond the nearest hit found so far within which hits
+/// are still collected (ten times [`EMITTER_TIE`]: every hit further away
+/// loses to the nearest one whatever its class).
+const PRUNE: f64 = 1e-8;
+
+/// One hit: ray parameter [m], the shape's key in the fixed order, its
+/// surface and primitive.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Cand {
+    pub(super) t: f64,
+    pub(super) key: u32,
+    pub(super) surface: u32,
+    pub(super) prim: u32,
+}
+
+const NONE: Cand = Cand {
+    t: f64::INFINITY,
+    key: u32::MAX,
+    surface: u32::MAX,
+    prim: 0,
+};
+
+impl Cand {
+    /// Whether `self` is nearer than `other`, ties to the smaller key.
+    #[inline(always)]
+    fn before(&self, other: &Cand) -> bool {
+        self.t < other.t || (self.t == other.t && self.key < other.key)
+    }
+}
+
+/// The nearest hit of each class so far.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Nearest {
+    flat: Cand,
+    emitter: Cand,
+    solid: Cand,
+    /// Hits at or beyond this `t` [m] cannot change the answer.
+    pub(super) bound: f64,
+}
+
+impl Nearest {
+    /// No hit yet.
+    #[inline(always)]
+    pub(super) fn new() -> Self {
+        Self {
+            flat: NONE,
+            emitter: NONE,
+            solid: NONE,
+            bound: f64::INFINITY,
+        }
+    }
+
+    #[inline(always)]
+    fn lower_bound(&mut self, t: f64) {
+        self.bound = self.bound.min(t * (1.0 + PRUNE));
+    }
+
+    /// A hit on a flat surface (an area source's when `emitter`).
+    #[inline(always)]
+    pub(super) fn flat(&mut self, c: Cand, emitter: bool) {
+        let slot = if emitter {
+            &mut self.emitter
+        } else {
+            &mut self.flat
+        };
+        if c.before(slot) {
+            *slot = c;
+        }
+        self.lower_bound(c.t);
+    }
+
+    /// A hit on a sphere, box or mesh.
+    #[inline(always)]
+    pub(super) fn solid(&mut self, c: Cand) {
+        if c.before(&self.solid) {
+            self.solid = c;
+        }
+        self.lower_bound(c.t);
+    }
+
+    /// The winning hit and whether it is an emitter's; `None` without hits.
+    #[inline]
+    pub(super) fn resolve(&self) -> Option<(Cand, bool)> {
+        let (f, emitter) = if self.emitter.t < self.flat.t * (1.0 + EMITTER_TIE) {
+            (self.emitter, true)
+        } else {
+            (self.flat, false)
+        };
+        let threshold = if emitter {
+            f.t * (1.0 - EMITTER_TIE)
+        } else {
+            f.t
+        };
+        if self.solid.t < threshold {
+            Some((self.solid, false))
+        } else if f.t < f64::INFINITY {
+            Some((f, emitter))
+        } else {
+            None
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn c(t: f64, key: u32) -> Cand {
+        Cand {
+            t,
+            key,
+            surface: key,
+            prim: 0,
+        }
+    }
+
+    /// Every ordering of `0..n`.
+    fn permutations(n: usize) -> Vec<Vec<usize>> {
+        if n == 0 {
+            return vec![vec![]];
+        }
+        let mut out = vec![];
+        for p in permutations(n - 1) {
+            for k in 0..=p.len() {
+                let mut q = p.clone();
+                q.insert(k, n - 1);
+                out.push(q);
+            }
+        }
+        out
+    }
+
+    /// Every order of the same hits gives the same answer, and the rules
+    /// pick what the module docs say.
+    #[test]
+    fn answer_is_independent_of_the_order_and_follows_the_rules() {
+        // (t, key, class: 0 flat, 1 emitter, 2 solid), expected winner key.
+        let tie = 0.5 * EMITTER_TIE;
+        type Hits = Vec<(f64, u32, u8)>;
+        let cases: Vec<(Hits, Option<u32>)> = vec![
+            (vec![], None),
+            (vec![(2.0, 3, 0), (1.0, 5, 0)], Some(5)),
+            // Equal t: the smaller key.
+            (vec![(1.0, 7, 0), (1.0, 4, 0), (1.0, 9, 0)], Some(4)),
+            // Emitter just behind a flat surface (within the tie): emitter.
+            (vec![(1.0, 1, 0), (1.0 + tie, 9, 1)], Some(9)),
+            (vec![(1.0, 1, 0), (1.0 + 3.0 * tie, 9, 1)], Some(1)),
+            // Flat surface just in front of an emitter: still the emitter.
+            (vec![(1.0, 9, 1), (1.0 - tie, 1, 0)], Some(9)),
+            // A solid must beat an emitter clearly, a flat surface strictly.
+            (vec![(1.0, 9, 1), (1.0 - tie, 20, 2)], Some(9)),
+            (vec![(1.0, 9, 1), (1.0 - 3.0 * tie, 20, 2)], Some(20)),
+            (vec![(1.0, 2, 0), (1.0, 20, 2)], Some(2)),
+            (vec![(1.0, 2, 0), (0.999, 20, 2)], Some(20)),
+            (vec![(1.0, 20, 2), (1.0, 21, 2)], Some(20)),
+            // Two emitters: the nearer.
+            (vec![(1.0 + tie, 9, 1), (1.0, 8, 1), (1.0, 1, 0)], Some(8)),
+        ];
+        for (hits, want) in cases {
+            for p in permutations(hits.len()) {
+                let mut acc = Nearest::new();
+                for &i in &p {
+                    let (t, key, class) = hits[i];
+                    match class {
+                        0 => acc.flat(c(t, key), false),
+                        1 => acc.flat(c(t, key), true),
+                        _ => acc.solid(c(t, key)),
+                    }
+                }
+                let got = acc.resolve().map(|(h, _)| h.key);
+                assert_eq!(got, want, "{hits:?} in order {p:?}");
+            }
+        }
+    }
+}
