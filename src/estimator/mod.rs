@@ -318,7 +318,10 @@ pub struct Receivers {
     need_r: Vec<f64>,
     all: Vec<Receiver>,
     frames: Vec<Frame>,
+    /// The distinct receiver lists ([`Self::from_receivers`]).
     lists: Vec<ReceiverList>,
+    /// Per surface: its list.
+    list_of: Vec<u32>,
     total_len: usize,
     direct: Vec<f64>,
     /// The sets of sources whose direct light is sampled ([`direct`]).
@@ -427,9 +430,32 @@ impl Receivers {
                 (!direct_sets[s].is_empty()).then_some(s as u8)
             })
             .collect();
-        let mut lists = Vec::with_capacity(scene.surfaces.len());
+        // Surfaces whose collisions reach the same receivers share one list
+        // (and one stretch of the accumulators): the tiles of one floor,
+        // every curved shape. A list is keyed by what decides its entries:
+        // an infinite plane's own bit, or the support plane (normal,
+        // offset, sides) of a flat shape, or nothing for a curved one.
+        let mut list_of = Vec::with_capacity(scene.surfaces.len());
+        let mut keys: std::collections::HashMap<(u64, [u64; 4], u8), u32> =
+            std::collections::HashMap::new();
+        let mut lists = Vec::new();
         let mut offset = 0;
         for s in 0..scene.surfaces.len() {
+            let key = match (scene.surfaces[s].shape, scene.support_plane(s as u32)) {
+                (ShapeRef::Plane(i), _) => (1u64 << i, [0; 4], 0),
+                (_, Some((pl, both))) => (
+                    0,
+                    [pl.n.x, pl.n.y, pl.n.z, pl.c].map(f64::to_bits),
+                    1 + both as u8,
+                ),
+                (_, None) => (0, [0; 4], 3),
+            };
+            if let Some(&k) = keys.get(&key) {
+                list_of.push(k);
+                continue;
+            }
+            keys.insert(key, lists.len() as u32);
+            list_of.push(lists.len() as u32);
             let mut list = ReceiverList {
                 offset,
                 inside_all: u64::MAX,
@@ -508,6 +534,7 @@ impl Receivers {
             all: receivers.to_vec(),
             frames,
             lists,
+            list_of,
             total_len: offset,
             direct,
             direct_sets,
@@ -685,7 +712,7 @@ impl Receivers {
 
     /// Number of receivers a collision on surface `s` scores into.
     pub fn list_len(&self, s: u32) -> usize {
-        self.lists[s as usize].idx.len()
+        self.lists[self.list_of[s as usize] as usize].idx.len()
     }
 
     /// Length of the flat per-bucket accumulator used by [`Self::score`].
@@ -707,7 +734,7 @@ impl Receivers {
         acc: &mut [f64],
         near: Option<&mut [f64]>,
     ) -> usize {
-        let list = &self.lists[c.surface as usize];
+        let list = &self.lists[self.list_of[c.surface as usize] as usize];
         let len = list.idx.len();
         if len == 0 {
             return 0;
