@@ -83,6 +83,7 @@ pub mod zcheck;
 
 mod batch;
 pub mod shard;
+mod state_file;
 mod tallies;
 pub use batch::Batch;
 pub use tallies::{Tallies, bucket, bucket_count};
