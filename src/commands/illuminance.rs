@@ -721,7 +721,9 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
 /// Run `lumest illuminance`.
 pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
     let views = a.views.as_deref().zip(a.views_out.as_deref());
+    let referenced = scene::referenced_files(&a.scene);
     let mut inputs = vec![a.scene.as_path(), Path::new(&a.points)];
+    inputs.extend(referenced.iter().map(|p| p.as_path()));
     let mut outputs = vec![("--out", Path::new(&a.out))];
     if let Some((v, out)) = views {
         inputs.push(Path::new(v));
@@ -740,7 +742,9 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
 /// Run `lumest luminance`.
 pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
     let points = a.points.as_deref().zip(a.points_out.as_deref());
+    let referenced = scene::referenced_files(&a.scene);
     let mut inputs = vec![a.scene.as_path()];
+    inputs.extend(referenced.iter().map(|p| p.as_path()));
     inputs.extend(a.views.as_deref().map(Path::new));
     let mut outputs = vec![("--out", Path::new(&a.out))];
     if let Some((p, out)) = points {

@@ -237,7 +237,10 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<()> {
         .iter()
         .map(|o| ("--out", std::path::Path::new(o)))
         .collect();
-    super::outputs::check_outputs(&[a.scene.as_path()], &outputs)?;
+    let referenced = crate::scene::referenced_files(&a.scene);
+    let mut inputs = vec![a.scene.as_path()];
+    inputs.extend(referenced.iter().map(|p| p.as_path()));
+    super::outputs::check_outputs(&inputs, &outputs)?;
     let (job, r) = measure_with(
         &a.scene,
         None,

@@ -54,6 +54,32 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     parse(&src, path)
 }
 
+/// The files a scene file refers to (meshes, SH coefficient files,
+/// photometric files), resolved relative to the scene's folder, for the
+/// output check: an output must not overwrite them. A scene that cannot be
+/// read or parsed refers to nothing here; loading it reports why.
+pub fn referenced_files(path: &Path) -> Vec<PathBuf> {
+    let Ok(src) = std::fs::read_to_string(path) else {
+        return Vec::new();
+    };
+    let Ok(desc) = toml::from_str::<desc::SceneDesc>(&src) else {
+        return Vec::new();
+    };
+    let ctx = compile::SourceCtx {
+        src: &src,
+        file: path,
+    };
+    let surfaces = desc
+        .surface
+        .iter()
+        .filter_map(|s| s.get_ref().file.as_ref());
+    let lights = desc.light.iter().filter_map(|l| l.get_ref().file.as_ref());
+    surfaces
+        .chain(lights)
+        .map(|f| ctx.relative(f.get_ref()))
+        .collect()
+}
+
 /// Validate and compile a scene from TOML text; `file` is used in messages.
 pub fn parse(src: &str, file: &Path) -> Result<Scene, SceneError> {
     let ctx = compile::SourceCtx { src, file };
