@@ -19,12 +19,13 @@ use std::path::{Path, PathBuf};
 /// An error in a scene file, with the file, line, column and field.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    /// The file could not be read.
-    #[error("{file}: cannot read scene file: {source}")]
+    /// The file could not be read. The operating system's reason is part
+    /// of the message and deliberately not an error source: `{:#}` would
+    /// print it twice.
+    #[error("{file}: cannot read scene file: {reason}")]
     Io {
         file: PathBuf,
-        #[source]
-        source: std::io::Error,
+        reason: std::io::Error,
     },
     /// The TOML is malformed, has an unknown key, a missing or mistyped field.
     #[error("{file}:{line}:{column}: {message}")]
@@ -47,9 +48,9 @@ pub enum SceneError {
 
 /// Read, validate and compile a scene file.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let src = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+    let src = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
         file: path.to_path_buf(),
-        source,
+        reason,
     })?;
     parse(&src, path)
 }
