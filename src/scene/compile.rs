@@ -2,7 +2,7 @@
 //! Markov chains and estimators use.
 
 use super::SceneError;
-use super::desc::{LightDesc, MaterialDesc, SceneDesc, SurfaceDesc};
+use super::desc::{LightDesc, MaterialDesc, SceneDesc, SurfaceDesc, Vec3};
 use super::world::{
     MAX_COORD, MAX_INTENSITY, MAX_PLANES, MIN_INTENSITY, Scene, Sides, SurfaceSpec,
 };
@@ -68,8 +68,8 @@ impl SourceCtx<'_> {
             .ok_or_else(|| self.invalid(table, field, "missing field"))
     }
 
-    fn finite_vec(&self, v: &Spanned<[f64; 3]>, field: &str) -> Result<DVec3, SceneError> {
-        let a = *v.get_ref();
+    fn finite_vec(&self, v: &Spanned<Vec3>, field: &str) -> Result<DVec3, SceneError> {
+        let a = v.get_ref().0;
         if !a.iter().all(|x| x.is_finite()) {
             return Err(self.invalid(
                 v.span(),
@@ -87,7 +87,7 @@ impl SourceCtx<'_> {
         Ok(DVec3::from_array(a))
     }
 
-    fn unit_vec(&self, v: &Spanned<[f64; 3]>, field: &str) -> Result<DVec3, SceneError> {
+    fn unit_vec(&self, v: &Spanned<Vec3>, field: &str) -> Result<DVec3, SceneError> {
         let d = self.finite_vec(v, field)?;
         let n = d.normalize_or_zero();
         if n == DVec3::ZERO || !n.is_finite() {
@@ -197,7 +197,7 @@ fn surface_fields_allowed(d: &SurfaceDesc, kind: &str, ctx: &SourceCtx) -> Resul
     let Some((_, allowed)) = SURFACE_FIELDS.iter().find(|f| f.0 == kind) else {
         return Ok(());
     };
-    let span = |v: &Option<Spanned<[f64; 3]>>| v.as_ref().map(Spanned::span);
+    let span = |v: &Option<Spanned<Vec3>>| v.as_ref().map(Spanned::span);
     let given: [(&str, Option<Range<usize>>); 16] = [
         ("point", span(&d.point)),
         ("normal", span(&d.normal)),
@@ -318,7 +318,7 @@ fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<Surfac
         .map_or_else(|| format!("surface #{}", k + 1), |n| n.get_ref().clone());
     let kind = d.kind.get_ref().as_str();
     surface_fields_allowed(d, kind, ctx)?;
-    let vec = |v: &Option<Spanned<[f64; 3]>>, field: &str| {
+    let vec = |v: &Option<Spanned<Vec3>>, field: &str| {
         ctx.finite_vec(ctx.required(v, s.span(), field)?, field)
     };
     let mat = || material(ctx.required(&d.material, s.span(), "material")?, ctx);
@@ -399,7 +399,8 @@ fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<Surfac
                 (None, Some(c)) => {
                     let mut v = Vec::with_capacity(c.get_ref().len());
                     for row in c.get_ref() {
-                        let [k, m, a, b] = *row;
+                        let row = row.0;
+                        let [k, m, a, b] = row;
                         let int = |x: f64| x >= 0.0 && x.fract() == 0.0 && x <= 1e6;
                         if !(int(k) && int(m)) {
                             return Err(ctx.invalid(
@@ -741,7 +742,7 @@ fn area(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String
             return Err(ctx.invalid(span, name, format!("not allowed for a `{kind}` light")));
         }
     }
-    let vec = |v: &Option<Spanned<[f64; 3]>>, field: &str| {
+    let vec = |v: &Option<Spanned<Vec3>>, field: &str| {
         ctx.finite_vec(ctx.required(v, l.span(), field)?, field)
     };
     let shape = if rect {

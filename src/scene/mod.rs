@@ -55,6 +55,18 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     parse(&src, path)
 }
 
+/// The key of the `key = value` whose value starts at byte `at` (the last
+/// `key =` before `at` on its line, also inside an inline table), if any.
+fn key_before(src: &str, at: usize) -> Option<&str> {
+    let before = src.get(..at)?;
+    let line = &before[before.rfind('\n').map_or(0, |i| i + 1)..];
+    let key = line[..line.rfind('=')?].trim_end();
+    let start = key
+        .rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '-'))
+        .map_or(0, |i| i + 1);
+    Some(&key[start..]).filter(|k| !k.is_empty())
+}
+
 /// The files a scene file refers to (meshes, SH coefficient files,
 /// photometric files), resolved relative to the scene's folder, for the
 /// output check: an output must not overwrite them. A scene that cannot be
@@ -85,12 +97,20 @@ pub fn referenced_files(path: &Path) -> Vec<PathBuf> {
 pub fn parse(src: &str, file: &Path) -> Result<Scene, SceneError> {
     let ctx = compile::SourceCtx { src, file };
     let desc: desc::SceneDesc = toml::from_str(src).map_err(|e| {
-        let (line, column) = ctx.line_col(e.span().map_or(0, |s| s.start));
+        let at = e.span().map_or(0, |s| s.start);
+        let (line, column) = ctx.line_col(at);
+        let message = e.message().trim();
+        // A value of the wrong type or length: name its key, as the
+        // validation stage does ("invalid type: string "1", expected f64").
+        let message = match key_before(src, at) {
+            Some(key) if !message.contains("field `") => format!("field `{key}`: {message}"),
+            _ => message.to_string(),
+        };
         SceneError::Syntax {
             file: file.to_path_buf(),
             line,
             column,
-            message: e.message().trim().to_string(),
+            message,
         }
     })?;
     compile::compile(&desc, &ctx)
