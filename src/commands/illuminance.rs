@@ -10,7 +10,7 @@ use super::{MAX_VIEWS, RunArgs, check_tally_size, progress_bar, tick};
 use crate::estimator::local::run;
 use crate::estimator::{Receiver, Receivers, ViewTarget, emitted_luminance, view_target};
 use crate::io::csvio::{Staged, stage_csv};
-use crate::io::{PointTable, ViewTable, format_number, read_points, read_views};
+use crate::io::{PointTable, ViewTable, format_fixed, format_number, read_points, read_views};
 use crate::run::{RunConfig, RunResult};
 use crate::scene::{self, Scene};
 use crate::tally::{figure_of_merit, relative_error, t_factor};
@@ -708,8 +708,11 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
     let min = e.iter().copied().fold(f64::INFINITY, f64::min);
     let max = e.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     Some(format!(
-        "points: E_avg {avg:.4} lx (std error <= {se_bound:.2e}), E_min {min:.4} lx, E_max {max:.4} lx, \
+        "points: E_avg {} lx (std error <= {se_bound:.2e}), E_min {} lx, E_max {} lx, \
          uniformity U0 = E_min/E_avg = {}{note}",
+        format_fixed(avg, 4),
+        format_fixed(min, 4),
+        format_fixed(max, 4),
         if avg > 0.0 {
             format!("{:.3}", min / avg)
         } else {

@@ -325,6 +325,18 @@ pub fn format_number(x: f64) -> String {
     }
 }
 
+/// `x` with `decimals` decimals, in scientific notation (`decimals` digits
+/// after the point) when so large or small that fixed notation would
+/// print tens of digits or hide the value (`1.0000e50`, not 51 digits).
+pub fn format_fixed(x: f64, decimals: usize) -> String {
+    let a = x.abs();
+    if !x.is_finite() || x == 0.0 || (1e-4..1e15).contains(&a) {
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.decimals$e}")
+    }
+}
+
 /// Write `contents` to `path` atomically (temporary file in the same folder,
 /// then rename), or to standard output for `-`.
 pub fn write_atomic(path: &str, contents: &[u8]) -> std::io::Result<()> {

@@ -19,6 +19,12 @@ use std::ops::Range;
 use std::path::Path;
 use toml::Spanned;
 
+/// Three numbers as written in messages: `[1e300, 0, 2.5]`.
+fn triple(a: [f64; 3]) -> String {
+    let f = crate::io::format_number;
+    format!("[{}, {}, {}]", f(a[0]), f(a[1]), f(a[2]))
+}
+
 /// The text being compiled, for turning byte spans into line and column.
 pub struct SourceCtx<'a> {
     pub src: &'a str,
@@ -74,14 +80,17 @@ impl SourceCtx<'_> {
             return Err(self.invalid(
                 v.span(),
                 field,
-                format!("every component must be finite, got {a:?}"),
+                format!("every component must be finite, got {}", triple(a)),
             ));
         }
         if a.iter().any(|x| x.abs() > MAX_COORD) {
             return Err(self.invalid(
                 v.span(),
                 field,
-                format!("every component must lie within +-{MAX_COORD:e} m, got {a:?}"),
+                format!(
+                    "every component must lie within +-{MAX_COORD:e} m, got {}",
+                    triple(a)
+                ),
             ));
         }
         Ok(DVec3::from_array(a))
@@ -678,7 +687,7 @@ fn light(
                 return Err(ctx.invalid(
                     sp,
                     "outer",
-                    format!("must be > 0 and >= `inner` ({inner} degrees), got {outer}"),
+                    format!("must be > 0 and >= `inner` ({inner} degrees), got {}", crate::io::format_number(outer)),
                 ));
             }
             // `i` above took a flux as isotropic: a spot's flux fills its cones.
