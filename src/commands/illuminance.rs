@@ -227,7 +227,7 @@ pub fn summary(r: &RunResult) -> String {
     };
     let text = format!(
         "{} receivers, {} chains in {} batches of {}, {:.3} s on {} thread(s), stopped by {:?}\n\
-         {:.4e} chains/s, {:.4e} scores/s, {:.3} collisions/chain\n\
+         {} chains/s, {} scores/s, {:.3} collisions/chain\n\
          relative standard error: RMS {:.3e}, max {:.3e}; FOM = 1/(R_rms^2 T) = {}",
         r.direct.len(),
         r.chains,
@@ -236,8 +236,8 @@ pub fn summary(r: &RunResult) -> String {
         r.wall,
         r.threads,
         r.reason,
-        r.chains as f64 / r.wall,
-        r.scores as f64 / r.wall,
+        per_second(r.chains as f64, r.wall),
+        per_second(r.scores as f64, r.wall),
         r.collisions as f64 / r.chains.max(1) as f64,
         rms,
         max,
@@ -719,6 +719,16 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
             "undefined (no light)".into()
         }
     ))
+}
+
+/// A rate per second for the summary: `0` when nothing was counted (a
+/// run in which nothing emits traces no chain in no time: not NaN).
+fn per_second(count: f64, wall: f64) -> String {
+    if count == 0.0 || wall <= 0.0 {
+        "0".into()
+    } else {
+        format!("{:.4e}", count / wall)
+    }
 }
 
 /// Run `lumest illuminance`.
