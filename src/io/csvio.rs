@@ -260,6 +260,19 @@ fn read_rays(
         let mut v = [0.0; 6];
         for (k, (&c, name)) in cols.iter().zip(names).enumerate() {
             v[k] = number(row.get(c).map_or("", String::as_str), path, line, name)?;
+            if k < 3 && v[k].abs() > crate::scene::MAX_COORD {
+                return Err(InputError::Field {
+                    file: display_name(path),
+                    line,
+                    field: name.to_string(),
+                    message: format!(
+                        "must lie within +-{:e} m (lengths are squared, and scores taken to the \
+                         fourth power), got {}",
+                        crate::scene::MAX_COORD,
+                        format_number(v[k])
+                    ),
+                });
+            }
         }
         let d = DVec3::new(v[3], v[4], v[5]);
         let len = d.length();

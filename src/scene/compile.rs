@@ -278,7 +278,17 @@ fn sides(
 
 fn positive(v: &Spanned<f64>, field: &str, ctx: &SourceCtx) -> Result<f64, SceneError> {
     let x = *v.get_ref();
-    if x.is_finite() && x > 0.0 {
+    if field == "radius" && x.is_finite() && x > MAX_COORD {
+        // A length like the coordinates: squared in areas and distances.
+        Err(ctx.invalid(
+            v.span(),
+            field,
+            format!(
+                "must lie within {MAX_COORD:e} m, got {}",
+                crate::io::format_number(x)
+            ),
+        ))
+    } else if x.is_finite() && x > 0.0 {
         Ok(x)
     } else {
         Err(ctx.invalid(
@@ -644,11 +654,14 @@ fn light(
             let c = ctx.finite_vec(cs, "center")?;
             let rs = ctx.required(&d.radius, l.span(), "radius")?;
             let r = *rs.get_ref();
-            if !(r.is_finite() && r > 0.0) {
+            if !(r.is_finite() && r > 0.0 && r <= MAX_COORD) {
                 return Err(ctx.invalid(
                     rs.span(),
                     "radius",
-                    format!("must be finite and > 0, got {}", crate::io::format_number(r)),
+                    format!(
+                        "must be finite, > 0 and within {MAX_COORD:e} m, got {}",
+                        crate::io::format_number(r)
+                    ),
                 ));
             }
             if let Some(k) = planes
