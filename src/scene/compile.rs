@@ -446,8 +446,15 @@ fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<Surfac
             let c = vec(&d.center, "center")?;
             let (_, rotation, scale) = placement(d, ctx)?;
             let field_span = d.coefficients.as_ref().map(Spanned::span).or(d.file.as_ref().map(Spanned::span)).unwrap_or(s.span());
-            let o = ShSurface::new(&coeffs, c, rotation, scale)
-                .map_err(|e| ctx.invalid(field_span, "coefficients", e.to_string()))?;
+            let o = ShSurface::new(&coeffs, c, rotation, scale).map_err(|e| match &d.file {
+                // Coefficients from a file: name it.
+                Some(f) => ctx.invalid(
+                    field_span,
+                    "file",
+                    format!("{}: {e}", ctx.relative(f.get_ref()).display()),
+                ),
+                None => ctx.invalid(field_span, "coefficients", e.to_string()),
+            })?;
             let sd = sides(&d.sides, ROUND_SIDES, FLAT_VALUES, ctx)?;
             Ok(SurfaceSpec::Sh(name, o, sd, mat()?))
         }
