@@ -178,6 +178,23 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
         .filter_map(|(name, note)| note.map(|n| format!("{name}: {n}")))
         .collect();
     for (k, name) in names.iter().enumerate() {
+        if scene.traps_light(k) {
+            let span = desc.surface.first().map_or(0..0, |s| {
+                s.get_ref()
+                    .material
+                    .as_ref()
+                    .map_or(s.span(), Spanned::span)
+            });
+            return Err(ctx.invalid(
+                span,
+                "material",
+                format!(
+                    "every surface reflects all the light it receives (reflectance 1) and no ray from \
+                     {name} leaves the scene: the light is never absorbed, so the illuminance is \
+                     infinite and chains would never end; give some surface a reflectance below 1"
+                ),
+            ));
+        }
         if scene.sealed(k) {
             scene.notes.push(format!(
                 "WARNING: {name} is sealed inside a solid: most rays from it meet the back of a surface, so its light hardly reaches a point in front of one"
