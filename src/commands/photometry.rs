@@ -8,7 +8,7 @@ use crate::light::Goniometric;
 use anyhow::Context;
 use clap::Args;
 use plotters::prelude::*;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `lumest photometry`.
 #[derive(Args, Clone, Debug)]
@@ -198,6 +198,9 @@ pub fn polar_svg(p: &Photometry, title: &str) -> Result<String, String> {
 
 /// Run `lumest photometry`.
 pub fn photometry(a: &PhotometryArgs) -> anyhow::Result<()> {
+    if let Some(out) = &a.plot {
+        super::outputs::check_outputs(&[a.file.as_path()], &[("--plot", Path::new(out))])?;
+    }
     let p = crate::io::photometry::read(&a.file)?;
     for line in summary(&p) {
         println!("{line}");
