@@ -131,6 +131,11 @@ impl RunArgs {
                 crate::io::format_number(r)
             );
         }
+        anyhow::ensure!(
+            self.max_order.is_none_or(|m| m >= 1),
+            "--max-order must be at least 1 (chains stop after that many reflections; \
+             0 would still score the first reflection)"
+        );
         if let Some(c) = stop.chains {
             anyhow::ensure!(c > 0, "--chains must be positive");
         }
