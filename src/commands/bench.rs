@@ -22,17 +22,17 @@ use clap::Args;
 #[derive(Args, Clone, Debug)]
 pub struct BenchArgs {
     /// Point counts to run.
-    #[arg(long, default_value = "100,10000")]
+    #[arg(long, default_value = "100,10000", allow_negative_numbers = true)]
     pub points: String,
     /// Seconds per case (one value, or one per point count). Default: 20 s for
     /// up to 1000 points, 60 s above.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub time: Option<String>,
     /// Worker threads (0: all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub threads: usize,
     /// Seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
     /// Compare local and backward estimation at equal wall time (points and
     /// views on the Sobolev scene) instead of the throughput run.

@@ -24,13 +24,13 @@ pub struct RenderArgs {
     #[arg(long, default_value = "0,0,1", allow_hyphen_values = true)]
     pub up: String,
     /// Horizontal field of view [degrees].
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
     pub fov: f64,
     /// Image width [pixels].
-    #[arg(long, default_value_t = 160)]
+    #[arg(long, default_value_t = 160, allow_negative_numbers = true)]
     pub width: usize,
     /// Image height [pixels].
-    #[arg(long, default_value_t = 120)]
+    #[arg(long, default_value_t = 120, allow_negative_numbers = true)]
     pub height: usize,
     /// Output PNG (display image). Also written: the same name with `.hdr`
     /// (luminance in cd/m^2), `_false.png` (false colour with a scale bar) and
@@ -39,16 +39,20 @@ pub struct RenderArgs {
     #[arg(long)]
     pub out: String,
     /// Thin-lens depth of field: aperture radius [m] (0: pinhole).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub aperture: f64,
     /// Thin-lens focus distance along the viewing axis [m] (default: |look - eye|).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub focus: Option<f64>,
     /// Lens samples per pixel with `--aperture` (a stratified square grid: 1, 4, 9, 16, ...).
-    #[arg(long = "lens-samples", default_value_t = 16)]
+    #[arg(
+        long = "lens-samples",
+        default_value_t = 16,
+        allow_negative_numbers = true
+    )]
     pub lens_samples: usize,
     /// Display exposure: `auto` or a factor k (display value = k L, 1 = white).
-    #[arg(long, default_value = "auto")]
+    #[arg(long, default_value = "auto", allow_negative_numbers = true)]
     pub exposure: String,
     /// Estimator of the reflected light.
     #[arg(long, value_enum, default_value_t = EstimatorKind::Local)]
