@@ -211,6 +211,11 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
         times.len() == 1 || times.len() == counts.len(),
         "--time: one value or one per point count"
     );
+    anyhow::ensure!(
+        times.iter().all(|t| t.is_finite() && *t > 0.0),
+        "--time: every time must be a positive number of seconds, got {}",
+        a.time.as_deref().unwrap_or("")
+    );
     if a.compare {
         return compare(a, &counts, &times);
     }
