@@ -118,6 +118,14 @@ pub fn sh_fit(a: &ShFitArgs) -> anyhow::Result<()> {
             "--samples {n}: at most {MAX_SAMPLES} (the check uses four times as many rays)"
         );
     }
+    if let Some(t) = a.compare {
+        // Checked before the fit writes its coefficients.
+        anyhow::ensure!(
+            t > 0.0 && t.is_finite(),
+            "--compare: a positive number of seconds, got {}",
+            crate::io::format_number(t)
+        );
+    }
     super::outputs::check_outputs(&[a.mesh.as_path()], &[("--out", a.out.as_path())])?;
     let t0 = Instant::now();
     let mesh = Mesh::load_obj(&a.mesh).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -188,7 +196,6 @@ pub fn sh_fit(a: &ShFitArgs) -> anyhow::Result<()> {
     );
     eprintln!("lumest: wrote {}", a.out.display());
     if let Some(t) = a.compare {
-        anyhow::ensure!(t > 0.0 && t.is_finite(), "--compare: seconds > 0");
         compare(mesh, sh_placed, center, f.mean_radius, t, a.threads);
     }
     Ok(())
