@@ -191,7 +191,8 @@ pub fn compare(a: &BenchArgs, counts: &[usize], times: &[f64]) -> anyhow::Result
 
 /// Run the benchmark and print a table.
 pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
-    let counts: Vec<usize> = parse_list(&a.points)?
+    let counts: Vec<usize> = parse_list(&a.points)
+        .map_err(|e| anyhow::anyhow!("--points: {e}"))?
         .into_iter()
         .map(|x| x as usize)
         .collect();
@@ -201,7 +202,7 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
         a.points
     );
     let times: Vec<f64> = match &a.time {
-        Some(t) => parse_list(t)?,
+        Some(t) => parse_list(t).map_err(|e| anyhow::anyhow!("--time: {e}"))?,
         None => counts
             .iter()
             .map(|&n| if n <= 1000 { 20.0 } else { 60.0 })

@@ -539,7 +539,7 @@ pub fn fan_views(p: glam::DVec3, n: glam::DVec3, dt: f64, dp: f64) -> ViewTable 
 
 /// Parse `a,b,c,...` into exactly `n` finite numbers.
 fn numbers(s: &str, n: usize, what: &str) -> anyhow::Result<Vec<f64>> {
-    let v = super::sobolev::parse_list(s)?;
+    let v = super::sobolev::parse_list(s).map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
     anyhow::ensure!(
         v.len() == n,
         "{what}: expected {n} comma-separated numbers, got `{s}`"

@@ -113,7 +113,7 @@ pub fn camera_views(
     );
     anyhow::ensure!(
         w > 0 && h > 0 && w.checked_mul(h).is_some_and(|n| n <= 4_000_000),
-        "image size must be positive and at most 4 Mpixel, got {w} x {h}"
+        "--width x --height must be positive and at most 4 Mpixel, got {w} x {h}"
     );
     if let Some(l) = lens {
         let m = (l.k as f64).sqrt().round().max(1.0) as u64;
@@ -172,7 +172,7 @@ pub fn camera_views(
 }
 
 fn vec3(s: &str, what: &str) -> anyhow::Result<DVec3> {
-    let v = super::sobolev::parse_list(s)?;
+    let v = super::sobolev::parse_list(s).map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
     anyhow::ensure!(v.len() == 3, "{what}: expected x,y,z, got `{s}`");
     Ok(DVec3::new(v[0], v[1], v[2]))
 }

@@ -78,7 +78,7 @@ pub fn parse_list(s: &str) -> anyhow::Result<Vec<f64>> {
 /// Run the command: CSV on standard output.
 pub fn sobolev(args: &SobolevArgs) -> anyhow::Result<()> {
     let problem = args.params.problem()?;
-    let rs = parse_list(&args.r)?;
+    let rs = parse_list(&args.r).map_err(|e| anyhow::anyhow!("--r: {e}"))?;
     for &r in &rs {
         anyhow::ensure!(r >= 0.0, "--r: distances must be >= 0, got {r}");
     }
