@@ -283,7 +283,7 @@ pub fn summary(r: &RunResult) -> String {
             p.wall,
             p.rel_error,
             r.batch_size,
-            p.planned,
+            format_number(p.planned as f64),
             if max <= target {
                 " (target met)".to_string()
             } else if r.reason == crate::run::StopReason::Time {
@@ -294,7 +294,7 @@ pub fn summary(r: &RunResult) -> String {
                         || "--time".to_string(),
                         |c| format!("the default time limit of {c:.0} s (no --time was given)")
                     ),
-                    p.planned,
+                    format_number(p.planned as f64),
                     p.estimated_time
                 )
             } else {
