@@ -1108,7 +1108,7 @@ fn cli_cases() -> Vec<Case> {
             Error("--time must be a positive number"),
         ),
         ill(
-            "--time 1e300 (shown short)",
+            "--time -1e300 (shown short)",
             "--time -1e300",
             Error("got -1e300"),
         ),
@@ -1551,6 +1551,36 @@ fn cli_cases() -> Vec<Case> {
             "validate with an unknown case",
             "validate nothing",
             Error("nothing"),
+        ),
+        cli(
+            "validate box --rho 1.5",
+            "validate box --rho 1.5 --chains 1000 --report {d}/rep",
+            Error("--rho must lie in [0, 1)"),
+        ),
+        cli(
+            "validate box --rho -0.5",
+            "validate box --rho -0.5 --chains 1000 --report {d}/rep",
+            Error("--rho must lie in [0, 1)"),
+        ),
+        cli(
+            "validate box --chains 0",
+            "validate box --chains 0 --report {d}/rep",
+            Error("--chains must be at least 64"),
+        ),
+        cli(
+            "validate box --report a file",
+            "validate box --chains 1000 --report {p}",
+            Error("--report"),
+        ),
+        cli(
+            "validate sobolev --rho1 2",
+            "validate sobolev --rho1 2 --report {d}/rep",
+            Error("rho1 = 2 must lie in [0, 1]"),
+        ),
+        cli(
+            "validate sobolev --report a file",
+            "validate sobolev --report {s}",
+            Error("--report"),
         ),
     ]
 }
