@@ -102,10 +102,22 @@ pub fn parse(src: &str, file: &Path) -> Result<Scene, SceneError> {
         let message = e.message().trim();
         // A value of the wrong type or length: name its key, as the
         // validation stage does ("invalid type: string "1", expected f64").
-        let message = match key_before(src, at) {
+        let mut message = match key_before(src, at) {
             Some(key) if !message.contains("field `") => format!("field `{key}`: {message}"),
             _ => message.to_string(),
         };
+        // `[surface]` after `[[surface]]` is read as a second table of the
+        // same name: say what was meant.
+        let before = src[..at.min(src.len())].rsplit('\n').next().unwrap_or("");
+        let rest = &src[at.min(src.len()) - before.len()..];
+        if let Some(table) = ["surface", "light"]
+            .into_iter()
+            .find(|t| rest.trim_start().starts_with(&format!("[{t}]")))
+        {
+            message += &format!(
+                " (each {table} is an array-of-tables entry: write `[[{table}]]` with double brackets)"
+            );
+        }
         SceneError::Syntax {
             file: file.to_path_buf(),
             line,
