@@ -381,3 +381,117 @@ fn outputs_are_checked_before_the_run() {
         "{err}"
     );
 }
+
+/// Files the scene refers to (an OBJ mesh, an SH coefficient file, an IES
+/// file) are inputs too: an output over one of them is refused before the
+/// run, by illuminance, luminance and render (whose `.csv` lands on the
+/// coefficient file), and the files are left as they were. Before, only the
+/// files named on the command line were counted.
+#[test]
+fn outputs_over_files_the_scene_refers_to_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_string_lossy().into_owned();
+    let obj =
+        "v 2 2 0.2\nv 2.2 2 0.2\nv 2 2.2 0.2\nv 2 2 0.4\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+    let coeffs = "k,m,a,b\n0,0,0.1,0\n";
+    let ies = std::fs::read_to_string("data/pendant.ies").unwrap();
+    write(dir.path(), "tetra.obj", obj);
+    write(dir.path(), "blob.csv", coeffs);
+    write(dir.path(), "lamp.ies", &ies);
+    let scene = format!(
+        "{SCENE}\n[[surface]]\ntype = \"mesh\"\nfile = \"tetra.obj\"\n\
+         material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+         [[surface]]\ntype = \"sh\"\nfile = \"blob.csv\"\ncenter = [-2, -2, 0.5]\n\
+         material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+         [[light]]\ntype = \"ies\"\nfile = \"sub/../lamp.ies\"\nposition = [3, 3, 0.9]\n"
+    );
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    let s = write(dir.path(), "scene.toml", &scene);
+    let p = write(dir.path(), "p.csv", POINTS);
+    let v = write(dir.path(), "v.csv", "x,y,z,dx,dy,dz\n0,0,0.5,0,0,1\n");
+    // The scene itself is fine: a run with an output elsewhere works.
+    let good = format!("{d}/E.csv");
+    let (ok, err) = run(&[
+        "illuminance",
+        "--scene",
+        &s,
+        "--points",
+        &p,
+        "--out",
+        &good,
+        "--chains",
+        "500",
+        "--quiet",
+    ]);
+    assert!(ok, "{err}");
+    for target in ["tetra.obj", "blob.csv", "lamp.ies"] {
+        let out = format!("{d}/{target}");
+        let (ok, err) = run(&[
+            "illuminance",
+            "--scene",
+            &s,
+            "--points",
+            &p,
+            "--out",
+            &out,
+            "--chains",
+            "500",
+            "--quiet",
+        ]);
+        assert!(
+            !ok && err.contains("would overwrite the input"),
+            "{target}: {err}"
+        );
+        assert!(
+            err.contains(target) && !err.contains("lumest: scene"),
+            "{target}: {err}"
+        );
+        let (ok, err) = run(&[
+            "luminance",
+            "--scene",
+            &s,
+            "--views",
+            &v,
+            "--out",
+            &out,
+            "--chains",
+            "500",
+            "--quiet",
+        ]);
+        assert!(
+            !ok && err.contains("would overwrite the input"),
+            "{target}: {err}"
+        );
+    }
+    let (ok, err) = run(&[
+        "render",
+        "--scene",
+        &s,
+        "--eye",
+        "0,-1,0.5",
+        "--look",
+        "0,0,0.5",
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "--out",
+        &format!("{d}/blob.png"),
+        "--chains",
+        "500",
+        "--quiet",
+    ]);
+    assert!(!ok && err.contains("would overwrite the input"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("tetra.obj")).unwrap(),
+        obj
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("blob.csv")).unwrap(),
+        coeffs
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("lamp.ies")).unwrap(),
+        ies
+    );
+}

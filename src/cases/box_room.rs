@@ -16,13 +16,13 @@ use std::path::PathBuf;
 #[derive(Args, Clone, Debug)]
 pub struct BoxArgs {
     /// Reflectance of the walls (the floor gets half of it, the ceiling 0.9 of it).
-    #[arg(long, default_value_t = 0.8)]
+    #[arg(long, default_value_t = 0.8, allow_negative_numbers = true)]
     pub rho: f64,
     /// Number of chains.
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, allow_negative_numbers = true)]
     pub chains: u64,
     /// Seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
     /// Folder for the table (CSV) and plot (SVG).
     #[arg(long, default_value = "validation_report")]

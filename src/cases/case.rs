@@ -15,19 +15,19 @@ use std::path::PathBuf;
 #[derive(Args, Clone, Debug)]
 pub struct CaseArgs {
     /// Wall-clock time of the run [s].
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub time: f64,
     /// Seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
     /// Worker threads (0: all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub threads: usize,
     /// Folder for the tables (CSV) and plots (SVG).
     #[arg(long, default_value = "validation_report")]
     pub report: PathBuf,
     /// Family-wise false-alarm rate of the z test over all points.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
     pub alpha: f64,
     /// No progress bar.
     #[arg(long)]

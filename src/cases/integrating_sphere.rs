@@ -18,16 +18,16 @@ use std::f64::consts::PI;
 #[derive(Args, Clone, Debug)]
 pub struct SphereArgs {
     /// Wall reflectance, in [0, 1).
-    #[arg(long, default_value_t = 0.9)]
+    #[arg(long, default_value_t = 0.9, allow_negative_numbers = true)]
     pub rho: f64,
     /// Radius [m].
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub radius: f64,
     /// Source position relative to the centre, in units of the radius: `x,y,z`.
     #[arg(long, default_value = "0.3,-0.2,0.45", allow_hyphen_values = true)]
     pub source: String,
     /// Number of points on the wall.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, allow_negative_numbers = true)]
     pub points: usize,
     /// Give the sphere as a degree-0 spherical-harmonic object instead.
     #[arg(long)]

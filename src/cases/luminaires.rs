@@ -32,14 +32,14 @@ use std::time::Instant;
 #[derive(Args, Clone, Debug)]
 pub struct LuminairesArgs {
     /// Samples per strategy and receiver for the variance table.
-    #[arg(long, default_value_t = 200_000)]
+    #[arg(long, default_value_t = 200_000, allow_negative_numbers = true)]
     pub mis_samples: u64,
     /// Chains per light kind for the flux balance.
-    #[arg(long, default_value_t = 200_000)]
+    #[arg(long, default_value_t = 200_000, allow_negative_numbers = true)]
     pub balance_chains: u64,
     /// Independent runs for the coverage of the sampled direct light's
     /// 95 % interval (0: skip).
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = 200, allow_negative_numbers = true)]
     pub coverage_runs: u64,
     #[command(flatten)]
     pub case: CaseArgs,

@@ -16,13 +16,13 @@ use glam::DVec3;
 #[derive(Args, Clone, Debug)]
 pub struct PlateArgs {
     /// Side of the square plate [m].
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub side: f64,
     /// Reflectance of the plate.
-    #[arg(long, default_value_t = 0.8)]
+    #[arg(long, default_value_t = 0.8, allow_negative_numbers = true)]
     pub rho: f64,
     /// Number of points.
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = 40, allow_negative_numbers = true)]
     pub points: usize,
     #[command(flatten)]
     pub case: CaseArgs,

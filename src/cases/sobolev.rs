@@ -25,13 +25,13 @@ pub struct ValidateSobolevArgs {
     #[command(flatten)]
     pub params: SobolevParams,
     /// Number of points, half on each plane.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, allow_negative_numbers = true)]
     pub points: usize,
     /// Number of views (luminance), half looking at each plane.
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = 50, allow_negative_numbers = true)]
     pub views: usize,
     /// Largest horizontal distance of the points [m].
-    #[arg(long = "r-max", default_value_t = 3.0)]
+    #[arg(long = "r-max", default_value_t = 3.0, allow_negative_numbers = true)]
     pub r_max: f64,
     #[command(flatten)]
     pub case: CaseArgs,

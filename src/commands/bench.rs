@@ -22,17 +22,17 @@ use clap::Args;
 #[derive(Args, Clone, Debug)]
 pub struct BenchArgs {
     /// Point counts to run.
-    #[arg(long, default_value = "100,10000")]
+    #[arg(long, default_value = "100,10000", allow_negative_numbers = true)]
     pub points: String,
     /// Seconds per case (one value, or one per point count). Default: 20 s for
     /// up to 1000 points, 60 s above.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub time: Option<String>,
     /// Worker threads (0: all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub threads: usize,
     /// Seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
     /// Compare local and backward estimation at equal wall time (points and
     /// views on the Sobolev scene) instead of the throughput run.
@@ -62,15 +62,20 @@ pub struct BenchArgs {
 pub fn shapes(a: &BenchArgs, list: &str) -> anyhow::Result<()> {
     use crate::cases::tiled_room::tiled_room;
     use crate::scene::{AUTO_MIN_SHAPES, Accel};
-    let counts: Vec<usize> = parse_list(list)?.into_iter().map(|x| x as usize).collect();
+    let counts = parse_list(list).map_err(|e| anyhow::anyhow!("--shapes: {e}"))?;
     anyhow::ensure!(
-        counts.iter().all(|&n| n >= 1),
-        "--shapes: every count must be at least 1, got {list}"
+        counts.iter().all(|&n| n >= 1.0 && n.fract() == 0.0 && n <= 1e7),
+        "--shapes: every count must be a whole number from 1 to 1e7, got {list}"
     );
+    let counts: Vec<usize> = counts.into_iter().map(|x| x as usize).collect();
     let t = match &a.time {
         Some(t) => {
-            let v = parse_list(t)?;
+            let v = parse_list(t).map_err(|e| anyhow::anyhow!("--time: {e}"))?;
             anyhow::ensure!(v.len() == 1, "--time: one value with --shapes");
+            anyhow::ensure!(
+                v[0].is_finite() && v[0] > 0.0,
+                "--time must be a positive number of seconds, got {t}"
+            );
             v[0]
         }
         None => 5.0,
@@ -322,7 +327,8 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
     if let Some(list) = &a.shapes {
         return shapes(a, list);
     }
-    let counts: Vec<usize> = parse_list(&a.points)?
+    let counts: Vec<usize> = parse_list(&a.points)
+        .map_err(|e| anyhow::anyhow!("--points: {e}"))?
         .into_iter()
         .map(|x| x as usize)
         .collect();
@@ -332,7 +338,7 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
         a.points
     );
     let times: Vec<f64> = match &a.time {
-        Some(t) => parse_list(t)?,
+        Some(t) => parse_list(t).map_err(|e| anyhow::anyhow!("--time: {e}"))?,
         None => counts
             .iter()
             .map(|&n| if n <= 1000 { 20.0 } else { 60.0 })
@@ -341,6 +347,11 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
     anyhow::ensure!(
         times.len() == 1 || times.len() == counts.len(),
         "--time: one value or one per point count"
+    );
+    anyhow::ensure!(
+        times.iter().all(|t| t.is_finite() && *t > 0.0),
+        "--time: every time must be a positive number of seconds, got {}",
+        a.time.as_deref().unwrap_or("")
     );
     if a.compare {
         return compare(a, &counts, &times);

@@ -10,7 +10,7 @@ use super::{MAX_VIEWS, RunArgs, check_tally_size, progress_bar, tick};
 use crate::estimator::local::run;
 use crate::estimator::{Receiver, Receivers, ViewTarget, emitted_luminance, view_target};
 use crate::io::csvio::{Staged, stage_csv};
-use crate::io::{PointTable, ViewTable, format_number, read_points, read_views};
+use crate::io::{PointTable, ViewTable, format_fixed, format_number, read_points, read_views};
 use crate::run::{RunConfig, RunResult};
 use crate::scene::{self, Scene};
 use crate::tally::{figure_of_merit, relative_error, t_factor};
@@ -232,7 +232,7 @@ pub fn summary(r: &RunResult) -> String {
     };
     let text = format!(
         "{} receivers, {} chains in {} batches of {}, {:.3} s on {} thread(s), stopped by {:?}\n\
-         {:.4e} chains/s, {:.4e} scores/s, {:.3} collisions/chain\n\
+         {} chains/s, {} scores/s, {:.3} collisions/chain\n\
          relative standard error: RMS {:.3e}, max {:.3e}; FOM = 1/(R_rms^2 T) = {}",
         r.direct.len(),
         r.chains,
@@ -241,8 +241,8 @@ pub fn summary(r: &RunResult) -> String {
         r.wall,
         r.threads,
         r.reason,
-        r.chains as f64 / r.wall,
-        r.scores as f64 / r.wall,
+        per_second(r.chains as f64, r.wall),
+        per_second(r.scores as f64, r.wall),
         r.collisions as f64 / r.chains.max(1) as f64,
         rms,
         max,
@@ -288,7 +288,7 @@ pub fn summary(r: &RunResult) -> String {
             p.wall,
             p.rel_error,
             r.batch_size,
-            p.planned,
+            format_number(p.planned as f64),
             if max <= target {
                 " (target met)".to_string()
             } else if r.reason == crate::run::StopReason::Time {
@@ -299,7 +299,7 @@ pub fn summary(r: &RunResult) -> String {
                         || "--time".to_string(),
                         |c| format!("the default time limit of {c:.0} s (no --time was given)")
                     ),
-                    p.planned,
+                    format_number(p.planned as f64),
                     p.estimated_time
                 )
             } else {
@@ -544,7 +544,7 @@ pub fn fan_views(p: glam::DVec3, n: glam::DVec3, dt: f64, dp: f64) -> ViewTable 
 
 /// Parse `a,b,c,...` into exactly `n` finite numbers.
 fn numbers(s: &str, n: usize, what: &str) -> anyhow::Result<Vec<f64>> {
-    let v = super::sobolev::parse_list(s)?;
+    let v = super::sobolev::parse_list(s).map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
     anyhow::ensure!(
         v.len() == n,
         "{what}: expected {n} comma-separated numbers, got `{s}`"
@@ -713,8 +713,11 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
     let min = e.iter().copied().fold(f64::INFINITY, f64::min);
     let max = e.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     Some(format!(
-        "points: E_avg {avg:.4} lx (std error <= {se_bound:.2e}), E_min {min:.4} lx, E_max {max:.4} lx, \
+        "points: E_avg {} lx (std error <= {se_bound:.2e}), E_min {} lx, E_max {} lx, \
          uniformity U0 = E_min/E_avg = {}{note}",
+        format_fixed(avg, 4),
+        format_fixed(min, 4),
+        format_fixed(max, 4),
         if avg > 0.0 {
             format!("{:.3}", min / avg)
         } else {
@@ -723,13 +726,25 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
     ))
 }
 
+/// A rate per second for the summary: `0` when nothing was counted (a
+/// run in which nothing emits traces no chain in no time: not NaN).
+fn per_second(count: f64, wall: f64) -> String {
+    if count == 0.0 || wall <= 0.0 {
+        "0".into()
+    } else {
+        format!("{:.4e}", count / wall)
+    }
+}
+
 /// Run `lumest illuminance`.
 pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
     if let Some(shard) = &a.shard {
         return super::merge::run_shard(a, shard);
     }
     let views = a.views.as_deref().zip(a.views_out.as_deref());
+    let referenced = scene::referenced_files(&a.scene);
     let mut inputs = vec![a.scene.as_path(), Path::new(&a.points)];
+    inputs.extend(referenced.iter().map(|p| p.as_path()));
     let mut outputs = vec![("--out", Path::new(&a.out))];
     if let Some((v, out)) = views {
         inputs.push(Path::new(v));
@@ -748,7 +763,9 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
 /// Run `lumest luminance`.
 pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
     let points = a.points.as_deref().zip(a.points_out.as_deref());
+    let referenced = scene::referenced_files(&a.scene);
     let mut inputs = vec![a.scene.as_path()];
+    inputs.extend(referenced.iter().map(|p| p.as_path()));
     inputs.extend(a.views.as_deref().map(Path::new));
     let mut outputs = vec![("--out", Path::new(&a.out))];
     if let Some((p, out)) = points {

@@ -42,31 +42,31 @@ pub(crate) fn check_tally_size(orders: u32, receivers: usize) -> anyhow::Result<
 pub struct RunArgs {
     /// Number of chains (rounded up to whole batches). Default 100000 when no
     /// other stopping rule is given.
-    #[arg(long, value_parser = parse_count)]
+    #[arg(long, value_parser = parse_count, allow_negative_numbers = true)]
     pub chains: Option<u64>,
     /// Wall-clock limit [s].
     #[arg(long, allow_negative_numbers = true)]
     pub time: Option<f64>,
     /// Stop when the largest relative standard error of E over the points is below this.
-    #[arg(long = "rel-error")]
+    #[arg(long = "rel-error", allow_negative_numbers = true)]
     pub rel_error: Option<f64>,
     /// Seed of the random streams.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
     /// Worker threads (0: all cores). Results do not depend on it.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub threads: usize,
     /// Resolve reflection orders 1..K and the rest in the output.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub orders: u32,
     /// Truncate chains after this many reflections (biased; for order studies only).
-    #[arg(long = "max-order")]
+    #[arg(long = "max-order", allow_negative_numbers = true)]
     pub max_order: Option<u32>,
     /// Chains per batch (default: from the number of points; see docs).
-    #[arg(long = "batch-size")]
+    #[arg(long = "batch-size", allow_negative_numbers = true)]
     pub batch_size: Option<u64>,
     /// Russian-roulette weight, relative to the starting weight, in (0, 1].
-    #[arg(long = "rr-weight", default_value_t = ChainParams::default().rr_weight)]
+    #[arg(long = "rr-weight", default_value_t = ChainParams::default().rr_weight, allow_negative_numbers = true)]
     pub rr_weight: f64,
     /// Near/far split against the singular kernel and for far points: `auto`
     /// (the default: where a point has a surface closer than a tenth of its
@@ -76,11 +76,11 @@ pub struct RunArgs {
     /// (unbiased; keeps the variance finite next to walls and in corners, and
     /// brings the light piled up around the sources to far points).
     /// Local estimator only. [default: auto]
-    #[arg(long = "near-radius")]
+    #[arg(long = "near-radius", allow_negative_numbers = true)]
     pub near_radius: Option<String>,
     /// Backward paths per point for every 256 chains, for the near part
     /// (with `--near-radius`). Local estimator only. [default: 16]
-    #[arg(long = "near-paths")]
+    #[arg(long = "near-paths", allow_negative_numbers = true)]
     pub near_paths: Option<u32>,
     /// Backward paths (`--estimator backward`, the near part of the split):
     /// plain next-event estimation only, without the light-guided connection
@@ -132,6 +132,11 @@ impl RunArgs {
                 crate::io::format_number(r)
             );
         }
+        anyhow::ensure!(
+            self.max_order.is_none_or(|m| m >= 1),
+            "--max-order must be at least 1 (chains stop after that many reflections; \
+             0 would still score the first reflection)"
+        );
         if let Some(c) = stop.chains {
             anyhow::ensure!(c > 0, "--chains must be positive");
         }

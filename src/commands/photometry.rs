@@ -3,12 +3,12 @@
 //! candela plot of the C0-C180 and C90-C270 planes, as photometric viewers show.
 
 use crate::io::photometry::{PhotometricType, Photometry};
-use crate::io::write_atomic;
+use crate::io::{format_fixed, format_number, write_atomic};
 use crate::light::Goniometric;
 use anyhow::Context;
 use clap::Args;
 use plotters::prelude::*;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `lumest photometry`.
 #[derive(Args, Clone, Debug)]
@@ -78,13 +78,14 @@ pub fn summary(p: &Photometry) -> Vec<String> {
         ),
         match p.lamp_lumens {
             Some(lm) => format!(
-                "flux of the table {:.1} lm; lamps {lm} lm; light output ratio {:.4}",
-                g.power(),
-                g.power() / lm
+                "flux of the table {} lm; lamps {} lm; light output ratio {}",
+                format_fixed(g.power(), 1),
+                format_number(lm),
+                format_fixed(g.power() / lm, 4)
             ),
             None => format!(
-                "flux of the table {:.1} lm (absolute photometry)",
-                g.power()
+                "flux of the table {} lm (absolute photometry)",
+                format_fixed(g.power(), 1)
             ),
         },
     ];
@@ -102,8 +103,10 @@ pub fn summary(p: &Photometry) -> Vec<String> {
         PhotometricType::B | PhotometricType::A => ("H", "V"),
     };
     lines.push(format!(
-        "max intensity {best:.1} cd at {h} = {} deg, {v} = {} deg",
-        at.0, at.1
+        "max intensity {} cd at {h} = {} deg, {v} = {} deg",
+        format_fixed(best, 1),
+        at.0,
+        at.1
     ));
     if p.kind == PhotometricType::C {
         for c in [0.0, 90.0] {
@@ -195,6 +198,9 @@ pub fn polar_svg(p: &Photometry, title: &str) -> Result<String, String> {
 
 /// Run `lumest photometry`.
 pub fn photometry(a: &PhotometryArgs) -> anyhow::Result<()> {
+    if let Some(out) = &a.plot {
+        super::outputs::check_outputs(&[a.file.as_path()], &[("--plot", Path::new(out))])?;
+    }
     let p = crate::io::photometry::read(&a.file)?;
     for line in summary(&p) {
         println!("{line}");

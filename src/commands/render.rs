@@ -24,13 +24,13 @@ pub struct RenderArgs {
     #[arg(long, default_value = "0,0,1", allow_hyphen_values = true)]
     pub up: String,
     /// Horizontal field of view [degrees].
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
     pub fov: f64,
     /// Image width [pixels].
-    #[arg(long, default_value_t = 160)]
+    #[arg(long, default_value_t = 160, allow_negative_numbers = true)]
     pub width: usize,
     /// Image height [pixels].
-    #[arg(long, default_value_t = 120)]
+    #[arg(long, default_value_t = 120, allow_negative_numbers = true)]
     pub height: usize,
     /// Output PNG (display image). Also written: the same name with `.hdr`
     /// (luminance in cd/m^2), `_false.png` (false colour with a scale bar) and
@@ -39,16 +39,20 @@ pub struct RenderArgs {
     #[arg(long)]
     pub out: String,
     /// Thin-lens depth of field: aperture radius [m] (0: pinhole).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub aperture: f64,
     /// Thin-lens focus distance along the viewing axis [m] (default: |look - eye|).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub focus: Option<f64>,
     /// Lens samples per pixel with `--aperture` (a stratified square grid: 1, 4, 9, 16, ...).
-    #[arg(long = "lens-samples", default_value_t = 16)]
+    #[arg(
+        long = "lens-samples",
+        default_value_t = 16,
+        allow_negative_numbers = true
+    )]
     pub lens_samples: usize,
     /// Display exposure: `auto` or a factor k (display value = k L, 1 = white).
-    #[arg(long, default_value = "auto")]
+    #[arg(long, default_value = "auto", allow_negative_numbers = true)]
     pub exposure: String,
     /// Estimator of the reflected light.
     #[arg(long, value_enum, default_value_t = EstimatorKind::Local)]
@@ -109,7 +113,7 @@ pub fn camera_views(
     );
     anyhow::ensure!(
         w > 0 && h > 0 && w.checked_mul(h).is_some_and(|n| n <= 4_000_000),
-        "image size must be positive and at most 4 Mpixel, got {w} x {h}"
+        "--width x --height must be positive and at most 4 Mpixel, got {w} x {h}"
     );
     if let Some(l) = lens {
         let m = (l.k as f64).sqrt().round().max(1.0) as u64;
@@ -168,7 +172,7 @@ pub fn camera_views(
 }
 
 fn vec3(s: &str, what: &str) -> anyhow::Result<DVec3> {
-    let v = super::sobolev::parse_list(s)?;
+    let v = super::sobolev::parse_list(s).map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
     anyhow::ensure!(v.len() == 3, "{what}: expected x,y,z, got `{s}`");
     Ok(DVec3::new(v[0], v[1], v[2]))
 }
@@ -237,7 +241,10 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<()> {
         .iter()
         .map(|o| ("--out", std::path::Path::new(o)))
         .collect();
-    super::outputs::check_outputs(&[a.scene.as_path()], &outputs)?;
+    let referenced = crate::scene::referenced_files(&a.scene);
+    let mut inputs = vec![a.scene.as_path()];
+    inputs.extend(referenced.iter().map(|p| p.as_path()));
+    super::outputs::check_outputs(&inputs, &outputs)?;
     let (job, r) = measure_with(
         &a.scene,
         None,

@@ -31,7 +31,7 @@ pub struct ShFitArgs {
     /// Star-shaped mesh (OBJ).
     pub mesh: PathBuf,
     /// Degree L of the expansion ((L + 1)^2 coefficients).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub degree: usize,
     /// Output CSV of coefficients `k,m,a,b` [m].
     #[arg(long)]
@@ -40,14 +40,14 @@ pub struct ShFitArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub center: Option<String>,
     /// Number of sample directions (default: max(4000, 20 (L + 1)^2)).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub samples: Option<usize>,
     /// Also run a scene (floor, object, point light, 48 points) with the mesh
     /// and with the fit for this many seconds each, and compare.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub compare: Option<f64>,
     /// Worker threads for `--compare` (0: all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub threads: usize,
 }
 
@@ -116,6 +116,14 @@ pub fn sh_fit(a: &ShFitArgs) -> anyhow::Result<()> {
         anyhow::ensure!(
             n <= MAX_SAMPLES,
             "--samples {n}: at most {MAX_SAMPLES} (the check uses four times as many rays)"
+        );
+    }
+    if let Some(t) = a.compare {
+        // Checked before the fit writes its coefficients.
+        anyhow::ensure!(
+            t > 0.0 && t.is_finite(),
+            "--compare: a positive number of seconds, got {}",
+            crate::io::format_number(t)
         );
     }
     super::outputs::check_outputs(&[a.mesh.as_path()], &[("--out", a.out.as_path())])?;
@@ -188,7 +196,6 @@ pub fn sh_fit(a: &ShFitArgs) -> anyhow::Result<()> {
     );
     eprintln!("lumest: wrote {}", a.out.display());
     if let Some(t) = a.compare {
-        anyhow::ensure!(t > 0.0 && t.is_finite(), "--compare: seconds > 0");
         compare(mesh, sh_placed, center, f.mean_radius, t, a.threads);
     }
     Ok(())

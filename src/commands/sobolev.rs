@@ -9,19 +9,19 @@ use rayon::prelude::*;
 #[derive(Args, Clone, Debug)]
 pub struct SobolevParams {
     /// Distance from the source to plane 1 [m].
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub h1: f64,
     /// Distance from the source to plane 2 [m].
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub h2: f64,
     /// Reflectance of plane 1.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub rho1: f64,
     /// Reflectance of plane 2.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub rho2: f64,
     /// Intensity of the isotropic source [cd].
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub intensity: f64,
 }
 
@@ -39,13 +39,13 @@ pub struct SobolevArgs {
     #[command(flatten)]
     pub params: SobolevParams,
     /// Plane (1 or 2).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=2))]
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=2), allow_negative_numbers = true)]
     pub plane: u8,
     /// Horizontal distances [m]: `a,b,c` or `start:stop:step`.
     #[arg(long, allow_hyphen_values = true)]
     pub r: String,
     /// Also print reflection orders 1..K.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub orders: u32,
 }
 
@@ -78,7 +78,7 @@ pub fn parse_list(s: &str) -> anyhow::Result<Vec<f64>> {
 /// Run the command: CSV on standard output.
 pub fn sobolev(args: &SobolevArgs) -> anyhow::Result<()> {
     let problem = args.params.problem()?;
-    let rs = parse_list(&args.r)?;
+    let rs = parse_list(&args.r).map_err(|e| anyhow::anyhow!("--r: {e}"))?;
     for &r in &rs {
         anyhow::ensure!(r >= 0.0, "--r: distances must be >= 0, got {r}");
     }

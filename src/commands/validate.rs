@@ -31,6 +31,21 @@ pub enum ValidateCase {
 
 /// Run a validation case.
 pub fn validate(case: &ValidateCase) -> anyhow::Result<()> {
+    let report = match case {
+        ValidateCase::Sobolev(a) => &a.case.report,
+        ValidateCase::IntegratingSphere(a) => &a.case.report,
+        ValidateCase::Plate(a) => &a.case.report,
+        ValidateCase::BoxFlux(a) => &a.report,
+        ValidateCase::Stress(a) => &a.report,
+        ValidateCase::Luminaires(a) => &a.case.report,
+    };
+    // Before the run: a report "folder" that is a file was found only when
+    // the tables were written, after the whole run.
+    anyhow::ensure!(
+        !report.exists() || report.is_dir(),
+        "--report {}: is a file, not a folder; give a folder (it is created if missing)",
+        report.display()
+    );
     match case {
         ValidateCase::Sobolev(a) => validate_sobolev(a),
         ValidateCase::IntegratingSphere(a) => validate_sphere(a),

@@ -79,6 +79,22 @@ pub enum MeshError {
 /// Name used in errors for meshes built in memory.
 const IN_MEMORY: &str = "<triangles>";
 
+/// A vertex in messages: `(x, y, z)`, numbers as in the CSV output.
+fn point(v: DVec3) -> String {
+    let f = crate::io::format_number;
+    format!("({}, {}, {})", f(v.x), f(v.y), f(v.z))
+}
+
+/// The first vertex (index, position) farther out than
+/// [`crate::scene::MAX_COORD`] in some coordinate.
+fn beyond_limit(vertices: &[DVec3]) -> Option<(usize, DVec3)> {
+    vertices
+        .iter()
+        .enumerate()
+        .find(|(_, v)| v.abs().max_element() > crate::scene::MAX_COORD)
+        .map(|(i, v)| (i, *v))
+}
+
 fn file_error(file: &str, message: impl Into<String>) -> MeshError {
     MeshError::File {
         file: file.to_string(),
@@ -195,8 +211,19 @@ impl Mesh {
                     line,
                     message: "vertex coordinates are not finite".into(),
                 },
-                None => file_error(&file, format!("vertex {v} is not finite")),
+                None => file_error(&file, format!("vertex {} is not finite", point(*v))),
             });
+        }
+        if let Some((i, v)) = beyond_limit(&vertices) {
+            return Err(file_error(
+                &file,
+                format!(
+                    "vertex {} = {} lies beyond +-{:e} m",
+                    i + 1,
+                    point(v),
+                    crate::scene::MAX_COORD
+                ),
+            ));
         }
         Self::build(&file, vertices, triangles)
     }
@@ -218,7 +245,10 @@ impl Mesh {
         triangles: Vec<[u32; 3]>,
     ) -> Result<Self, MeshError> {
         if let Some((i, v)) = vertices.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(file_error(file, format!("vertex {i} = {v} is not finite")));
+            return Err(file_error(
+                file,
+                format!("vertex {i} = {} is not finite", point(*v)),
+            ));
         }
         let nv = vertices.len();
         let mut kept = Vec::with_capacity(triangles.len());
@@ -292,7 +322,10 @@ impl Mesh {
         if !(scale > 0.0 && scale.is_finite()) {
             return Err(file_error(
                 IN_MEMORY,
-                format!("transform: scale {scale} is not positive and finite"),
+                format!(
+                    "transform: scale {} is not positive and finite",
+                    crate::io::format_number(scale)
+                ),
             ));
         }
         let off = (rotation.transpose() * rotation - DMat3::IDENTITY)
@@ -305,7 +338,8 @@ impl Mesh {
                 IN_MEMORY,
                 format!(
                     "transform: not a rotation (|R^T R - I| = {off:e}, det = {det}) \
-                     or translation {translate} not finite"
+                     or translation {} not finite",
+                    point(translate)
                 ),
             ));
         }
@@ -313,7 +347,18 @@ impl Mesh {
             .vertices
             .iter()
             .map(|&v| translate + scale * (rotation * v))
-            .collect();
+            .collect::<Vec<_>>();
+        if let Some((i, v)) = beyond_limit(&vertices) {
+            return Err(file_error(
+                IN_MEMORY,
+                format!(
+                    "transform: vertex {} moves to {}, beyond +-{:e} m (translate, rotate, scale)",
+                    i + 1,
+                    point(v),
+                    crate::scene::MAX_COORD
+                ),
+            ));
+        }
         Self::build(IN_MEMORY, vertices, self.triangles)
     }
 

@@ -80,7 +80,8 @@ pub enum ShError {
     },
     /// `b != 0` at `m = 0`, where it has no effect.
     #[error(
-        "coefficient {index} (k = {k}, m = 0): b = {b} must be 0 (sin(0 phi) = 0, so b has no effect at m = 0)"
+        "coefficient {index} (k = {k}, m = 0): b = {} must be 0 (sin(0 phi) = 0, so b has no effect at m = 0)",
+        crate::io::format_number(*.b)
     )]
     SineAtZeroOrder { index: usize, k: usize, b: f64 },
     /// The same `(k, m)` twice.
@@ -95,7 +96,7 @@ pub enum ShError {
     #[error("centre {center} is not finite")]
     Center { center: DVec3 },
     /// The scale is not a positive finite number.
-    #[error("scale {scale} must be finite and > 0")]
+    #[error("scale {} must be finite and > 0", crate::io::format_number(*.scale))]
     Scale { scale: f64 },
     /// The rotation is not a proper rotation matrix.
     #[error("rotation is not a proper rotation matrix: {reason}")]

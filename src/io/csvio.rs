@@ -260,6 +260,19 @@ fn read_rays(
         let mut v = [0.0; 6];
         for (k, (&c, name)) in cols.iter().zip(names).enumerate() {
             v[k] = number(row.get(c).map_or("", String::as_str), path, line, name)?;
+            if k < 3 && v[k].abs() > crate::scene::MAX_COORD {
+                return Err(InputError::Field {
+                    file: display_name(path),
+                    line,
+                    field: name.to_string(),
+                    message: format!(
+                        "must lie within +-{:e} m (lengths are squared, and scores taken to the \
+                         fourth power), got {}",
+                        crate::scene::MAX_COORD,
+                        format_number(v[k])
+                    ),
+                });
+            }
         }
         let d = DVec3::new(v[3], v[4], v[5]);
         let len = d.length();
@@ -322,6 +335,18 @@ pub fn format_number(x: f64) -> String {
         format!("{x}")
     } else {
         format!("{x:e}")
+    }
+}
+
+/// `x` with `decimals` decimals, in scientific notation (`decimals` digits
+/// after the point) when so large or small that fixed notation would
+/// print tens of digits or hide the value (`1.0000e50`, not 51 digits).
+pub fn format_fixed(x: f64, decimals: usize) -> String {
+    let a = x.abs();
+    if !x.is_finite() || x == 0.0 || (1e-4..1e15).contains(&a) {
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.decimals$e}")
     }
 }
 

@@ -25,12 +25,12 @@ pub enum ImageIoError {
     /// The encoder refused the data.
     #[error("{path}: cannot encode: {message}")]
     Encode { path: String, message: String },
-    /// The file could not be written.
-    #[error("{path}: cannot write: {source}")]
+    /// The file could not be written (the operating system's reason is
+    /// part of the message, not an error source, so `{:#}` prints it once).
+    #[error("{path}: cannot write: {reason}")]
     Write {
         path: String,
-        #[source]
-        source: std::io::Error,
+        reason: std::io::Error,
     },
 }
 
@@ -143,9 +143,9 @@ impl LuminanceImage {
 }
 
 fn write_file(path: &str, bytes: &[u8]) -> Result<()> {
-    write_atomic(path, bytes).map_err(|source| ImageIoError::Write {
+    write_atomic(path, bytes).map_err(|reason| ImageIoError::Write {
         path: path.to_string(),
-        source,
+        reason,
     })
 }
 

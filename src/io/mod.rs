@@ -9,5 +9,6 @@ pub mod sh_coeffs;
 pub(crate) mod text;
 
 pub use csvio::{
-    InputError, PointTable, ViewTable, format_number, read_points, read_views, write_atomic,
+    InputError, PointTable, ViewTable, format_fixed, format_number, read_points, read_views,
+    write_atomic,
 };

@@ -267,7 +267,10 @@ impl RadialProfile {
             if x.is_finite() {
                 Ok(x)
             } else {
-                Err(format!("`{key}` must be finite, got {x}"))
+                Err(format!(
+                    "`{key}` must be finite, got {}",
+                    crate::io::format_number(x)
+                ))
             }
         };
         let list = |key: &str| -> Result<Vec<f64>, String> {
@@ -297,7 +300,8 @@ impl RadialProfile {
                 };
                 if a <= 0.0 {
                     return Err(format!(
-                        "`offset` must be > 0 [m] (1/(R - s) is not integrable), got {a}"
+                        "`offset` must be > 0 [m] (1/(R - s) is not integrable), got {}",
+                        crate::io::format_number(a)
                     ));
                 }
                 ProfileKind::HyperbolicIncreasing { offset: a }
@@ -306,7 +310,8 @@ impl RadialProfile {
                 let t = number("turning")?;
                 if !(0.0..=radius).contains(&t) {
                     return Err(format!(
-                        "`turning` must lie in [0, {radius}] (the radius), got {t}"
+                        "`turning` must lie in [0, {radius}] (the radius), got {}",
+                        crate::io::format_number(t)
                     ));
                 }
                 if name == "v" {

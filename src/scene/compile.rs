@@ -2,7 +2,7 @@
 //! Markov chains and estimators use.
 
 use super::SceneError;
-use super::desc::{LightDesc, MaterialDesc, SceneDesc, SurfaceDesc};
+use super::desc::{LightDesc, MaterialDesc, SceneDesc, SurfaceDesc, Vec3};
 use super::world::{
     MAX_COORD, MAX_INTENSITY, MAX_PLANES, MIN_INTENSITY, Scene, Sides, SurfaceSpec,
 };
@@ -18,6 +18,12 @@ use std::f64::consts::PI;
 use std::ops::Range;
 use std::path::Path;
 use toml::Spanned;
+
+/// Three numbers as written in messages: `[1e300, 0, 2.5]`.
+fn triple(a: [f64; 3]) -> String {
+    let f = crate::io::format_number;
+    format!("[{}, {}, {}]", f(a[0]), f(a[1]), f(a[2]))
+}
 
 /// The text being compiled, for turning byte spans into line and column.
 pub struct SourceCtx<'a> {
@@ -68,26 +74,29 @@ impl SourceCtx<'_> {
             .ok_or_else(|| self.invalid(table, field, "missing field"))
     }
 
-    fn finite_vec(&self, v: &Spanned<[f64; 3]>, field: &str) -> Result<DVec3, SceneError> {
-        let a = *v.get_ref();
+    fn finite_vec(&self, v: &Spanned<Vec3>, field: &str) -> Result<DVec3, SceneError> {
+        let a = v.get_ref().0;
         if !a.iter().all(|x| x.is_finite()) {
             return Err(self.invalid(
                 v.span(),
                 field,
-                format!("every component must be finite, got {a:?}"),
+                format!("every component must be finite, got {}", triple(a)),
             ));
         }
         if a.iter().any(|x| x.abs() > MAX_COORD) {
             return Err(self.invalid(
                 v.span(),
                 field,
-                format!("every component must lie within +-{MAX_COORD:e} m, got {a:?}"),
+                format!(
+                    "every component must lie within +-{MAX_COORD:e} m, got {}",
+                    triple(a)
+                ),
             ));
         }
         Ok(DVec3::from_array(a))
     }
 
-    fn unit_vec(&self, v: &Spanned<[f64; 3]>, field: &str) -> Result<DVec3, SceneError> {
+    fn unit_vec(&self, v: &Spanned<Vec3>, field: &str) -> Result<DVec3, SceneError> {
         let d = self.finite_vec(v, field)?;
         let n = d.normalize_or_zero();
         if n == DVec3::ZERO || !n.is_finite() {
@@ -169,6 +178,23 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
         .filter_map(|(name, note)| note.map(|n| format!("{name}: {n}")))
         .collect();
     for (k, name) in names.iter().enumerate() {
+        if scene.traps_light(k) {
+            let span = desc.surface.first().map_or(0..0, |s| {
+                s.get_ref()
+                    .material
+                    .as_ref()
+                    .map_or(s.span(), Spanned::span)
+            });
+            return Err(ctx.invalid(
+                span,
+                "material",
+                format!(
+                    "every surface reflects all the light it receives (reflectance 1) and no ray from \
+                     {name} leaves the scene: the light is never absorbed, so the illuminance is \
+                     infinite and chains would never end; give some surface a reflectance below 1"
+                ),
+            ));
+        }
         if scene.sealed(k) {
             scene.notes.push(format!(
                 "WARNING: {name} is sealed inside a solid: most rays from it meet the back of a surface, so its light hardly reaches a point in front of one"
@@ -197,7 +223,7 @@ fn surface_fields_allowed(d: &SurfaceDesc, kind: &str, ctx: &SourceCtx) -> Resul
     let Some((_, allowed)) = SURFACE_FIELDS.iter().find(|f| f.0 == kind) else {
         return Ok(());
     };
-    let span = |v: &Option<Spanned<[f64; 3]>>| v.as_ref().map(Spanned::span);
+    let span = |v: &Option<Spanned<Vec3>>| v.as_ref().map(Spanned::span);
     let given: [(&str, Option<Range<usize>>); 16] = [
         ("point", span(&d.point)),
         ("normal", span(&d.normal)),
@@ -269,7 +295,17 @@ fn sides(
 
 fn positive(v: &Spanned<f64>, field: &str, ctx: &SourceCtx) -> Result<f64, SceneError> {
     let x = *v.get_ref();
-    if x.is_finite() && x > 0.0 {
+    if field == "radius" && x.is_finite() && x > MAX_COORD {
+        // A length like the coordinates: squared in areas and distances.
+        Err(ctx.invalid(
+            v.span(),
+            field,
+            format!(
+                "must lie within {MAX_COORD:e} m, got {}",
+                crate::io::format_number(x)
+            ),
+        ))
+    } else if x.is_finite() && x > 0.0 {
         Ok(x)
     } else {
         Err(ctx.invalid(
@@ -318,7 +354,7 @@ fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<Surfac
         .map_or_else(|| format!("surface #{}", k + 1), |n| n.get_ref().clone());
     let kind = d.kind.get_ref().as_str();
     surface_fields_allowed(d, kind, ctx)?;
-    let vec = |v: &Option<Spanned<[f64; 3]>>, field: &str| {
+    let vec = |v: &Option<Spanned<Vec3>>, field: &str| {
         ctx.finite_vec(ctx.required(v, s.span(), field)?, field)
     };
     let mat = || material(ctx.required(&d.material, s.span(), "material")?, ctx);
@@ -399,7 +435,8 @@ fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<Surfac
                 (None, Some(c)) => {
                     let mut v = Vec::with_capacity(c.get_ref().len());
                     for row in c.get_ref() {
-                        let [k, m, a, b] = *row;
+                        let row = row.0;
+                        let [k, m, a, b] = row;
                         let int = |x: f64| x >= 0.0 && x.fract() == 0.0 && x <= 1e6;
                         if !(int(k) && int(m)) {
                             return Err(ctx.invalid(
@@ -426,8 +463,15 @@ fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<Surfac
             let c = vec(&d.center, "center")?;
             let (_, rotation, scale) = placement(d, ctx)?;
             let field_span = d.coefficients.as_ref().map(Spanned::span).or(d.file.as_ref().map(Spanned::span)).unwrap_or(s.span());
-            let o = ShSurface::new(&coeffs, c, rotation, scale)
-                .map_err(|e| ctx.invalid(field_span, "coefficients", e.to_string()))?;
+            let o = ShSurface::new(&coeffs, c, rotation, scale).map_err(|e| match &d.file {
+                // Coefficients from a file: name it.
+                Some(f) => ctx.invalid(
+                    field_span,
+                    "file",
+                    format!("{}: {e}", ctx.relative(f.get_ref()).display()),
+                ),
+                None => ctx.invalid(field_span, "coefficients", e.to_string()),
+            })?;
             let sd = sides(&d.sides, ROUND_SIDES, FLAT_VALUES, ctx)?;
             Ok(SurfaceSpec::Sh(name, o, sd, mat()?))
         }
@@ -634,11 +678,14 @@ fn light(
             let c = ctx.finite_vec(cs, "center")?;
             let rs = ctx.required(&d.radius, l.span(), "radius")?;
             let r = *rs.get_ref();
-            if !(r.is_finite() && r > 0.0) {
+            if !(r.is_finite() && r > 0.0 && r <= MAX_COORD) {
                 return Err(ctx.invalid(
                     rs.span(),
                     "radius",
-                    format!("must be finite and > 0, got {}", crate::io::format_number(r)),
+                    format!(
+                        "must be finite, > 0 and within {MAX_COORD:e} m, got {}",
+                        crate::io::format_number(r)
+                    ),
                 ));
             }
             if let Some(k) = planes
@@ -677,7 +724,7 @@ fn light(
                 return Err(ctx.invalid(
                     sp,
                     "outer",
-                    format!("must be > 0 and >= `inner` ({inner} degrees), got {outer}"),
+                    format!("must be > 0 and >= `inner` ({inner} degrees), got {}", crate::io::format_number(outer)),
                 ));
             }
             // `i` above took a flux as isotropic: a spot's flux fills its cones.
@@ -741,7 +788,7 @@ fn area(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String
             return Err(ctx.invalid(span, name, format!("not allowed for a `{kind}` light")));
         }
     }
-    let vec = |v: &Option<Spanned<[f64; 3]>>, field: &str| {
+    let vec = |v: &Option<Spanned<Vec3>>, field: &str| {
         ctx.finite_vec(ctx.required(v, l.span(), field)?, field)
     };
     let shape = if rect {

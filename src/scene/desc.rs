@@ -4,8 +4,27 @@
 //! (`scene::validate`) can name the line and the field of a bad value.
 //! Unknown keys are rejected here by serde.
 
-use serde::Deserialize;
+use serde::{Deserialize, Deserializer};
 use toml::Spanned;
+
+/// Exactly `N` numbers, `[x, y, z]`: an array of another length is refused
+/// with its length (serde's fixed-size arrays let a longer one through and
+/// drop the rest).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Numbers<const N: usize>(pub [f64; N]);
+
+/// Three numbers: a point [m] or a direction.
+pub type Vec3 = Numbers<3>;
+
+impl<'de, const N: usize> Deserialize<'de> for Numbers<N> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Vec::<f64>::deserialize(d)?;
+        let n = v.len();
+        v.try_into().map(Numbers).map_err(|_| {
+            serde::de::Error::invalid_length(n, &format!("an array of {N} numbers").as_str())
+        })
+    }
+}
 
 /// A whole scene file.
 #[derive(Debug, Deserialize)]
@@ -31,26 +50,26 @@ pub struct SurfaceDesc {
     /// Optional name used in messages and summaries.
     pub name: Option<Spanned<String>>,
     /// A point of a plane [m].
-    pub point: Option<Spanned<[f64; 3]>>,
+    pub point: Option<Spanned<Vec3>>,
     /// Normal of a plane or disc (any length > 0; normalised on compile).
-    pub normal: Option<Spanned<[f64; 3]>>,
+    pub normal: Option<Spanned<Vec3>>,
     /// Corner of a rectangle [m].
-    pub corner: Option<Spanned<[f64; 3]>>,
+    pub corner: Option<Spanned<Vec3>>,
     /// First edge of a rectangle [m]; the front normal is `edge1 x edge2`.
-    pub edge1: Option<Spanned<[f64; 3]>>,
+    pub edge1: Option<Spanned<Vec3>>,
     /// Second edge of a rectangle [m].
-    pub edge2: Option<Spanned<[f64; 3]>>,
+    pub edge2: Option<Spanned<Vec3>>,
     /// Centre of a disc, sphere or SH object [m].
-    pub center: Option<Spanned<[f64; 3]>>,
+    pub center: Option<Spanned<Vec3>>,
     /// Radius of a disc or sphere [m].
     pub radius: Option<Spanned<f64>>,
     /// Reflecting side(s): `"front"`, `"back"`, `"both"` (rectangle, disc,
     /// mesh) or `"outside"`, `"inside"`, `"both"` (sphere, SH object).
     pub sides: Option<Spanned<String>>,
     /// Lower corner of a box [m].
-    pub min: Option<Spanned<[f64; 3]>>,
+    pub min: Option<Spanned<Vec3>>,
     /// Upper corner of a box [m].
-    pub max: Option<Spanned<[f64; 3]>>,
+    pub max: Option<Spanned<Vec3>>,
     /// Normals of a box: `"inward"` (a room, default) or `"outward"` (a solid block).
     pub normals: Option<Spanned<String>>,
     /// Per-face materials of a box overriding `material`.
@@ -59,11 +78,11 @@ pub struct SurfaceDesc {
     /// relative to the scene file's folder.
     pub file: Option<Spanned<String>>,
     /// Inline SH coefficients `[[k, m, a, b], ...]` (instead of `file`).
-    pub coefficients: Option<Spanned<Vec<[f64; 4]>>>,
+    pub coefficients: Option<Spanned<Vec<Numbers<4>>>>,
     /// Translation of a mesh [m] (applied last).
-    pub translate: Option<Spanned<[f64; 3]>>,
+    pub translate: Option<Spanned<Vec3>>,
     /// Rotation of a mesh or SH object: angles in degrees about x, then y, then z.
-    pub rotate: Option<Spanned<[f64; 3]>>,
+    pub rotate: Option<Spanned<Vec3>>,
     /// Uniform scale of a mesh or SH object (dimensionless, > 0).
     pub scale: Option<Spanned<f64>>,
     /// The surface's material (inline table).
@@ -117,9 +136,9 @@ pub struct LightDesc {
     /// Optional name used in messages and summaries.
     pub name: Option<Spanned<String>>,
     /// Position of a point light [m].
-    pub position: Option<Spanned<[f64; 3]>>,
+    pub position: Option<Spanned<Vec3>>,
     /// Centre of a sphere light [m].
-    pub center: Option<Spanned<[f64; 3]>>,
+    pub center: Option<Spanned<Vec3>>,
     /// Radius of a sphere light [m].
     pub radius: Option<Spanned<f64>>,
     /// Luminous intensity [cd] (isotropic point source). Exclusive with `flux`.
@@ -132,7 +151,7 @@ pub struct LightDesc {
     pub file: Option<Spanned<String>>,
     /// Direction of a goniometric luminaire's photometric nadir (gamma = 0);
     /// default `[0, 0, -1]`.
-    pub aim: Option<Spanned<[f64; 3]>>,
+    pub aim: Option<Spanned<Vec3>>,
     /// Turn of a goniometric luminaire about its nadir [deg], from C0 along
     /// the world `+x` axis (projected); default 0.
     pub rotate: Option<Spanned<f64>>,
@@ -143,19 +162,19 @@ pub struct LightDesc {
     /// default false.
     pub opening: Option<Spanned<bool>>,
     /// Beam direction of a spot light (normalised; non-zero).
-    pub direction: Option<Spanned<[f64; 3]>>,
+    pub direction: Option<Spanned<Vec3>>,
     /// Inner cone half-angle of a spot light [deg]: full intensity inside.
     pub inner: Option<Spanned<f64>>,
     /// Outer cone half-angle of a spot light [deg]: nothing outside.
     pub outer: Option<Spanned<f64>>,
     /// Corner of a rectangle source [m].
-    pub corner: Option<Spanned<[f64; 3]>>,
+    pub corner: Option<Spanned<Vec3>>,
     /// First edge of a rectangle source [m].
-    pub edge1: Option<Spanned<[f64; 3]>>,
+    pub edge1: Option<Spanned<Vec3>>,
     /// Second edge of a rectangle source [m]; it emits towards `edge1 x edge2`.
-    pub edge2: Option<Spanned<[f64; 3]>>,
+    pub edge2: Option<Spanned<Vec3>>,
     /// Emitting side's normal of a disc source.
-    pub normal: Option<Spanned<[f64; 3]>>,
+    pub normal: Option<Spanned<Vec3>>,
     /// Luminance of an area source [cd/m^2] (at its profile's peak).
     /// Exclusive with `flux`.
     pub luminance: Option<Spanned<f64>>,

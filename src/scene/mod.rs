@@ -19,12 +19,13 @@ use std::path::{Path, PathBuf};
 /// An error in a scene file, with the file, line, column and field.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    /// The file could not be read.
-    #[error("{file}: cannot read scene file: {source}")]
+    /// The file could not be read. The operating system's reason is part
+    /// of the message and deliberately not an error source: `{:#}` would
+    /// print it twice.
+    #[error("{file}: cannot read scene file: {reason}")]
     Io {
         file: PathBuf,
-        #[source]
-        source: std::io::Error,
+        reason: std::io::Error,
     },
     /// The TOML is malformed, has an unknown key, a missing or mistyped field.
     #[error("{file}:{line}:{column}: {message}")]
@@ -47,23 +48,81 @@ pub enum SceneError {
 
 /// Read, validate and compile a scene file.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let src = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+    let src = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
         file: path.to_path_buf(),
-        source,
+        reason,
     })?;
     parse(&src, path)
+}
+
+/// The key of the `key = value` whose value starts at byte `at` (the last
+/// `key =` before `at` on its line, also inside an inline table), if any.
+fn key_before(src: &str, at: usize) -> Option<&str> {
+    let before = src.get(..at)?;
+    let line = &before[before.rfind('\n').map_or(0, |i| i + 1)..];
+    let key = line[..line.rfind('=')?].trim_end();
+    let start = key
+        .rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '-'))
+        .map_or(0, |i| i + 1);
+    Some(&key[start..]).filter(|k| !k.is_empty())
+}
+
+/// The files a scene file refers to (meshes, SH coefficient files,
+/// photometric files), resolved relative to the scene's folder, for the
+/// output check: an output must not overwrite them. A scene that cannot be
+/// read or parsed refers to nothing here; loading it reports why.
+pub fn referenced_files(path: &Path) -> Vec<PathBuf> {
+    let Ok(src) = std::fs::read_to_string(path) else {
+        return Vec::new();
+    };
+    let Ok(desc) = toml::from_str::<desc::SceneDesc>(&src) else {
+        return Vec::new();
+    };
+    let ctx = compile::SourceCtx {
+        src: &src,
+        file: path,
+    };
+    let surfaces = desc
+        .surface
+        .iter()
+        .filter_map(|s| s.get_ref().file.as_ref());
+    let lights = desc.light.iter().filter_map(|l| l.get_ref().file.as_ref());
+    surfaces
+        .chain(lights)
+        .map(|f| ctx.relative(f.get_ref()))
+        .collect()
 }
 
 /// Validate and compile a scene from TOML text; `file` is used in messages.
 pub fn parse(src: &str, file: &Path) -> Result<Scene, SceneError> {
     let ctx = compile::SourceCtx { src, file };
     let desc: desc::SceneDesc = toml::from_str(src).map_err(|e| {
-        let (line, column) = ctx.line_col(e.span().map_or(0, |s| s.start));
+        let at = e.span().map_or(0, |s| s.start);
+        let (line, column) = ctx.line_col(at);
+        let message = e.message().trim();
+        // A value of the wrong type or length: name its key, as the
+        // validation stage does ("invalid type: string "1", expected f64").
+        let mut message = match key_before(src, at) {
+            Some(key) if !message.contains("field `") => format!("field `{key}`: {message}"),
+            _ => message.to_string(),
+        };
+        // `[surface]` after `[[surface]]` is read as a second table of the
+        // same name: say what was meant.
+        let before = src[..at.min(src.len())].rsplit('\n').next().unwrap_or("");
+        let rest = &src[at.min(src.len()) - before.len()..];
+        if let Some(table) = ["surface", "light"]
+            .into_iter()
+            .find(|t| rest.trim_start().starts_with(&format!("[{t}]")))
+        {
+            message += &format!(
+                " (each {table} is an array-of-tables entry: write `[[{table}]]` with double brackets)"
+            );
+        }
         SceneError::Syntax {
             file: file.to_path_buf(),
             line,
             column,
-            message: e.message().trim().to_string(),
+            message,
         }
     })?;
     compile::compile(&desc, &ctx)

@@ -662,6 +662,34 @@ impl Scene {
         back >= PROBES * 7 / 8
     }
 
+    /// True when light from light `k` is never absorbed: every surface
+    /// reflects all the light it receives (Lambertian reflectance 1, or Phong
+    /// `kd + ks = 1`) and each of 32 probe rays from the light meets a
+    /// reflecting side (none leaves the scene or meets a black back side), as
+    /// in a closed room whose surfaces all have reflectance 1. The
+    /// illuminance is then infinite and a chain (or a backward path) would
+    /// never end. Area sources are not probed.
+    pub fn traps_light(&self, k: usize) -> bool {
+        const PROBES: usize = 32;
+        let l = &self.lights[k];
+        let lossless = |m: &Material| match *m {
+            Material::Lambertian { rho } => rho >= 1.0,
+            Material::Phong { kd, ks, .. } => kd + ks >= 1.0,
+        };
+        if matches!(l, Light::Area(_)) || !self.surfaces.iter().all(|s| lossless(&s.material)) {
+            return false;
+        }
+        let p = l.position();
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        (0..PROBES).all(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / PROBES as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let (sp, cp) = (golden * i as f64).sin_cos();
+            let d = DVec3::new(r * cp, r * sp, z);
+            self.first_hit_from(p, d).is_some_and(|h| d.dot(h.n) < 0.0)
+        })
+    }
+
     /// Index of a light picked with probability proportional to its power
     /// (an alias table: O(1)); light 0 when nothing emits (no chain is
     /// traced then).

@@ -11,23 +11,23 @@ pub struct StressArgs {
     #[arg(long)]
     pub quick: bool,
     /// Wall-clock time per case [s] (default 2; with `--quick`, fixed chains instead).
-    #[arg(long = "time-per-case")]
+    #[arg(long = "time-per-case", allow_negative_numbers = true)]
     pub time_per_case: Option<f64>,
     /// Chains per case instead of a time (paths per point for the backward
     /// estimator); at least 8192 (32 batches of 256).
-    #[arg(long, conflicts_with = "time_per_case")]
+    #[arg(long, conflicts_with = "time_per_case", allow_negative_numbers = true)]
     pub chains: Option<u64>,
     /// Seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
     /// Worker threads (0: all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub threads: usize,
     /// Folder for `stress.csv`, `stress_summary.csv` and the convergence tables and plots.
     #[arg(long, default_value = "validation_report")]
     pub report: PathBuf,
     /// Family-wise false-alarm rate of the z test over all rows.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
     pub alpha: f64,
 }
 

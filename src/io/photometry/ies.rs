@@ -185,7 +185,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
             return Err(err(
                 line,
                 "TILT multiplying factors",
-                format!("must be >= 0, got {f}"),
+                format!("must be >= 0, got {}", crate::io::format_number(*f)),
             ));
         }
         interpolate(&angles, &factors, 0.0)
@@ -199,7 +199,10 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         return Err(err(
             l_line,
             "lumens per lamp",
-            format!("must be > 0, or -1 for absolute photometry, got {lumens}"),
+            format!(
+                "must be > 0, or -1 for absolute photometry, got {}",
+                crate::io::format_number(lumens)
+            ),
         ));
     }
     let (multiplier, m_line) = t.number("candela multiplier")?;
@@ -207,7 +210,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         return Err(err(
             m_line,
             "candela multiplier",
-            format!("must be > 0, got {multiplier}"),
+            format!("must be > 0, got {}", crate::io::format_number(multiplier)),
         ));
     }
     let n_v = t.count("number of vertical angles", 1, MAX_ANGLES as i64)? as usize;
@@ -237,7 +240,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         return Err(err(
             b_line,
             "ballast factor",
-            format!("must be > 0, got {ballast}"),
+            format!("must be > 0, got {}", crate::io::format_number(ballast)),
         ));
     }
     let (second, s_line) = t.number(match version {
@@ -251,7 +254,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
                 return Err(err(
                     s_line,
                     "ballast-lamp photometric factor",
-                    format!("must be > 0, got {second}"),
+                    format!("must be > 0, got {}", crate::io::format_number(second)),
                 ));
             }
             second
@@ -263,7 +266,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         return Err(err(
             w_line,
             "input watts",
-            format!("must be >= 0, got {watts}"),
+            format!("must be >= 0, got {}", crate::io::format_number(watts)),
         ));
     }
     let line = t.line();
@@ -492,9 +495,14 @@ TILT=NONE
         for (text, line, field) in cases {
             let e = parse(text, "x.ies").unwrap_err();
             assert_eq!((e.line, e.field.as_str()), (line, field), "{e}");
+            // Line 0 (the file as a whole) is not printed.
+            let at = if line > 0 {
+                format!(":{line}")
+            } else {
+                String::new()
+            };
             assert!(
-                e.to_string()
-                    .starts_with(&format!("x.ies:{line}: {field}: ")),
+                e.to_string().starts_with(&format!("x.ies{at}: {field}: ")),
                 "{e}"
             );
         }

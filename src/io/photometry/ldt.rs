@@ -129,7 +129,11 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
     ]) {
         *d = l.number(field)?;
         if *d < 0.0 {
-            return Err(l.err(l.next, field, format!("must be >= 0 [mm], got {d}")));
+            return Err(l.err(
+                l.next,
+                field,
+                format!("must be >= 0 [mm], got {}", crate::io::format_number(*d)),
+            ));
         }
     }
     l.number("downward flux fraction")?;
@@ -139,7 +143,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         return Err(l.err(
             l.next,
             "conversion factor for luminous intensities",
-            format!("must be > 0, got {cfli}"),
+            format!("must be > 0, got {}", crate::io::format_number(cfli)),
         ));
     }
     l.number("tilt of luminaire during measurement")?;
@@ -163,7 +167,10 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         return Err(l.err(
             l.next - sets + k + 1,
             "total luminous flux of lamps",
-            format!("must be > 0 [lm], got {}", flux[k]),
+            format!(
+                "must be > 0 [lm], got {}",
+                crate::io::format_number(flux[k])
+            ),
         ));
     }
     for field in ["colour appearance", "colour rendering group"] {
@@ -206,7 +213,10 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
             return Err(l.err(
                 line + i,
                 "intensities",
-                format!("must be >= 0 [cd/klm], got {}", row[i]),
+                format!(
+                    "must be >= 0 [cd/klm], got {}",
+                    crate::io::format_number(row[i])
+                ),
             ));
         }
         let c = if isym == 3 { (540.0 - c) % 360.0 } else { c };

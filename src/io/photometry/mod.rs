@@ -114,7 +114,7 @@ impl Photometry {
 
 /// An error in a photometric file, naming the file, the line and the field.
 #[derive(Debug, thiserror::Error, PartialEq)]
-#[error("{file}:{line}: {field}: {message}")]
+#[error("{file}{}: {field}: {message}", if *line > 0 { format!(":{line}") } else { String::new() })]
 pub struct PhotometryError {
     /// The file, as given.
     pub file: String,
@@ -163,15 +163,17 @@ pub(crate) fn check_angles(
     for (k, &a) in angles.iter().enumerate() {
         if !(a.is_finite() && (lo..=hi).contains(&a)) {
             return Err(err(format!(
-                "angle {} = {a} lies outside [{lo}, {hi}] degrees",
-                k + 1
+                "angle {} = {} lies outside [{lo}, {hi}] degrees",
+                k + 1,
+                crate::io::format_number(a)
             )));
         }
         if k > 0 && a <= angles[k - 1] {
             return Err(err(format!(
-                "angles must ascend: angle {} = {a} after {}",
+                "angles must ascend: angle {} = {} after {}",
                 k + 1,
-                angles[k - 1]
+                crate::io::format_number(a),
+                crate::io::format_number(angles[k - 1])
             )));
         }
     }
@@ -181,7 +183,10 @@ pub(crate) fn check_angles(
 /// `v` as a whole number in `lo..=hi`, or the message saying why not.
 pub(crate) fn whole(v: f64, lo: i64, hi: i64) -> Result<i64, String> {
     if v.fract() != 0.0 || v < lo as f64 || v > hi as f64 {
-        Err(format!("must be a whole number in [{lo}, {hi}], got {v}"))
+        Err(format!(
+            "must be a whole number in [{lo}, {hi}], got {}",
+            crate::io::format_number(v)
+        ))
     } else {
         Ok(v as i64)
     }
