@@ -111,6 +111,10 @@ pub struct RunConfig {
     /// [`RunResult::batches`], for [`fold_batches`] to merge later; `None`:
     /// the whole run.
     pub shard: Option<(u64, u64)>,
+    /// Continue a `--chains` run from this checkpoint: its tallies after
+    /// its first batches, then the batches after them (the result is the
+    /// uninterrupted run's, bit for bit); `None`: start afresh.
+    pub resume: Option<std::sync::Arc<crate::tally::checkpoint::Checkpoint>>,
 }
 
 /// The command line's defaults: 100,000 chains, stratified, the near/far
@@ -132,6 +136,7 @@ impl Default for RunConfig {
             near: (0.0, 16),
             near_auto: true,
             shard: None,
+            resume: None,
         }
     }
 }
@@ -176,7 +181,9 @@ pub struct Progress<'a> {
     pub chains: u64,
     /// Point scores evaluated in folded batches.
     pub scores: u64,
-    /// Wall time since the start [s].
+    /// Collisions in folded batches.
+    pub collisions: u64,
+    /// Wall time since the start [s] (of the first session, when resumed).
     pub elapsed: f64,
 }
 
@@ -282,6 +289,7 @@ impl RunResult {
             direct: &self.direct,
             chains: self.chains,
             scores: self.scores,
+            collisions: self.collisions,
             elapsed: self.wall,
         }
     }
@@ -581,7 +589,18 @@ fn drive_batches(
     } else {
         max_batches
     };
-    let next = AtomicU64::new(0);
+    // A resumed run starts from its checkpoint's tallies and batch.
+    let (resumed, prior_wall) = match &cfg.resume {
+        Some(c) if cfg.shard.is_none() => {
+            tallies = c.tallies.clone();
+            result.chains = c.chains;
+            result.collisions = c.collisions;
+            result.scores = c.scores;
+            (c.folded, c.wall)
+        }
+        _ => (0, 0.0),
+    };
+    let next = AtomicU64::new(resumed);
     let halt = AtomicBool::new(false);
     let (tx, rx) = mpsc::channel::<Batch>();
     let mut keep_until = u64::MAX; // batches with index >= this are discarded
@@ -609,7 +628,7 @@ fn drive_batches(
         drop(tx);
 
         let mut pending: BTreeMap<u64, Batch> = BTreeMap::new();
-        let mut folded = 0u64;
+        let mut folded = resumed;
         let mut batch_means = vec![0.0; buckets * n];
         loop {
             match rx.recv_timeout(Duration::from_millis(50)) {
@@ -650,7 +669,8 @@ fn drive_batches(
                     direct: &direct,
                     chains: result.chains,
                     scores: result.scores,
-                    elapsed: start.elapsed().as_secs_f64(),
+                    collisions: result.collisions,
+                    elapsed: prior_wall + start.elapsed().as_secs_f64(),
                 };
                 if !observe(&progress) && keep_until == u64::MAX {
                     result.reason = StopReason::Observer;
@@ -662,7 +682,7 @@ fn drive_batches(
     });
     result.direct = direct;
     result.tallies = tallies;
-    result.wall = start.elapsed().as_secs_f64();
+    result.wall = prior_wall + start.elapsed().as_secs_f64();
     result
 }
 

@@ -64,7 +64,9 @@ pub fn shapes(a: &BenchArgs, list: &str) -> anyhow::Result<()> {
     use crate::scene::{AUTO_MIN_SHAPES, Accel};
     let counts = parse_list(list).map_err(|e| anyhow::anyhow!("--shapes: {e}"))?;
     anyhow::ensure!(
-        counts.iter().all(|&n| n >= 1.0 && n.fract() == 0.0 && n <= 1e7),
+        counts
+            .iter()
+            .all(|&n| n >= 1.0 && n.fract() == 0.0 && n <= 1e7),
         "--shapes: every count must be a whole number from 1 to 1e7, got {list}"
     );
     let counts: Vec<usize> = counts.into_iter().map(|x| x as usize).collect();

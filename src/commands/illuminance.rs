@@ -486,13 +486,18 @@ pub fn run_job(
     cfg: &RunConfig,
     estimator: EstimatorKind,
     quiet: bool,
+    mut checkpoint: Option<super::run_state::Checkpointer>,
 ) -> RunResult {
     let pb = progress_bar(cfg, quiet);
     // A first Ctrl-C (or SIGTERM) stops the run after the batches in hand;
-    // what was folded is kept and written.
+    // what was folded is kept and written, with a checkpoint to resume from.
     let mut observe = |p: &crate::run::Progress| {
         tick(&pb, cfg, p);
-        !crate::io::interrupt::interrupted()
+        let stop = crate::io::interrupt::interrupted();
+        if let Some(c) = checkpoint.as_mut() {
+            c.offer(p, stop);
+        }
+        !stop
     };
     let result = match estimator {
         EstimatorKind::Local => run(scene, &job.receivers, cfg, &mut observe),
@@ -617,8 +622,28 @@ pub(crate) fn measure_with(
     for note in &scene.notes {
         eprintln!("lumest: {note}");
     }
+    let cfg = match &run_args.resume {
+        Some(path) => super::run_state::resume(path, &scene, &job, &cfg, estimator)?,
+        None => cfg,
+    };
+    // Checkpoints: every --checkpoint-every seconds to --checkpoint, and at
+    // an interrupt (there, or next to the first output) when the run has a
+    // fixed number of chains.
+    let out = points.map(|p| p.1).or(views.map(|v| v.1)).unwrap_or("-");
+    let ckpt_path = run_args.checkpoint.clone().or_else(|| {
+        (cfg.stop.time.is_none() && cfg.stop.rel_error.is_none() && out != "-")
+            .then(|| format!("{out}.checkpoint"))
+    });
+    let checkpointer = ckpt_path.as_ref().map(|p| {
+        let every = if run_args.checkpoint.is_some() {
+            run_args.checkpoint_every
+        } else {
+            f64::INFINITY
+        };
+        super::run_state::Checkpointer::new(p.clone(), every, &scene, &job, &cfg, estimator)
+    });
     crate::io::interrupt::install();
-    let result = run_job(&scene, &job, &cfg, estimator, run_args.quiet);
+    let result = run_job(&scene, &job, &cfg, estimator, run_args.quiet, checkpointer);
     if crate::io::interrupt::interrupted() {
         anyhow::ensure!(
             result.tallies.batches() >= 2,
@@ -630,6 +655,12 @@ pub(crate) fn measure_with(
             result.tallies.batches(),
             result.chains
         );
+        if let Some(p) = &ckpt_path {
+            eprintln!(
+                "lumest: checkpoint written to {p}: run the same command with `--resume {p}` to finish \
+                 the run (the result is the uninterrupted run's, bit for bit)"
+            );
+        }
     }
     // Every output is staged before any is renamed into place: all or none.
     let mut rows = Vec::new();

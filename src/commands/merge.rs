@@ -8,7 +8,7 @@ use super::illuminance::{EstimatorKind, IlluminanceArgs, result_cells, result_he
 use super::outputs::check_outputs;
 use crate::io::csvio::{stage_csv, write_atomic_with};
 use crate::run::{RunResult, StopReason, Tallies, fold_batches};
-use crate::tally::shard::{RunIdentity, ShardState, fnv1a};
+use crate::tally::shard::{RunIdentity, ShardState};
 use anyhow::Context;
 use clap::Args;
 use std::path::Path;
@@ -52,6 +52,10 @@ pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
         &[a.scene.as_path(), Path::new(&a.points)],
         &[("--out", Path::new(&a.out))],
     )?;
+    anyhow::ensure!(
+        a.run.checkpoint.is_none() && a.run.resume.is_none(),
+        "--shard writes its state when done: it takes no --checkpoint or --resume"
+    );
     let mut cfg = a.run.config()?;
     if a.estimator == EstimatorKind::Backward {
         a.run.check_local_only("backward")?;
@@ -60,41 +64,18 @@ pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
     let scene = crate::scene::load(&a.scene)?;
     let job = super::illuminance::Job::new(&scene, Some(&a.points), None)?;
     let table = job.points.as_ref().context("no points")?;
-    let identity_cfg = crate::run::RunConfig {
-        threads: 0,
-        ..cfg.clone()
-    };
     cfg.shard = Some((i, m));
     eprintln!("lumest: scene {}: {}", a.scene.display(), scene.summary());
-    let r = run_job(&scene, &job, &cfg, a.estimator, a.run.quiet);
+    let r = run_job(&scene, &job, &cfg, a.estimator, a.run.quiet, None);
     anyhow::ensure!(
         !crate::io::interrupt::interrupted(),
         "interrupted: a shard is written whole or not at all (run it again)"
     );
-    let points_hash = {
-        let mut text = table.headers.join("\u{1f}");
-        for row in &table.rows {
-            text.push('\u{1e}');
-            text.push_str(&row.join("\u{1f}"));
-        }
-        fnv1a(text.as_bytes())
-    };
     let state = ShardState {
         run: RunIdentity {
             batches: r.total_batches,
-            batch_size: r.batch_size,
             chains,
-            seed: cfg.seed,
-            orders: cfg.orders,
-            receivers: r.direct.len() as u64,
-            scene: fnv1a(format!("{scene:?}").as_bytes()),
-            points: points_hash,
-            config: format!(
-                "lumest {} estimator {:?} {:?}",
-                env!("CARGO_PKG_VERSION"),
-                a.estimator,
-                identity_cfg
-            ),
+            ..super::run_state::identity(&scene, &job, &cfg, a.estimator, r.batch_size)
         },
         shard: (i, m),
         wall: r.wall,

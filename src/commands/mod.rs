@@ -7,6 +7,7 @@ pub mod merge;
 pub mod outputs;
 pub mod photometry;
 pub mod render;
+pub mod run_state;
 pub mod shfit;
 pub mod sobolev;
 pub mod validate;
@@ -94,6 +95,23 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Write a checkpoint of a `--chains` run to this file every
+    /// `--checkpoint-every` seconds (atomically); an interrupted run writes
+    /// one too (here, or next to `--out`).
+    #[arg(long)]
+    pub checkpoint: Option<String>,
+    /// Seconds between checkpoints.
+    #[arg(
+        long = "checkpoint-every",
+        default_value_t = 60.0,
+        allow_negative_numbers = true
+    )]
+    pub checkpoint_every: f64,
+    /// Continue the run whose checkpoint this is (same scene, points, seed,
+    /// `--chains` and settings): the result is the uninterrupted run's, bit
+    /// for bit.
+    #[arg(long)]
+    pub resume: Option<String>,
 }
 
 /// A count given as a whole number, also in scientific notation (`1e5`).
@@ -141,6 +159,19 @@ impl RunArgs {
             anyhow::ensure!(c > 0, "--chains must be positive");
         }
         anyhow::ensure!(
+            self.checkpoint_every.is_finite() && self.checkpoint_every > 0.0,
+            "--checkpoint-every must be a positive number of seconds, got {}",
+            crate::io::format_number(self.checkpoint_every)
+        );
+        if self.checkpoint.is_some() || self.resume.is_some() {
+            anyhow::ensure!(
+                stop.time.is_none() && stop.rel_error.is_none(),
+                "--checkpoint and --resume go with a run of a fixed number of chains \
+                 (--chains, or the default), not with --time or --rel-error: those depend on \
+                 the run's own pace and batches"
+            );
+        }
+        anyhow::ensure!(
             self.orders <= MAX_ORDERS,
             "--orders must be at most {MAX_ORDERS} (each resolved order adds a tally per \
              receiver and two output columns), got {}",
@@ -186,6 +217,7 @@ impl RunArgs {
             near: (near_radius, self.near_paths.unwrap_or(16)),
             near_auto,
             shard: None,
+            resume: None,
         })
     }
 }
@@ -224,7 +256,9 @@ pub(crate) fn progress_bar(cfg: &RunConfig, quiet: bool) -> indicatif::ProgressB
         (None, None) => ProgressBar::no_length(),
     };
     pb.set_draw_target(ProgressDrawTarget::stderr());
-    let tmpl = "{spinner} [{elapsed_precise}] {wide_bar} {msg}";
+    // The time left (to the chain count or the time limit) is indicatif's
+    // estimate from the pace so far.
+    let tmpl = "{spinner} [{elapsed_precise}] {wide_bar} {msg} (about {eta} left)";
     pb.set_style(ProgressStyle::with_template(tmpl).expect("valid template"));
     pb
 }

@@ -82,6 +82,7 @@ use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 pub mod zcheck;
 
 mod batch;
+pub mod checkpoint;
 pub mod shard;
 mod state_file;
 mod tallies;
@@ -118,6 +119,29 @@ impl Welford {
             m4: 0.0,
             min: f64::INFINITY,
             max: f64::NEG_INFINITY,
+        }
+    }
+
+    /// The exact state `(n, [mean, m2, m3, m4, min, max])`, for a
+    /// checkpoint ([`Self::from_parts`] restores it bit for bit).
+    pub fn to_parts(&self) -> (u64, [f64; 6]) {
+        (
+            self.n,
+            [self.mean, self.m2, self.m3, self.m4, self.min, self.max],
+        )
+    }
+
+    /// The accumulator of a state from [`Self::to_parts`].
+    pub fn from_parts(n: u64, v: [f64; 6]) -> Self {
+        let [mean, m2, m3, m4, min, max] = v;
+        Self {
+            n,
+            mean,
+            m2,
+            m3,
+            m4,
+            min,
+            max,
         }
     }
 

@@ -176,20 +176,16 @@ pub(super) fn finish<W: Write>(mut w: Hashing<W>) -> io::Result<()> {
     w.inner.flush()
 }
 
+/// A header's keys and values.
+pub(super) type Header = std::collections::BTreeMap<String, String>;
+
 /// A state file checked (trailer, `magic`) and split into its header's
 /// keys, the run it names and the body. `what` names the kind of file.
 pub(super) fn open<'a>(
     bytes: &'a [u8],
     magic: &'static str,
     what: &'static str,
-) -> Result<
-    (
-        std::collections::BTreeMap<String, String>,
-        RunIdentity,
-        &'a [u8],
-    ),
-    StateError,
-> {
+) -> Result<(Header, RunIdentity, &'a [u8]), StateError> {
     if !bytes.starts_with(magic.as_bytes()) {
         return Err(StateError::Magic(what, magic));
     }
@@ -233,36 +229,27 @@ pub(super) fn open<'a>(
 }
 
 /// Header value of `k`.
-pub(super) fn key(
-    kv: &std::collections::BTreeMap<String, String>,
-    k: &str,
-) -> Result<String, StateError> {
+pub(super) fn key(kv: &Header, k: &str) -> Result<String, StateError> {
     kv.get(k)
         .cloned()
         .ok_or_else(|| StateError::Header(format!("`{k}` is missing")))
 }
 
 /// Header value of `k` as a whole number.
-pub(super) fn key_u64(
-    kv: &std::collections::BTreeMap<String, String>,
-    k: &str,
-) -> Result<u64, StateError> {
+pub(super) fn key_u64(kv: &Header, k: &str) -> Result<u64, StateError> {
     key(kv, k)?
         .parse()
         .map_err(|_| StateError::Header(format!("`{k}` is not a whole number")))
 }
 
 /// Header value of `k` as a number.
-pub(super) fn key_f64(
-    kv: &std::collections::BTreeMap<String, String>,
-    k: &str,
-) -> Result<f64, StateError> {
+pub(super) fn key_f64(kv: &Header, k: &str) -> Result<f64, StateError> {
     key(kv, k)?
         .parse()
         .map_err(|_| StateError::Header(format!("`{k}` is not a number")))
 }
 
-fn key_hex(kv: &std::collections::BTreeMap<String, String>, k: &str) -> Result<u64, StateError> {
+fn key_hex(kv: &Header, k: &str) -> Result<u64, StateError> {
     u64::from_str_radix(&key(kv, k)?, 16)
         .map_err(|_| StateError::Header(format!("`{k}` is not a hash")))
 }

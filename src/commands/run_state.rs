@@ -1,0 +1,176 @@
+//! What names a run in its state files (shards, checkpoints), and the
+//! periodic checkpoint of a run in progress (`--checkpoint`, `--resume`).
+
+use super::illuminance::{EstimatorKind, Job};
+use crate::io::csvio::write_atomic_with;
+use crate::run::{Progress, RunConfig};
+use crate::scene::Scene;
+use crate::tally::checkpoint::Checkpoint;
+use crate::tally::shard::{RunIdentity, fnv1a};
+use std::time::Instant;
+
+/// FNV-1a of a table's header and rows (unit and record separators between
+/// cells and rows, so that no two tables hash alike by concatenation).
+pub fn table_hash(headers: &[String], rows: &[Vec<String>]) -> u64 {
+    let mut text = headers.join("\u{1f}");
+    for row in rows {
+        text.push('\u{1e}');
+        text.push_str(&row.join("\u{1f}"));
+    }
+    fnv1a(text.as_bytes())
+}
+
+/// The identity of a `--chains` run of `job` on `scene` with batches of
+/// `bs` chains: the hash of the compiled scene (so every file it read
+/// counts), of the points and views, and every setting that changes the
+/// numbers (not the threads, the shard, the resume state or how the batch
+/// size was chosen, which is compared as a number).
+pub fn identity(
+    scene: &Scene,
+    job: &Job,
+    cfg: &RunConfig,
+    estimator: EstimatorKind,
+    bs: u64,
+) -> RunIdentity {
+    let chains = cfg.stop.chains.unwrap_or(0);
+    let mut points = 0u64;
+    if let Some(t) = &job.points {
+        points ^= table_hash(&t.headers, &t.rows);
+    }
+    if let Some((t, _)) = &job.views {
+        points ^= table_hash(&t.headers, &t.rows).rotate_left(1);
+    }
+    let settings = RunConfig {
+        threads: 0,
+        shard: None,
+        resume: None,
+        batch_size: None,
+        ..cfg.clone()
+    };
+    RunIdentity {
+        batches: chains.div_ceil(bs.max(1)).max(2),
+        batch_size: bs,
+        chains,
+        seed: cfg.seed,
+        orders: cfg.orders,
+        receivers: job.receivers.len() as u64,
+        scene: fnv1a(format!("{scene:?}").as_bytes()),
+        points,
+        config: format!(
+            "lumest {} estimator {estimator:?} {settings:?}",
+            env!("CARGO_PKG_VERSION")
+        ),
+    }
+}
+
+/// Writes a run's checkpoint every `every` seconds, and when it is
+/// interrupted.
+pub struct Checkpointer<'a> {
+    /// Where.
+    pub path: String,
+    /// Seconds between checkpoints.
+    pub every: f64,
+    scene: &'a Scene,
+    job: &'a Job,
+    cfg: &'a RunConfig,
+    estimator: EstimatorKind,
+    last: Instant,
+}
+
+impl<'a> Checkpointer<'a> {
+    /// A checkpointer of the run of `job` on `scene` with `cfg`.
+    pub fn new(
+        path: String,
+        every: f64,
+        scene: &'a Scene,
+        job: &'a Job,
+        cfg: &'a RunConfig,
+        estimator: EstimatorKind,
+    ) -> Self {
+        Self {
+            path,
+            every,
+            scene,
+            job,
+            cfg,
+            estimator,
+            last: Instant::now(),
+        }
+    }
+
+    /// Write a checkpoint of `p` if `every` seconds have passed since the
+    /// last one, or at once when `now`; an error is reported, not fatal
+    /// (the run goes on; the results are still written at its end).
+    pub fn offer(&mut self, p: &Progress, now: bool) {
+        let b = p.tallies.batches();
+        if b == 0 || !(now || self.last.elapsed().as_secs_f64() >= self.every) {
+            return;
+        }
+        self.last = Instant::now();
+        let bs = p.chains / b;
+        let c = Checkpoint {
+            run: identity(self.scene, self.job, self.cfg, self.estimator, bs),
+            folded: b,
+            chains: p.chains,
+            collisions: p.collisions,
+            scores: p.scores,
+            wall: p.elapsed,
+            tallies: p.tallies.clone(),
+        };
+        if let Err(e) = write_atomic_with(&self.path, |w| c.write(w)) {
+            eprintln!("lumest: could not write the checkpoint {}: {e}", self.path);
+        }
+    }
+}
+
+/// Read the checkpoint at `path` for a run of `job` on `scene` with `cfg`:
+/// refused unless it names the same run; returns it and the configuration
+/// that continues it (its batch size, and the checkpoint to start from).
+pub fn resume(
+    path: &str,
+    scene: &Scene,
+    job: &Job,
+    cfg: &RunConfig,
+    estimator: EstimatorKind,
+) -> anyhow::Result<RunConfig> {
+    use anyhow::Context;
+    let bytes = std::fs::read(path).with_context(|| format!("reading {path}"))?;
+    let c = Checkpoint::read(&bytes).with_context(|| path.to_string())?;
+    let want = identity(scene, job, cfg, estimator, c.run.batch_size);
+    let differ: Vec<&str> = [
+        ("scene", want.scene != c.run.scene),
+        (
+            "points or views",
+            want.points != c.run.points || want.receivers != c.run.receivers,
+        ),
+        ("seed", want.seed != c.run.seed),
+        ("--chains", want.chains != c.run.chains),
+        (
+            "settings",
+            want.config != c.run.config || want.orders != c.run.orders,
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(what, d)| d.then_some(what))
+    .collect();
+    anyhow::ensure!(
+        differ.is_empty(),
+        "{path} is the checkpoint of another run: its {} differ(s) from this run's",
+        differ.join(", ")
+    );
+    anyhow::ensure!(
+        c.folded < c.run.batches,
+        "{path}: the run it belongs to was complete ({} of {} batches)",
+        c.folded,
+        c.run.batches
+    );
+    eprintln!(
+        "lumest: resuming from {path}: {} of {} batches done ({} chains, {:.3} s)",
+        c.folded, c.run.batches, c.chains, c.wall
+    );
+    Ok(RunConfig {
+        batch_size: Some(c.run.batch_size),
+        resume: Some(std::sync::Arc::new(c)),
+        ..cfg.clone()
+    })
+}

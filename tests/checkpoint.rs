@@ -1,0 +1,111 @@
+//! Long runs that survive interruption (issue 14 item 6): a run stopped by
+//! SIGINT writes its results so far and a checkpoint; `--resume` finishes
+//! it with the uninterrupted run's CSV, byte for byte. A checkpoint of
+//! another run is refused.
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+
+const CHAINS: &str = "400000";
+
+fn args<'a>(out: &'a str, seed: &'a str) -> Vec<&'a str> {
+    vec![
+        "illuminance",
+        "--scene",
+        "data/office.toml",
+        "--points",
+        "data/office_grid.csv",
+        "--out",
+        out,
+        "--chains",
+        CHAINS,
+        "--seed",
+        seed,
+        "--quiet",
+    ]
+}
+
+fn lumest(a: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lumest"))
+        .args(a)
+        .output()
+        .unwrap()
+}
+
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_resumes_to_the_identical_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (full, part, done) = (d.join("full.csv"), d.join("part.csv"), d.join("done.csv"));
+    let ck = d.join("run.ckpt");
+    let ck_s = ck.to_str().unwrap();
+    // Interrupted after a second or two, with periodic checkpoints on.
+    let mut a = args(part.to_str().unwrap(), "7");
+    a.extend(["--checkpoint", ck_s, "--checkpoint-every", "0.2"]);
+    let child = Command::new(env!("CARGO_BIN_EXE_lumest"))
+        .args(&a)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(2500));
+    assert!(
+        Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("interrupted by a signal") && err.contains("--resume"),
+        "{err}"
+    );
+    assert!(Path::new(&part).exists() && ck.exists());
+    // Resumed: the uninterrupted run's CSV, byte for byte.
+    let mut a = args(done.to_str().unwrap(), "7");
+    a.extend(["--resume", ck_s, "--threads", "1"]);
+    let o = lumest(&a);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("resuming from"), "{err}");
+    let o = lumest(&args(full.to_str().unwrap(), "7"));
+    assert!(o.status.success());
+    let (f, r) = (std::fs::read(&full).unwrap(), std::fs::read(&done).unwrap());
+    assert!(f == r, "resumed run differs from the uninterrupted one");
+    // The interrupted run's partial results differ (fewer chains).
+    assert!(std::fs::read(&part).unwrap() != f);
+    // Another seed, or fewer chains: not this checkpoint's run.
+    let mut a = args(done.to_str().unwrap(), "8");
+    a.extend(["--resume", ck_s]);
+    let o = lumest(&a);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("another run") && err.contains("seed"),
+        "{err}"
+    );
+    let mut a = args(done.to_str().unwrap(), "7");
+    a[8] = "1000";
+    a.extend(["--resume", ck_s]);
+    let o = lumest(&a);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--chains"), "{err}");
+    // Checkpoints go with a fixed chain count.
+    let o = lumest(&[
+        "illuminance",
+        "--scene",
+        "data/office.toml",
+        "--points",
+        "data/office_grid.csv",
+        "--out",
+        done.to_str().unwrap(),
+        "--time",
+        "1",
+        "--checkpoint",
+        ck_s,
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--time"), "{err}");
+}
