@@ -575,12 +575,24 @@ pub(crate) fn measure_with(
     if estimator == EstimatorKind::Backward {
         run_args.check_local_only("backward")?;
     }
-    let scene = scene::load(scene_path)?;
+    let mut scene = scene::load(scene_path)?;
+    if scene.has_directional() {
+        anyhow::ensure!(
+            estimator != EstimatorKind::Backward,
+            "{}: --estimator backward does not support distant or environment lights (its light-guided paths start photons at a light's position); use the default local estimator",
+            scene_path.display()
+        );
+        anyhow::ensure!(
+            cfg.near.0 <= 0.0,
+            "{}: --near-radius is not supported with distant or environment lights (the near part's backward paths cannot reach a light at infinity); the local estimate runs plain there",
+            scene_path.display()
+        );
+    }
     let (views, table) = match views {
         Some((name, table, out)) => (Some((name, out)), table),
         None => (None, None),
     };
-    let job = match table {
+    let mut job = match table {
         Some(t) => Job::with_views(
             &scene,
             points.map(|p| p.0),
@@ -589,6 +601,19 @@ pub(crate) fn measure_with(
         )?,
         None => Job::new(&scene, points.map(|p| p.0), views.map(|v| v.0))?,
     };
+    // With infinite planes the chains of a light at infinity start on a
+    // density fitted to the receivers too (exact either way; efficiency).
+    if scene.has_directional() && !scene.planes().is_empty() {
+        let pts: Vec<glam::DVec3> = job.receivers.receivers().iter().map(|r| r.p).collect();
+        scene.fit_directional(&pts);
+        let table = job.views.take().map(|v| v.0);
+        job = Job::with_views(
+            &scene,
+            points.map(|p| p.0),
+            table,
+            views.map_or("-", |v| v.0),
+        )?;
+    }
     check_tally_size(
         cfg.orders,
         job.points.as_ref().map_or(0, |t| t.rows.len())
@@ -611,6 +636,13 @@ pub(crate) fn measure_with(
     );
     for note in &scene.notes {
         eprintln!("lumest: {note}");
+    }
+    for (l, name) in scene.lights.iter().zip(&scene.light_names) {
+        if let crate::light::Light::Distant(dl) = l
+            && let Some(note) = dl.region.note()
+        {
+            eprintln!("lumest: {name}: {note}");
+        }
     }
     crate::io::interrupt::install();
     let result = run_job(&scene, &job, &cfg, estimator, run_args.quiet);

@@ -612,6 +612,30 @@ fn next_event(
             }
             continue;
         }
+        if let Light::Distant(dl) = l {
+            // Next-event estimation from the sun (the backward estimator
+            // refuses scenes with lights at infinity, whose photons strategy
+            // B cannot draw; this keeps the sum over lights complete).
+            let u = rng.next_2d();
+            let (wi, scale) = if dl.collimated() {
+                (-dl.d, dl.e_n)
+            } else {
+                let s = crate::sampling::cone::sample_uniform_cone(u, dl.sin_a, dl.cos_a);
+                (
+                    Frame::from_normal(-dl.d).to_world(s.w),
+                    dl.luminance() / s.pdf,
+                )
+            };
+            let cos_n = wi.dot(h.n);
+            if cos_n > 0.0
+                && scene
+                    .intersect(&crate::geometry::Ray { o: h.p, d: wi }, from)
+                    .is_none()
+            {
+                nee += m.eval(f_frame.to_local(wi), wo) * scale * cos_n;
+            }
+            continue;
+        }
         let to_c = l.position() - h.p;
         let dist2 = to_c.length_squared();
         let dist = dist2.sqrt();
@@ -660,7 +684,7 @@ fn next_event(
                     nee += m.eval(f_frame.to_local(wi), wo) * l.luminance() * cos_n * solid_angle;
                 }
             }
-            Light::Area(_) => unreachable!("handled above"),
+            Light::Area(_) | Light::Distant(_) => unreachable!("handled above"),
         }
     }
     (nee, p_b)

@@ -14,6 +14,7 @@
 //!   negligible). Seen from outside it has luminance `L`.
 
 pub mod area;
+pub mod distant;
 pub mod goniometric;
 pub mod lambert;
 pub mod radial_profile;
@@ -22,6 +23,7 @@ pub mod spot;
 use crate::math::quadrature::panel;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
 pub use area::{AreaLight, AreaShape};
+pub use distant::{Distant, StartRegion};
 use glam::DVec3;
 pub use goniometric::Goniometric;
 pub use spot::Spot;
@@ -48,6 +50,8 @@ pub enum Light {
     Area(std::sync::Arc<AreaLight>),
     /// Spot light.
     Spot(Spot),
+    /// Distant (directional) light: the sun ([`Distant`]).
+    Distant(std::sync::Arc<Distant>),
 }
 
 /// The luminous opening of a goniometric luminaire, for near-field
@@ -211,6 +215,31 @@ impl Light {
             Light::Gonio { dist, .. } => dist.power(),
             Light::Area(a) => a.power(),
             Light::Spot(sp) => sp.power(),
+            Light::Distant(dl) => dl.power(),
+        }
+    }
+
+    /// Whether the light lies at infinity (distant or environment light):
+    /// it has no position, and its chains start on a plane upstream of the
+    /// scene ([`StartRegion`]).
+    pub fn is_directional(&self) -> bool {
+        matches!(self, Light::Distant(_))
+    }
+
+    /// Set the start region of a light at infinity (no effect on others).
+    pub fn set_region(&mut self, region: &StartRegion) {
+        if let Light::Distant(dl) = self {
+            std::sync::Arc::make_mut(dl).region = region.clone();
+        }
+    }
+
+    /// Luminance [cd/m^2] seen along a ray that leaves the scene in unit
+    /// direction `d` (from the observer): a distant light's disc where `d`
+    /// lies in it; 0 otherwise.
+    pub fn escaped_luminance(&self, d: DVec3) -> f64 {
+        match self {
+            Light::Distant(dl) if dl.in_cone(d) => dl.luminance(),
+            _ => 0.0,
         }
     }
 
@@ -260,7 +289,7 @@ impl Light {
         match self {
             Light::Point { i, .. } => *i,
             Light::Spot(sp) => sp.intensity(w),
-            Light::Sphere { .. } | Light::Area(_) => 0.0,
+            Light::Sphere { .. } | Light::Area(_) | Light::Distant(_) => 0.0,
             Light::Gonio { frame, dist, .. } => dist.intensity(frame.to_local(w)),
         }
     }
@@ -305,6 +334,8 @@ impl Light {
     ) -> EmissionSample {
         match *self {
             Light::Area(ref a) => a.sample_emission(u_dir, u_pos),
+            // The stratified uniforms go to the start point.
+            Light::Distant(ref dl) => dl.sample_emission(u_dir, u_pos),
             Light::Spot(ref sp) => {
                 let d = sp.sample(u_dir, u_extra);
                 let i = sp.intensity(d);
@@ -401,9 +432,11 @@ impl Light {
         }
     }
 
-    /// Position of a point light, centre of a sphere or an area source [m].
+    /// Position of a point light, centre of a sphere or an area source [m];
+    /// for a light at infinity the centre of its start region.
     pub fn position(&self) -> DVec3 {
         match *self {
+            Light::Distant(ref dl) => dl.region.c,
             Light::Point { p, .. } | Light::Gonio { p, .. } => p,
             Light::Spot(ref sp) => sp.p,
             Light::Sphere { c, .. } => c,
@@ -416,7 +449,11 @@ impl Light {
     /// [`AreaLight::emitted`]).
     pub fn luminance(&self) -> f64 {
         match *self {
-            Light::Point { .. } | Light::Gonio { .. } | Light::Area(_) | Light::Spot(_) => 0.0,
+            Light::Point { .. }
+            | Light::Gonio { .. }
+            | Light::Area(_)
+            | Light::Spot(_)
+            | Light::Distant(_) => 0.0,
             Light::Sphere { r, i, .. } => i / (PI * r * r),
         }
     }
@@ -426,7 +463,7 @@ impl Light {
     /// illuminance).
     pub fn contains(&self, x: DVec3) -> bool {
         match *self {
-            Light::Area(_) => false,
+            Light::Area(_) | Light::Distant(_) => false,
             Light::Point { p, .. } | Light::Gonio { p, .. } | Light::Spot(Spot { p, .. }) => {
                 (p - x).length() <= 1e-12 * p.abs().max_element().max(x.abs().max_element())
             }
@@ -439,7 +476,11 @@ impl Light {
     /// area source (a surface of the scene, met by the scene's intersection).
     pub fn hit(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<f64> {
         match *self {
-            Light::Point { .. } | Light::Gonio { .. } | Light::Area(_) | Light::Spot(_) => None,
+            Light::Point { .. }
+            | Light::Gonio { .. }
+            | Light::Area(_)
+            | Light::Spot(_)
+            | Light::Distant(_) => None,
             Light::Sphere { c, r, .. } => {
                 let oc = o - c;
                 let b = oc.dot(d);
@@ -465,6 +506,7 @@ impl Light {
     pub fn direct_illuminance(&self, x: DVec3, n: DVec3) -> f64 {
         match *self {
             Light::Area(ref a) => a.direct_exact(x, n).unwrap_or(f64::NAN),
+            Light::Distant(ref dl) => dl.direct_illuminance(n),
             // Emission from an opening has no closed form: sampled.
             Light::Gonio {
                 opening: Some(_), ..
@@ -505,6 +547,8 @@ impl Light {
             | Light::Gonio {
                 opening: Some(_), ..
             } => f64::NAN,
+            Light::Distant(ref dl) if dl.collimated() => dl.direct_illuminance(n) * w(-dl.d),
+            Light::Distant(_) => f64::NAN,
             Light::Point { p, .. } | Light::Gonio { p, .. } | Light::Spot(Spot { p, .. }) => {
                 let wi = (p - x).normalize();
                 self.direct_illuminance(x, n) * w(wi)

@@ -4,6 +4,7 @@
 //! (so tests can drive it) and returns a named record with its pdf.
 
 pub mod alias;
+pub mod cone;
 pub mod qmc;
 pub mod rng;
 pub mod warp;

@@ -542,6 +542,19 @@ fn light(
         }
     };
     let kind = d.kind.get_ref().as_str();
+    if kind == "distant" {
+        return distant(l, ctx);
+    }
+    not_for(
+        kind,
+        &[
+            ("illuminance", d.illuminance.as_ref().map(Spanned::span)),
+            (
+                "angular_diameter",
+                d.angular_diameter.as_ref().map(Spanned::span),
+            ),
+        ],
+    )?;
     if kind == "rectangle" || kind == "disc" {
         return area(l, ctx);
     }
@@ -692,10 +705,81 @@ fn light(
             d.kind.span(),
             "type",
             format!(
-                "unknown light type `{other}` (this version knows: point, sphere, spot, ies, ldt, rectangle, disc)"
+                "unknown light type `{other}` (this version knows: point, sphere, spot, ies, ldt, rectangle, disc, distant)"
             ),
         )),
     }
+}
+
+/// A distant light (`type = "distant"`): `direction` (the direction the
+/// light travels, from the sun towards the scene), `illuminance` [lx] on a
+/// plane normal to it and `angular_diameter` [deg] (default 0). Its start
+/// region is fitted when the scene is built.
+fn distant(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String>), SceneError> {
+    let d = l.get_ref();
+    let others = [
+        ("position", d.position.as_ref().map(Spanned::span)),
+        ("center", d.center.as_ref().map(Spanned::span)),
+        ("radius", d.radius.as_ref().map(Spanned::span)),
+        ("intensity", d.intensity.as_ref().map(Spanned::span)),
+        ("flux", d.flux.as_ref().map(Spanned::span)),
+        ("file", d.file.as_ref().map(Spanned::span)),
+        ("aim", d.aim.as_ref().map(Spanned::span)),
+        ("rotate", d.rotate.as_ref().map(Spanned::span)),
+        ("multiplier", d.multiplier.as_ref().map(Spanned::span)),
+        ("opening", d.opening.as_ref().map(Spanned::span)),
+        ("inner", d.inner.as_ref().map(Spanned::span)),
+        ("outer", d.outer.as_ref().map(Spanned::span)),
+        ("corner", d.corner.as_ref().map(Spanned::span)),
+        ("edge1", d.edge1.as_ref().map(Spanned::span)),
+        ("edge2", d.edge2.as_ref().map(Spanned::span)),
+        ("normal", d.normal.as_ref().map(Spanned::span)),
+        ("luminance", d.luminance.as_ref().map(Spanned::span)),
+        ("sides", d.sides.as_ref().map(Spanned::span)),
+        ("profile", d.profile.as_ref().map(Spanned::span)),
+        ("material", d.material.as_ref().map(Spanned::span)),
+    ];
+    if let Some((name, Some(span))) = others.iter().find(|f| f.1.is_some()) {
+        return Err(ctx.invalid(
+            span.clone(),
+            name,
+            "not allowed for a `distant` light (it takes `direction`, `illuminance`, `angular_diameter`)",
+        ));
+    }
+    let dir = ctx.unit_vec(
+        ctx.required(&d.direction, l.span(), "direction")?,
+        "direction",
+    )?;
+    let es = ctx.required(&d.illuminance, l.span(), "illuminance")?;
+    let e_n = ctx.nonneg(es, "illuminance")?;
+    if e_n > MAX_INTENSITY {
+        return Err(ctx.invalid(
+            es.span(),
+            "illuminance",
+            format!("out of range: at most {MAX_INTENSITY:e} lx; results scale exactly with it, so rescale the input"),
+        ));
+    }
+    let diam = match &d.angular_diameter {
+        None => 0.0,
+        Some(a) => {
+            let x = *a.get_ref();
+            let max = crate::light::Distant::MAX_DIAMETER_DEG;
+            if !(x.is_finite() && (0.0..=max).contains(&x)) {
+                return Err(ctx.invalid(
+                    a.span(),
+                    "angular_diameter",
+                    format!(
+                        "must lie in [0, {max}] degrees, got {}",
+                        crate::io::format_number(x)
+                    ),
+                ));
+            }
+            x
+        }
+    };
+    let region = crate::light::StartRegion::fit(None, &[], &[]);
+    let light = crate::light::Distant::new(dir, e_n, diam.to_radians(), region);
+    Ok((Light::Distant(std::sync::Arc::new(light)), None))
 }
 
 /// A Lambertian area source (`type = "rectangle"` or `"disc"`): its shape

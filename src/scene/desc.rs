@@ -111,7 +111,8 @@ pub struct MaterialDesc {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
-    /// Light kind: `"point"`, `"sphere"`, `"ies"` or `"ldt"`.
+    /// Light kind: `"point"`, `"sphere"`, `"spot"`, `"ies"`, `"ldt"`,
+    /// `"rectangle"`, `"disc"` or `"distant"`.
     #[serde(rename = "type")]
     pub kind: Spanned<String>,
     /// Optional name used in messages and summaries.
@@ -142,7 +143,8 @@ pub struct LightDesc {
     /// file gives (near-field accuracy) instead of from its position alone;
     /// default false.
     pub opening: Option<Spanned<bool>>,
-    /// Beam direction of a spot light (normalised; non-zero).
+    /// Beam direction of a spot light, or the direction a distant light
+    /// travels (from the sun towards the scene); normalised, non-zero.
     pub direction: Option<Spanned<[f64; 3]>>,
     /// Inner cone half-angle of a spot light [deg]: full intensity inside.
     pub inner: Option<Spanned<f64>>,
@@ -166,4 +168,9 @@ pub struct LightDesc {
     pub profile: Option<Spanned<toml::Value>>,
     /// How an area source's surface reflects; default black.
     pub material: Option<Spanned<MaterialDesc>>,
+    /// Illuminance of a distant light on a plane normal to its direction [lx].
+    pub illuminance: Option<Spanned<f64>>,
+    /// Angular diameter of a distant light's disc [deg]; default 0 (a point
+    /// at infinity); the sun: 0.53.
+    pub angular_diameter: Option<Spanned<f64>>,
 }
