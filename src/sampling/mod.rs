@@ -7,6 +7,7 @@ pub mod alias;
 pub mod cone;
 pub mod qmc;
 pub mod rng;
+pub mod sphere_table;
 pub mod warp;
 
 pub use rng::Philox4x32;
