@@ -638,9 +638,12 @@ pub(crate) fn measure_with(
         eprintln!("lumest: {note}");
     }
     for (l, name) in scene.lights.iter().zip(&scene.light_names) {
-        if let crate::light::Light::Distant(dl) = l
-            && let Some(note) = dl.region.note()
-        {
+        let region = match l {
+            crate::light::Light::Distant(dl) => Some(&dl.region),
+            crate::light::Light::Environment(env) => Some(&env.region),
+            _ => None,
+        };
+        if let Some(note) = region.and_then(|r| r.note()) {
             eprintln!("lumest: {name}: {note}");
         }
     }

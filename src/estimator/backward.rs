@@ -612,6 +612,20 @@ fn next_event(
             }
             continue;
         }
+        if let Light::Environment(env) = l {
+            // Next-event estimation from the map (see the sun's below).
+            let (wi, pdf, le) = env.sample(rng.next_2d());
+            let cos_n = wi.dot(h.n);
+            if cos_n > 0.0
+                && pdf > 0.0
+                && scene
+                    .intersect(&crate::geometry::Ray { o: h.p, d: wi }, from)
+                    .is_none()
+            {
+                nee += m.eval(f_frame.to_local(wi), wo) * le * cos_n / pdf;
+            }
+            continue;
+        }
         if let Light::Distant(dl) = l {
             // Next-event estimation from the sun (the backward estimator
             // refuses scenes with lights at infinity, whose photons strategy
@@ -684,7 +698,9 @@ fn next_event(
                     nee += m.eval(f_frame.to_local(wi), wo) * l.luminance() * cos_n * solid_angle;
                 }
             }
-            Light::Area(_) | Light::Distant(_) => unreachable!("handled above"),
+            Light::Area(_) | Light::Distant(_) | Light::Environment(_) => {
+                unreachable!("handled above")
+            }
         }
     }
     (nee, p_b)

@@ -11,6 +11,8 @@
 //! blocks it. Two strategies sample it (Veach 1997, ch. 9; seed 001):
 //!
 //! - **light sampling**: pick a source `k` with probability `P_k`
+//!   (an environment map: a direction drawn from the map's table, density
+//!   `L / int L dw`, so that `p_L = P_k L(wi) / F`)
 //!   proportional to its power among the sampled ones, then a point `y` on
 //!   it with density `p_A(y)` per area (proportional to its luminance; for a
 //!   sphere, or the sun's disc of a distant light, a direction uniform in
@@ -145,6 +147,7 @@ fn light_pdf(set: &LightSet, scene: &Scene, k: u32, x: DVec3, wi: DVec3, y: DVec
             p / cone(*r, dist).0
         }
         Light::Distant(dl) if dl.in_cone(wi) => p / dl.solid_angle(),
+        Light::Environment(env) => p * env.pdf(wi),
         _ => 0.0,
     }
 }
@@ -240,6 +243,16 @@ fn light_sample(
                 return (0.0, p_l, wi, true);
             }
             (dl.luminance() * r, p_l, wi)
+        }
+        Light::Environment(env) => {
+            // A direction drawn from the map; lit where the ray leaves the scene.
+            let (wi, pdf, le) = env.sample(u);
+            let p_l = set.prob[k as usize] * pdf;
+            let (r, _) = response(rec, frame, wi);
+            if r <= 0.0 || le <= 0.0 || scene.first_hit_from(x, wi).is_some() {
+                return (0.0, p_l, wi, true);
+            }
+            (le * r, p_l, wi)
         }
         _ => (0.0, 0.0, DVec3::Z),
     };

@@ -195,6 +195,7 @@ pub fn exact_direct(scene: &Scene, k: usize) -> bool {
                         .iter()
                         .all(|pl| pl.n.dot(dl.d).abs() >= dl.sin_a))
         }
+        Light::Environment(_) => false,
         Light::Area(a) => {
             if !a.is_uniform() {
                 return false;

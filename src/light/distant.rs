@@ -165,7 +165,13 @@ impl StartRegion {
     /// half-angle `alpha` (`cos_a = cos alpha`).
     #[inline]
     pub fn disc_radius(&self, cos_a: f64) -> f64 {
-        self.r0 / cos_a
+        // Without finite shapes nothing can be hit: any disc does (the unit
+        // one keeps the pick weight, which direct-light sampling uses, > 0).
+        if self.r0 > 0.0 {
+            self.r0 / cos_a
+        } else {
+            self.a
+        }
     }
 
     /// Area [m^2] whose flux is the chains' pick weight: the start disc's

@@ -15,6 +15,7 @@
 
 pub mod area;
 pub mod distant;
+pub mod environment;
 pub mod goniometric;
 pub mod lambert;
 pub mod radial_profile;
@@ -24,6 +25,7 @@ use crate::math::quadrature::panel;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
 pub use area::{AreaLight, AreaShape};
 pub use distant::{Distant, StartRegion};
+pub use environment::{Environment, Mapping};
 use glam::DVec3;
 pub use goniometric::Goniometric;
 pub use spot::Spot;
@@ -52,6 +54,8 @@ pub enum Light {
     Spot(Spot),
     /// Distant (directional) light: the sun ([`Distant`]).
     Distant(std::sync::Arc<Distant>),
+    /// Environment light from an HDR map ([`Environment`]).
+    Environment(std::sync::Arc<Environment>),
 }
 
 /// The luminous opening of a goniometric luminaire, for near-field
@@ -216,6 +220,7 @@ impl Light {
             Light::Area(a) => a.power(),
             Light::Spot(sp) => sp.power(),
             Light::Distant(dl) => dl.power(),
+            Light::Environment(env) => env.power(),
         }
     }
 
@@ -223,13 +228,15 @@ impl Light {
     /// it has no position, and its chains start on a plane upstream of the
     /// scene ([`StartRegion`]).
     pub fn is_directional(&self) -> bool {
-        matches!(self, Light::Distant(_))
+        matches!(self, Light::Distant(_) | Light::Environment(_))
     }
 
     /// Set the start region of a light at infinity (no effect on others).
     pub fn set_region(&mut self, region: &StartRegion) {
-        if let Light::Distant(dl) = self {
-            std::sync::Arc::make_mut(dl).region = region.clone();
+        match self {
+            Light::Distant(dl) => std::sync::Arc::make_mut(dl).region = region.clone(),
+            Light::Environment(env) => std::sync::Arc::make_mut(env).region = region.clone(),
+            _ => {}
         }
     }
 
@@ -239,6 +246,7 @@ impl Light {
     pub fn escaped_luminance(&self, d: DVec3) -> f64 {
         match self {
             Light::Distant(dl) if dl.in_cone(d) => dl.luminance(),
+            Light::Environment(env) => env.luminance(d),
             _ => 0.0,
         }
     }
@@ -289,7 +297,9 @@ impl Light {
         match self {
             Light::Point { i, .. } => *i,
             Light::Spot(sp) => sp.intensity(w),
-            Light::Sphere { .. } | Light::Area(_) | Light::Distant(_) => 0.0,
+            Light::Sphere { .. } | Light::Area(_) | Light::Distant(_) | Light::Environment(_) => {
+                0.0
+            }
             Light::Gonio { frame, dist, .. } => dist.intensity(frame.to_local(w)),
         }
     }
@@ -336,6 +346,7 @@ impl Light {
             Light::Area(ref a) => a.sample_emission(u_dir, u_pos),
             // The stratified uniforms go to the start point.
             Light::Distant(ref dl) => dl.sample_emission(u_dir, u_pos),
+            Light::Environment(ref env) => env.sample_emission(u_dir, u_pos),
             Light::Spot(ref sp) => {
                 let d = sp.sample(u_dir, u_extra);
                 let i = sp.intensity(d);
@@ -437,6 +448,7 @@ impl Light {
     pub fn position(&self) -> DVec3 {
         match *self {
             Light::Distant(ref dl) => dl.region.c,
+            Light::Environment(ref env) => env.region.c,
             Light::Point { p, .. } | Light::Gonio { p, .. } => p,
             Light::Spot(ref sp) => sp.p,
             Light::Sphere { c, .. } => c,
@@ -453,7 +465,8 @@ impl Light {
             | Light::Gonio { .. }
             | Light::Area(_)
             | Light::Spot(_)
-            | Light::Distant(_) => 0.0,
+            | Light::Distant(_)
+            | Light::Environment(_) => 0.0,
             Light::Sphere { r, i, .. } => i / (PI * r * r),
         }
     }
@@ -463,7 +476,7 @@ impl Light {
     /// illuminance).
     pub fn contains(&self, x: DVec3) -> bool {
         match *self {
-            Light::Area(_) | Light::Distant(_) => false,
+            Light::Area(_) | Light::Distant(_) | Light::Environment(_) => false,
             Light::Point { p, .. } | Light::Gonio { p, .. } | Light::Spot(Spot { p, .. }) => {
                 (p - x).length() <= 1e-12 * p.abs().max_element().max(x.abs().max_element())
             }
@@ -480,7 +493,8 @@ impl Light {
             | Light::Gonio { .. }
             | Light::Area(_)
             | Light::Spot(_)
-            | Light::Distant(_) => None,
+            | Light::Distant(_)
+            | Light::Environment(_) => None,
             Light::Sphere { c, r, .. } => {
                 let oc = o - c;
                 let b = oc.dot(d);
@@ -507,6 +521,8 @@ impl Light {
         match *self {
             Light::Area(ref a) => a.direct_exact(x, n).unwrap_or(f64::NAN),
             Light::Distant(ref dl) => dl.direct_illuminance(n),
+            // Sampled (MIS of the map and the receiver's lobe).
+            Light::Environment(_) => f64::NAN,
             // Emission from an opening has no closed form: sampled.
             Light::Gonio {
                 opening: Some(_), ..
@@ -548,7 +564,7 @@ impl Light {
                 opening: Some(_), ..
             } => f64::NAN,
             Light::Distant(ref dl) if dl.collimated() => dl.direct_illuminance(n) * w(-dl.d),
-            Light::Distant(_) => f64::NAN,
+            Light::Distant(_) | Light::Environment(_) => f64::NAN,
             Light::Point { p, .. } | Light::Gonio { p, .. } | Light::Spot(Spot { p, .. }) => {
                 let wi = (p - x).normalize();
                 self.direct_illuminance(x, n) * w(wi)

@@ -542,6 +542,20 @@ fn light(
         }
     };
     let kind = d.kind.get_ref().as_str();
+    if kind == "environment" {
+        return environment(l, ctx);
+    }
+    not_for(
+        kind,
+        &[
+            ("scale", d.scale.as_ref().map(Spanned::span)),
+            (
+                "horizontal_illuminance",
+                d.horizontal_illuminance.as_ref().map(Spanned::span),
+            ),
+            ("mapping", d.mapping.as_ref().map(Spanned::span)),
+        ],
+    )?;
     if kind == "distant" {
         return distant(l, ctx);
     }
@@ -705,7 +719,7 @@ fn light(
             d.kind.span(),
             "type",
             format!(
-                "unknown light type `{other}` (this version knows: point, sphere, spot, ies, ldt, rectangle, disc, distant)"
+                "unknown light type `{other}` (this version knows: point, sphere, spot, ies, ldt, rectangle, disc, distant, environment)"
             ),
         )),
     }
@@ -780,6 +794,132 @@ fn distant(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<Str
     let region = crate::light::StartRegion::fit(None, &[], &[]);
     let light = crate::light::Distant::new(dir, e_n, diam.to_radians(), region);
     Ok((Light::Distant(std::sync::Arc::new(light)), None))
+}
+
+/// An environment light (`type = "environment"`): `file` (an HDR map,
+/// relative to the scene file), `mapping` (`"equirect"`, default, or
+/// `"angular"`), `rotate` [deg] about the vertical, and `scale` (pixel value
+/// times scale is luminance [cd/m^2]; default 1) or `horizontal_illuminance`
+/// [lx] (the map scaled to give it on an unobstructed horizontal plane).
+fn environment(
+    l: &Spanned<LightDesc>,
+    ctx: &SourceCtx,
+) -> Result<(Light, Option<String>), SceneError> {
+    use crate::light::{Environment, Mapping};
+    let d = l.get_ref();
+    let others = [
+        ("position", d.position.as_ref().map(Spanned::span)),
+        ("center", d.center.as_ref().map(Spanned::span)),
+        ("radius", d.radius.as_ref().map(Spanned::span)),
+        ("intensity", d.intensity.as_ref().map(Spanned::span)),
+        ("flux", d.flux.as_ref().map(Spanned::span)),
+        ("aim", d.aim.as_ref().map(Spanned::span)),
+        ("multiplier", d.multiplier.as_ref().map(Spanned::span)),
+        ("opening", d.opening.as_ref().map(Spanned::span)),
+        ("direction", d.direction.as_ref().map(Spanned::span)),
+        ("inner", d.inner.as_ref().map(Spanned::span)),
+        ("outer", d.outer.as_ref().map(Spanned::span)),
+        ("corner", d.corner.as_ref().map(Spanned::span)),
+        ("edge1", d.edge1.as_ref().map(Spanned::span)),
+        ("edge2", d.edge2.as_ref().map(Spanned::span)),
+        ("normal", d.normal.as_ref().map(Spanned::span)),
+        ("luminance", d.luminance.as_ref().map(Spanned::span)),
+        ("sides", d.sides.as_ref().map(Spanned::span)),
+        ("profile", d.profile.as_ref().map(Spanned::span)),
+        ("material", d.material.as_ref().map(Spanned::span)),
+        ("illuminance", d.illuminance.as_ref().map(Spanned::span)),
+        (
+            "angular_diameter",
+            d.angular_diameter.as_ref().map(Spanned::span),
+        ),
+    ];
+    if let Some((name, Some(span))) = others.iter().find(|f| f.1.is_some()) {
+        return Err(ctx.invalid(
+            span.clone(),
+            name,
+            "not allowed for an `environment` light (it takes `file`, `mapping`, `rotate`, `scale` or `horizontal_illuminance`)",
+        ));
+    }
+    let fs = ctx.required(&d.file, l.span(), "file")?;
+    let path = ctx.relative(fs.get_ref());
+    let map = crate::io::envmap::read_luminance_map(&path)
+        .map_err(|m| ctx.invalid(fs.span(), "file", m))?;
+    let mapping = match &d.mapping {
+        None => Mapping::Equirect,
+        Some(m) => match m.get_ref().as_str() {
+            "equirect" => Mapping::Equirect,
+            "angular" => Mapping::Angular,
+            other => {
+                return Err(ctx.invalid(
+                    m.span(),
+                    "mapping",
+                    format!("unknown mapping `{other}` (use \"equirect\" or \"angular\")"),
+                ));
+            }
+        },
+    };
+    let rotate = match &d.rotate {
+        None => 0.0,
+        Some(r) => {
+            let x = *r.get_ref();
+            if !x.is_finite() {
+                return Err(ctx.invalid(r.span(), "rotate", "must be finite [deg]"));
+            }
+            x.to_radians()
+        }
+    };
+    let build = |scale: f64, span: Range<usize>, field: &str| {
+        Environment::new(&map.y, map.width, map.height, mapping, scale, rotate)
+            .map_err(|m| ctx.invalid(span, field, m))
+    };
+    let env = match (&d.scale, &d.horizontal_illuminance) {
+        (Some(_), Some(h)) => {
+            return Err(ctx.invalid(
+                h.span(),
+                "horizontal_illuminance",
+                "give either `scale` or `horizontal_illuminance` [lx], not both",
+            ));
+        }
+        (Some(s), None) => {
+            let k = ctx.nonneg(s, "scale")?;
+            build(k, s.span(), "scale")?
+        }
+        (None, Some(h)) => {
+            let e = ctx.nonneg(h, "horizontal_illuminance")?;
+            let unit = build(1.0, fs.span(), "file")?;
+            let e1 = unit.horizontal_illuminance();
+            if e1 <= 0.0 {
+                return Err(ctx.invalid(
+                    h.span(),
+                    "horizontal_illuminance",
+                    "the map's upper hemisphere is black: no scale gives a horizontal illuminance",
+                ));
+            }
+            build(e / e1, h.span(), "horizontal_illuminance")?
+        }
+        (None, None) => build(1.0, fs.span(), "file")?,
+    };
+    if !(env.integral().is_finite() && env.integral() <= MAX_INTENSITY) {
+        return Err(ctx.invalid(
+            fs.span(),
+            "file",
+            format!("the map's luminance integrated over the sphere must be finite and at most {MAX_INTENSITY:e} cd/m^2 sr: rescale it"),
+        ));
+    }
+    let note = format!(
+        "environment map `{}`: {} x {} pixels ({}), {:.6e} lx on an unobstructed horizontal plane, int L dw = {:.6e} cd/m^2 sr",
+        fs.get_ref(),
+        map.width,
+        map.height,
+        if mapping == Mapping::Angular {
+            "angular, resampled"
+        } else {
+            "equirectangular"
+        },
+        env.horizontal_illuminance(),
+        env.integral()
+    );
+    Ok((Light::Environment(std::sync::Arc::new(env)), Some(note)))
 }
 
 /// A Lambertian area source (`type = "rectangle"` or `"disc"`): its shape

@@ -112,7 +112,7 @@ pub struct MaterialDesc {
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
     /// Light kind: `"point"`, `"sphere"`, `"spot"`, `"ies"`, `"ldt"`,
-    /// `"rectangle"`, `"disc"` or `"distant"`.
+    /// `"rectangle"`, `"disc"`, `"distant"` or `"environment"`.
     #[serde(rename = "type")]
     pub kind: Spanned<String>,
     /// Optional name used in messages and summaries.
@@ -129,13 +129,15 @@ pub struct LightDesc {
     /// luminaire, the flux its table is scaled to (exclusive with `multiplier`).
     pub flux: Option<Spanned<f64>>,
     /// Photometric file of a goniometric luminaire (`type = "ies"` or
-    /// `"ldt"`), relative to the scene file.
+    /// `"ldt"`) or the HDR map of an environment light, relative to the
+    /// scene file.
     pub file: Option<Spanned<String>>,
     /// Direction of a goniometric luminaire's photometric nadir (gamma = 0);
     /// default `[0, 0, -1]`.
     pub aim: Option<Spanned<[f64; 3]>>,
     /// Turn of a goniometric luminaire about its nadir [deg], from C0 along
-    /// the world `+x` axis (projected); default 0.
+    /// the world `+x` axis (projected), or of an environment map about the
+    /// vertical `+z` (counter-clockwise seen from above); default 0.
     pub rotate: Option<Spanned<f64>>,
     /// Factor on a goniometric luminaire's candela values; default 1.
     pub multiplier: Option<Spanned<f64>>,
@@ -173,4 +175,12 @@ pub struct LightDesc {
     /// Angular diameter of a distant light's disc [deg]; default 0 (a point
     /// at infinity); the sun: 0.53.
     pub angular_diameter: Option<Spanned<f64>>,
+    /// Factor from an environment map's pixel value to luminance [cd/m^2
+    /// per unit of pixel value]. Exclusive with `horizontal_illuminance`.
+    pub scale: Option<Spanned<f64>>,
+    /// Scale an environment map so that it gives this illuminance [lx] on
+    /// an unobstructed horizontal plane facing up. Exclusive with `scale`.
+    pub horizontal_illuminance: Option<Spanned<f64>>,
+    /// An environment map's layout: `"equirect"` (default) or `"angular"`.
+    pub mapping: Option<Spanned<String>>,
 }

@@ -365,6 +365,14 @@ impl Scene {
                     }
                     (DVec3::ZERO, 0.0)
                 }
+                Light::Environment(ref env) => {
+                    if !(env.integral().is_finite() && env.integral() > 0.0) {
+                        return Err(bad(
+                            "an environment map needs a finite luminance, not all zero".into(),
+                        ));
+                    }
+                    (DVec3::ZERO, 0.0)
+                }
             };
             if !pos.is_finite() {
                 return Err(bad(format!(
