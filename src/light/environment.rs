@@ -88,6 +88,31 @@ impl Environment {
         })
     }
 
+    /// Rows and columns of the table.
+    pub fn table_size(&self) -> (usize, usize) {
+        self.table.size()
+    }
+
+    /// Luminance [cd/m^2] of cell `(i, j)`.
+    pub fn cell_value(&self, i: usize, j: usize) -> f64 {
+        self.table.value(i, j)
+    }
+
+    /// Solid angle [sr] of a cell of row `i`.
+    pub fn cell_solid_angle(&self, i: usize) -> f64 {
+        self.table.cell_solid_angle(i)
+    }
+
+    /// World direction of the centre of cell `(i, j)` (mid `theta`, mid
+    /// `phi`; indices clamped to the table).
+    pub fn cell_direction(&self, i: usize, j: usize) -> DVec3 {
+        let (rows, cols) = self.table.size();
+        let (i, j) = (i.min(rows - 1), j.min(cols - 1));
+        let theta = PI * (i as f64 + 0.5) / rows as f64;
+        let phi = 2.0 * PI * (j as f64 + 0.5) / cols as f64;
+        self.to_world(theta.cos(), phi)
+    }
+
     /// The map frame's `(cos theta, phi)` of world direction `w` (unit).
     #[inline]
     fn to_map(&self, w: DVec3) -> (f64, f64) {

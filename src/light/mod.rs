@@ -18,6 +18,7 @@ pub mod distant;
 pub mod environment;
 pub mod goniometric;
 pub mod lambert;
+pub mod median_cut;
 pub mod radial_profile;
 pub mod spot;
 

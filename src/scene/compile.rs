@@ -141,24 +141,42 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
             _ => None,
         })
         .collect();
-    let (lights, notes): (Vec<Light>, Vec<Option<String>>) = desc
-        .light
-        .iter()
-        .map(|l| light(l, ctx, &planes))
-        .collect::<Result<Vec<_>, _>>()?
-        .into_iter()
-        .unzip();
-    let names: Vec<String> = desc
-        .light
-        .iter()
-        .enumerate()
-        .map(|(k, l)| {
-            l.get_ref()
-                .name
-                .as_ref()
-                .map_or_else(|| format!("light #{}", k + 1), |n| n.get_ref().clone())
-        })
-        .collect();
+    let mut lights = Vec::with_capacity(desc.light.len());
+    let mut notes = Vec::with_capacity(desc.light.len());
+    let mut names = Vec::with_capacity(desc.light.len());
+    for (k, l) in desc.light.iter().enumerate() {
+        let (light, note) = light(l, ctx, &planes)?;
+        let name = l
+            .get_ref()
+            .name
+            .as_ref()
+            .map_or_else(|| format!("light #{}", k + 1), |n| n.get_ref().clone());
+        // Median cut: the map becomes N distant lights.
+        if let (Light::Environment(env), Some(n)) = (&light, median_cut_request(l, ctx)?) {
+            let cut = crate::light::median_cut::median_cut(env, n).map_err(|m| {
+                let sp = l.get_ref().lights.as_ref().map_or(l.span(), Spanned::span);
+                ctx.invalid(sp, "lights", m)
+            })?;
+            notes.push(note.map(|n0| {
+                format!("{n0}; median cut into {n} distant lights (an approximation: see the README for its bias)")
+            }));
+            names.push(format!("{name} [median cut 1/{n}]"));
+            for m in 1..n {
+                notes.push(None);
+                names.push(format!("{name} [median cut {}/{n}]", m + 1));
+            }
+            for c in cut {
+                let region = crate::light::StartRegion::fit(None, &[], &[]);
+                lights.push(Light::Distant(std::sync::Arc::new(
+                    crate::light::Distant::new(-c.wi, c.e_n, 0.0, region),
+                )));
+            }
+            continue;
+        }
+        lights.push(light);
+        notes.push(note);
+        names.push(name);
+    }
     // Every value was checked above with its line; what `build` checks again
     // cannot fail here.
     let mut scene =
@@ -554,6 +572,8 @@ fn light(
                 d.horizontal_illuminance.as_ref().map(Spanned::span),
             ),
             ("mapping", d.mapping.as_ref().map(Spanned::span)),
+            ("sampling", d.sampling.as_ref().map(Spanned::span)),
+            ("lights", d.lights.as_ref().map(Spanned::span)),
         ],
     )?;
     if kind == "distant" {
@@ -840,6 +860,7 @@ fn environment(
             "not allowed for an `environment` light (it takes `file`, `mapping`, `rotate`, `scale` or `horizontal_illuminance`)",
         ));
     }
+    median_cut_request(l, ctx)?;
     let fs = ctx.required(&d.file, l.span(), "file")?;
     let path = ctx.relative(fs.get_ref());
     let map = crate::io::envmap::read_luminance_map(&path)
@@ -920,6 +941,49 @@ fn environment(
         env.integral()
     );
     Ok((Light::Environment(std::sync::Arc::new(env)), Some(note)))
+}
+
+/// The number of median-cut lights an environment light asks for
+/// (`sampling = "median-cut"`, `lights = N`, default 64, a power of two up
+/// to 4096), or `None` for importance sampling (`sampling = "importance"`,
+/// the default).
+fn median_cut_request(
+    l: &Spanned<LightDesc>,
+    ctx: &SourceCtx,
+) -> Result<Option<usize>, SceneError> {
+    let d = l.get_ref();
+    let cut = match &d.sampling {
+        None => false,
+        Some(s) => match s.get_ref().as_str() {
+            "importance" => false,
+            "median-cut" => true,
+            other => {
+                return Err(ctx.invalid(
+                    s.span(),
+                    "sampling",
+                    format!("unknown sampling `{other}` (use \"importance\" or \"median-cut\")"),
+                ));
+            }
+        },
+    };
+    match (&d.lights, cut) {
+        (Some(n), false) => {
+            Err(ctx.invalid(n.span(), "lights", "only with `sampling = \"median-cut\"`"))
+        }
+        (None, false) => Ok(None),
+        (None, true) => Ok(Some(64)),
+        (Some(n), true) => {
+            let v = *n.get_ref();
+            if !(1..=4096).contains(&v) || !(v as u64).is_power_of_two() {
+                return Err(ctx.invalid(
+                    n.span(),
+                    "lights",
+                    format!("must be a power of two from 1 to 4096, got {v}"),
+                ));
+            }
+            Ok(Some(v as usize))
+        }
+    }
 }
 
 /// A Lambertian area source (`type = "rectangle"` or `"disc"`): its shape

@@ -183,4 +183,10 @@ pub struct LightDesc {
     pub horizontal_illuminance: Option<Spanned<f64>>,
     /// An environment map's layout: `"equirect"` (default) or `"angular"`.
     pub mapping: Option<Spanned<String>>,
+    /// How an environment light is sampled: `"importance"` (default: the
+    /// map itself, importance-sampled) or `"median-cut"` (replaced by
+    /// `lights` distant lights of equal energy, an approximation).
+    pub sampling: Option<Spanned<String>>,
+    /// Number of median-cut lights (a power of two; default 64).
+    pub lights: Option<Spanned<i64>>,
 }
