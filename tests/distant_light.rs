@@ -354,7 +354,7 @@ fn distant_light_keys_and_errors() {
 }
 
 /// The command line: a run summary states the start region and its
-/// truncation; the backward estimator and `--near-radius` refuse the scene.
+/// truncation; `--near-radius` refuses the scene.
 #[test]
 fn command_line_runs_and_refuses_what_it_cannot_do() {
     use assert_cmd::Command;
@@ -389,13 +389,101 @@ fn command_line_runs_and_refuses_what_it_cannot_do() {
     let e: f64 = sunlit.split(',').nth(7).unwrap().parse().unwrap();
     let want = 100000.0 * 0.642787610;
     assert!((e / want - 1.0).abs() < 0.05, "{sunlit}");
-    for (extra, word) in [
-        (&["--estimator", "backward"][..], "--estimator backward"),
-        (&["--near-radius", "0.1"][..], "--near-radius"),
-    ] {
-        let out = run(extra);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{extra:?} accepted");
-        assert!(err.contains(word) && err.contains("distant"), "{err}");
+    // The backward estimator runs such scenes (next-event estimation from
+    // the sun); the near/far split does not.
+    let out = run(&["--estimator", "backward"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = run(&["--near-radius", "0.1"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "--near-radius accepted");
+    assert!(
+        err.contains("--near-radius") && err.contains("distant"),
+        "{err}"
+    );
+}
+
+/// The backward estimator (paths from the receivers, next-event estimation
+/// from the sun) shares no chain code with the local one: on the open floor
+/// both agree with the closed form, and on the floor and wall, where the
+/// local estimate's scores are heavy-tailed, the backward one meets the
+/// closed form with calibrated error bars.
+#[test]
+fn backward_estimator_meets_the_closed_forms() {
+    let d = sun(35.0, 20.0);
+    let (rf, rw) = (0.5, 0.8);
+    let floor = format!(
+        r#"
+[[surface]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+material = {{ type = "lambertian", reflectance = {rf} }}
+"#
+    );
+    let wall = format!(
+        r#"
+[[surface]]
+type = "plane"
+point = [0, 0, 0]
+normal = [1, 0, 0]
+material = {{ type = "lambertian", reflectance = {rw} }}
+"#
+    );
+    let light = format!(
+        "[[light]]\ntype = \"distant\"\ndirection = {}\nilluminance = 1e5\nangular_diameter = 0.53\n",
+        v(d)
+    );
+    let (ef, ew) = (1e5 * -d.z, 1e5 * -d.x);
+    // Open floor: rho E_f into points facing down (and E_f on the floor).
+    let s = scene(&format!("{floor}{light}"));
+    let pts = [
+        (DVec3::new(0.0, 0.0, 1.0), -DVec3::Z),
+        (DVec3::new(3.0, -1.0, 0.7), -DVec3::Z),
+    ];
+    let rec = Receivers::new(&s, &pts).unwrap();
+    let rb = lumest::backward::run(&s, &rec, &common::chains_cfg(20_000, 3, 2), &mut |_| true);
+    let rl = run(&s, &rec, &common::chains_cfg(400_000, 3, 2), &mut |_| true);
+    let bound = sidak(2 * pts.len());
+    for j in 0..pts.len() {
+        let e = rf * ef;
+        for (name, r) in [("backward", &rb), ("local", &rl)] {
+            let z = common::z(r, j, e);
+            let se = r.tallies.estimated[j].std_error();
+            assert!(z.abs() < bound, "{name}, point {j}: z = {z:.2}");
+            assert!(0.02 * e > bound * se, "{name}, point {j}: se {se}");
+        }
+    }
+    // Floor and wall.
+    let s = scene(&format!("{floor}{wall}{light}"));
+    let e_floor = (ef + rw * ew / 2.0) / (1.0 - rf * rw / 4.0);
+    let e_wall = ew + rf * e_floor / 2.0;
+    let pts = [
+        (DVec3::new(1.0, 0.0, 0.0), DVec3::Z),
+        (DVec3::new(3.0, 5.0, 0.0), DVec3::Z),
+        (DVec3::new(0.0, 0.0, 1.5), DVec3::X),
+        (DVec3::new(0.0, -2.0, 3.0), DVec3::X),
+    ];
+    let exact = [e_floor, e_floor, e_wall, e_wall];
+    let rec = Receivers::new(&s, &pts).unwrap();
+    let rb = lumest::backward::run(&s, &rec, &common::chains_cfg(40_000, 5, 2), &mut |_| true);
+    let bound = sidak(pts.len());
+    for (j, &e) in exact.iter().enumerate() {
+        let z = common::z(&rb, j, e);
+        let est = rb.direct[j] + rb.tallies.estimated[j].mean();
+        let se = rb.tallies.estimated[j].std_error();
+        let reflected = e - rb.direct[j];
+        assert!(
+            z.abs() < bound,
+            "point {j}: {est} +- {se} vs {e} (z = {z:.2})"
+        );
+        // A lost second order (rho_f rho_w / 4 of it) would fail.
+        assert!(
+            0.1 * reflected > bound * se,
+            "point {j}: se {se} for {reflected}"
+        );
     }
 }

@@ -104,6 +104,20 @@ scale = 2.0
     let mut sc = s.clone();
     sc.fit_directional(&pts.iter().map(|p| p.0).collect::<Vec<_>>());
     check(&sc, &pts, &exact, 2_000_000, 5);
+    // The backward estimator (next-event estimation from the map) agrees
+    // on the reflected light (the point facing down; the others have mostly
+    // the sampled direct light, the same code for both estimators).
+    let pts = &pts[2..3];
+    let exact = &exact[2..3];
+    let rec = Receivers::new(&sc, pts).unwrap();
+    let rb = lumest::backward::run(&sc, &rec, &common::chains_cfg(100_000, 6, 2), &mut |_| true);
+    let bound = sidak(pts.len());
+    for (j, &e) in exact.iter().enumerate() {
+        let z = common::z(&rb, j, e);
+        let se = rb.tallies.estimated[j].std_error();
+        assert!(z.abs() < bound, "backward, point {j}: z = {z:.2}");
+        assert!(0.02 * e > bound * se, "backward, point {j}: se {se}");
+    }
     // The view of the sky: the map's luminance.
     assert_eq!(
         emitted_luminance(

@@ -578,11 +578,6 @@ pub(crate) fn measure_with(
     let mut scene = scene::load(scene_path)?;
     if scene.has_directional() {
         anyhow::ensure!(
-            estimator != EstimatorKind::Backward,
-            "{}: --estimator backward does not support distant or environment lights (its light-guided paths start photons at a light's position); use the default local estimator",
-            scene_path.display()
-        );
-        anyhow::ensure!(
             cfg.near.0 <= 0.0,
             "{}: --near-radius is not supported with distant or environment lights (the near part's backward paths cannot reach a light at infinity); the local estimate runs plain there",
             scene_path.display()

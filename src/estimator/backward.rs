@@ -56,10 +56,17 @@ pub fn run(
     cfg: &RunConfig,
     observe: &mut dyn FnMut(&Progress) -> bool,
 ) -> RunResult {
+    // A light at infinity lights every vertex alike: every vertex counts.
     let reach = scene
         .lights
         .iter()
-        .map(|l| (l.position(), light_reach(scene, l).powi(2)))
+        .map(|l| {
+            if l.is_directional() {
+                (l.position(), f64::INFINITY)
+            } else {
+                (l.position(), light_reach(scene, l).powi(2))
+            }
+        })
         .collect();
     drive(
         &BackwardWork {
@@ -627,9 +634,9 @@ fn next_event(
             continue;
         }
         if let Light::Distant(dl) = l {
-            // Next-event estimation from the sun (the backward estimator
-            // refuses scenes with lights at infinity, whose photons strategy
-            // B cannot draw; this keeps the sum over lights complete).
+            // Next-event estimation from the sun, alone: a path ray that
+            // leaves the scene adds nothing (the sun's light comes by this
+            // estimate only), and strategy B draws no photons from it.
             let u = rng.next_2d();
             let (wi, scale) = if dl.collimated() {
                 (-dl.d, dl.e_n)
@@ -723,6 +730,13 @@ fn connect(
 ) -> f64 {
     let k = scene.pick_light_index(rng.next_f64());
     let light = &scene.lights[k];
+    // A light at infinity has no centre to send photons from: picked, it
+    // gives no sample (its share is left out of `p_B` too, see
+    // [`next_event`], so the combination stays unbiased; its light comes
+    // by next-event estimation).
+    if light.is_directional() {
+        return 0.0;
+    }
     // Isotropic from points and spheres; a goniometric light's photons
     // follow its emission (so that p_B stays positive where it emits).
     let dir = match light {

@@ -22,22 +22,30 @@
 //!   within `r0` of it), so the start points are uniform on that disc and
 //!   every chain carries the disc's flux `E_n pi R^2`;
 //! - a scene with **infinite planes** is unbounded: every line meets them.
-//!   There the start points cover the whole plane `P`, with the density
-//!   `p_s(rho) = a / (2 pi (rho^2 + a^2)^(3/2))` of the distance `rho` from
-//!   `c` (normalised on the plane; drawn as `rho = a sqrt(u (2 - u)) / (1 -
-//!   u)`; 29 % of the chains start within `a` of `c`, 90 % within `10 a`).
-//!   Nothing is truncated: the answer is exact at every receiver, wherever
-//!   it lies. A chain starting far out carries a large weight, `E_n / p_s ~
-//!   rho^3`, but it scores into a receiver at distance `d ~ rho` from its
-//!   collision `x` through the kernel `cos_x cos_p / d^2 <= h / d^3`
-//!   (`cos_x = h / d`, `h` the receiver's distance from the plane of the
-//!   collision), so its first-order score stays bounded and the variance
-//!   finite. (The density `a^2 / (pi (rho^2 + a^2)^2)` was tried first: its
-//!   weights `~ rho^4` make the scores grow like `d` into a receiver that
-//!   faces along the plane, as on a wall next to the floor, whose variance
-//!   is then infinite; measured 1-7 standard errors low at 1.5e6 chains
-//!   in the floor-and-wall test.) The
-//!   centre and scale `(c, a)` only steer efficiency: they are fitted to
+//!   There the start points cover the plane `P` out to `rho_max = 1e6 a`
+//!   with the density `p_s(rho) ~ a / (2 pi (rho^2 + a^2)^(3/2))` of the
+//!   distance `rho` from `c` (normalised within `rho_max`; drawn as `rho = a
+//!   sqrt(v (2 - v)) / (1 - v)`, `v = u F(rho_max)`; 29 % of the chains start
+//!   within `a` of `c`, 90 % within `10 a`). Light landing beyond `rho_max`
+//!   is left out: into a receiver at distance `h` from a plane it is at
+//!   most about `h / (rho_max - |p - c|)` of what that plane reflects there
+//!   ([`StartRegion::TRUNCATION`]). A chain starting far out carries a
+//!   large weight, `E_n / p_s ~ rho^3`, but its first collision scores into
+//!   a receiver at distance `d ~ rho` through the kernel `cos_x cos_p / d^2
+//!   <= h / d^3` (`cos_x = h / d`), so first-order scores stay bounded:
+//!   on a single plane the error bars are calibrated (`tests/distant_light.rs`).
+//!   (The density `a^2 / (pi (rho^2 + a^2)^2)` was tried first: its weights
+//!   `~ rho^4` make even first-order scores grow like `d` into a receiver
+//!   that faces along the plane.) **Limitation**: light reflected again
+//!   (by a second, non-parallel plane or a finite shape standing on the
+//!   plane) reaches a receiver from a far start with probability `~
+//!   rho^-3` and then scores `~ rho^3`: the variance diverges with
+//!   `rho_max` and finite runs read low with error bars too small
+//!   (measured on a floor and a wall against their closed form:
+//!   0-13 standard errors low over 16 seeds). [`StartRegion::note`] warns;
+//!   the backward estimator, which starts at the receivers and reaches the
+//!   light by next-event estimation, is calibrated there.
+//!   The centre and scale `(c, a)` are fitted to
 //!   the finite shapes, the planes' points and, when known, the receivers
 //!   ([`crate::scene::Scene::fit_directional`]).
 //!
@@ -145,7 +153,7 @@ impl StartRegion {
             .all(|(n, _)| n.cross(self.planes[0].0).length() < 1e-9);
         if !parallel || self.has_finite {
             s.push_str(
-                "; WARNING: with non-parallel infinite planes, or finite shapes on an infinite plane, light from far out reaches the receivers through rare heavy-weight chains: the error bars are not reliable (measured on a floor and a wall: runs 1-13 standard errors low); bound the ground by a finite rectangle where you can",
+                "; WARNING: with non-parallel infinite planes, or finite shapes on an infinite plane, light from far out reaches the receivers through rare heavy-weight chains: the error bars are not reliable (measured on a floor and a wall: runs 0-13 standard errors low); use --estimator backward (paths from the receivers, next-event estimation from the light: calibrated there), or bound the ground by a finite rectangle",
             );
         }
         Some(s)
