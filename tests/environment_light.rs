@@ -354,3 +354,37 @@ fn shipped_probes_match_their_generator() {
     let s = lumest::scene::load(&root.join("indoor_angular.toml")).unwrap();
     assert!(s.lights[0].is_directional());
 }
+
+/// Views that leave the scene see the map (here the indoor probe, angular,
+/// scale 10): at 15 degrees from the zenith the ceiling, 0.8 (RGBE
+/// 0.80078125) x 10; the summary does not claim that no light arrives.
+#[test]
+fn views_that_leave_the_scene_see_the_map() {
+    let out = assert_cmd::Command::cargo_bin("lumest")
+        .unwrap()
+        .args([
+            "luminance",
+            "--scene",
+            "data/probes/indoor_angular.toml",
+            "--fan-at",
+            "0,0,0,0,0,1",
+            "--fan",
+            "30,90",
+            "--out",
+            "-",
+            "--chains",
+            "2000",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && !err.contains("WARNING"), "{err}");
+    let csv = String::from_utf8_lossy(&out.stdout);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "L").unwrap();
+    let first: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
+    assert_eq!(first[0], "15");
+    let l: f64 = first[col].parse().unwrap();
+    assert_eq!(l, 8.0078125, "{}", csv.lines().nth(1).unwrap());
+}

@@ -243,6 +243,10 @@ pub fn summary(r: &RunResult) -> String {
         max,
         if rms > 0.0 && r.wall > 0.0 {
             format!("{:.4e} 1/s", figure_of_merit(rms, r.wall))
+        } else if r.direct.is_empty() {
+            // Views that all leave the scene (they see only lights at
+            // infinity, computed exactly) or meet back sides.
+            "undefined (no receivers: every view leaves the scene or meets a back side)".to_string()
         } else if (0..r.direct.len()).all(|j| r.direct[j] + r.tallies.estimated[j].mean() == 0.0) {
             "undefined\nWARNING: no light reaches any point (a light sealed inside a solid, \
              points behind walls, or lights facing away): every result is 0"
