@@ -388,3 +388,49 @@ fn views_that_leave_the_scene_see_the_map() {
     let l: f64 = first[col].parse().unwrap();
     assert_eq!(l, 8.0078125, "{}", csv.lines().nth(1).unwrap());
 }
+
+/// A bounded scene (chains start uniformly on the disc that covers it):
+/// a Lambertian sphere of reflectance rho in a uniform map of luminance L.
+/// Convex, so its surface keeps only the map's light, `L` itself
+/// reflected as `rho L` (uniform); at a point facing its centre from
+/// distance `D` it fills a cone of `sin^2 a = (R / D)^2`:
+/// `E = pi L (1 - (1 - rho) sin^2 a)`. Local and backward estimators.
+#[test]
+fn sphere_in_a_uniform_map_local_and_backward() {
+    let d = dir("sphere");
+    write_map(&d.join("grey.hdr"), 16, 8, |_, _| 2.0);
+    let s = scene_in(
+        &d,
+        r#"
+[[surface]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1.0
+material = { type = "lambertian", reflectance = 0.7 }
+
+[[light]]
+type = "environment"
+file = "grey.hdr"
+"#,
+    );
+    let (l, rho) = (2.0, 0.7);
+    let pts: Vec<(DVec3, DVec3)> = [1.5, 2.5, 4.0]
+        .iter()
+        .map(|&dist| (DVec3::new(dist, 0.0, 0.0), -DVec3::X))
+        .collect();
+    let exact: Vec<f64> = [1.5f64, 2.5, 4.0]
+        .iter()
+        .map(|&dist| {
+            let s2 = (1.0 / dist).powi(2);
+            PI * l * (1.0 - (1.0 - rho) * s2)
+        })
+        .collect();
+    check(&s, &pts, &exact, 3_000_000, 21);
+    let rec = Receivers::new(&s, &pts).unwrap();
+    let rb = lumest::backward::run(&s, &rec, &common::chains_cfg(200_000, 22, 2), &mut |_| true);
+    let bound = sidak(pts.len());
+    for (j, &e) in exact.iter().enumerate() {
+        let z = common::z(&rb, j, e);
+        assert!(z.abs() < bound, "backward, point {j}: z = {z:.2}");
+    }
+}
