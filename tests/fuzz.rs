@@ -135,6 +135,7 @@ fn parsers_survive_mutated_inputs() {
     // Copies the scenes may refer to.
     std::fs::write(d.join("mesh.obj"), corpus("mesh.obj")).unwrap();
     std::fs::write(d.join("table.ies"), corpus("table.ies")).unwrap();
+    std::fs::write(d.join("probe.hdr"), corpus("probe.hdr")).unwrap();
     let scene_check = |p: &Path| -> Result<(), String> {
         let s = lumest::scene::load(p).map_err(|e| e.to_string())?;
         let pts = [(glam::DVec3::new(0.1, 0.2, 0.3), glam::DVec3::Z)];

@@ -248,6 +248,10 @@ pub fn summary(r: &RunResult) -> String {
         max,
         if rms > 0.0 && r.wall > 0.0 {
             format!("{:.4e} 1/s", figure_of_merit(rms, r.wall))
+        } else if r.direct.is_empty() {
+            // Views that all leave the scene (they see only lights at
+            // infinity, computed exactly) or meet back sides.
+            "undefined (no receivers: every view leaves the scene or meets a back side)".to_string()
         } else if (0..r.direct.len()).all(|j| r.direct[j] + r.tallies.estimated[j].mean() == 0.0) {
             "undefined\nWARNING: no light reaches any point (a light sealed inside a solid, \
              points behind walls, or lights facing away): every result is 0"
@@ -585,12 +589,19 @@ pub(crate) fn measure_with(
     if estimator == EstimatorKind::Backward {
         run_args.check_local_only("backward")?;
     }
-    let scene = scene::load(scene_path)?;
+    let mut scene = scene::load(scene_path)?;
+    if scene.has_directional() {
+        anyhow::ensure!(
+            cfg.near.0 <= 0.0,
+            "{}: --near-radius is not supported with distant or environment lights (the near part's backward paths cannot reach a light at infinity); the local estimate runs plain there",
+            scene_path.display()
+        );
+    }
     let (views, table) = match views {
         Some((name, table, out)) => (Some((name, out)), table),
         None => (None, None),
     };
-    let job = match table {
+    let mut job = match table {
         Some(t) => Job::with_views(
             &scene,
             points.map(|p| p.0),
@@ -599,6 +610,19 @@ pub(crate) fn measure_with(
         )?,
         None => Job::new(&scene, points.map(|p| p.0), views.map(|v| v.0))?,
     };
+    // With infinite planes the chains of a light at infinity start on a
+    // density fitted to the receivers too (exact either way; efficiency).
+    if scene.has_directional() && !scene.planes().is_empty() {
+        let pts: Vec<glam::DVec3> = job.receivers.receivers().iter().map(|r| r.p).collect();
+        scene.fit_directional(&pts);
+        let table = job.views.take().map(|v| v.0);
+        job = Job::with_views(
+            &scene,
+            points.map(|p| p.0),
+            table,
+            views.map_or("-", |v| v.0),
+        )?;
+    }
     check_tally_size(
         cfg.orders,
         job.points.as_ref().map_or(0, |t| t.rows.len())
@@ -621,6 +645,16 @@ pub(crate) fn measure_with(
     );
     for note in &scene.notes {
         eprintln!("lumest: {note}");
+    }
+    for (l, name) in scene.lights.iter().zip(&scene.light_names) {
+        let region = match l {
+            crate::light::Light::Distant(dl) => Some(&dl.region),
+            crate::light::Light::Environment(env) => Some(&env.region),
+            _ => None,
+        };
+        if let Some(note) = region.and_then(|r| r.note()) {
+            eprintln!("lumest: {name}: {note}");
+        }
     }
     let cfg = match &run_args.resume {
         Some(path) => super::run_state::resume(path, &scene, &job, &cfg, estimator)?,

@@ -56,10 +56,17 @@ pub fn run(
     cfg: &RunConfig,
     observe: &mut dyn FnMut(&Progress) -> bool,
 ) -> RunResult {
+    // A light at infinity lights every vertex alike: every vertex counts.
     let reach = scene
         .lights
         .iter()
-        .map(|l| (l.position(), light_reach(scene, l).powi(2)))
+        .map(|l| {
+            if l.is_directional() {
+                (l.position(), f64::INFINITY)
+            } else {
+                (l.position(), light_reach(scene, l).powi(2))
+            }
+        })
         .collect();
     drive(
         &BackwardWork {
@@ -612,6 +619,44 @@ fn next_event(
             }
             continue;
         }
+        if let Light::Environment(env) = l {
+            // Next-event estimation from the map (see the sun's below).
+            let (wi, pdf, le) = env.sample(rng.next_2d());
+            let cos_n = wi.dot(h.n);
+            if cos_n > 0.0
+                && pdf > 0.0
+                && scene
+                    .intersect(&crate::geometry::Ray { o: h.p, d: wi }, from)
+                    .is_none()
+            {
+                nee += m.eval(f_frame.to_local(wi), wo) * le * cos_n / pdf;
+            }
+            continue;
+        }
+        if let Light::Distant(dl) = l {
+            // Next-event estimation from the sun, alone: a path ray that
+            // leaves the scene adds nothing (the sun's light comes by this
+            // estimate only), and strategy B draws no photons from it.
+            let u = rng.next_2d();
+            let (wi, scale) = if dl.collimated() {
+                (-dl.d, dl.e_n)
+            } else {
+                let s = crate::sampling::cone::sample_uniform_cone(u, dl.sin_a, dl.cos_a);
+                (
+                    Frame::from_normal(-dl.d).to_world(s.w),
+                    dl.luminance() / s.pdf,
+                )
+            };
+            let cos_n = wi.dot(h.n);
+            if cos_n > 0.0
+                && scene
+                    .intersect(&crate::geometry::Ray { o: h.p, d: wi }, from)
+                    .is_none()
+            {
+                nee += m.eval(f_frame.to_local(wi), wo) * scale * cos_n;
+            }
+            continue;
+        }
         let to_c = l.position() - h.p;
         let dist2 = to_c.length_squared();
         let dist = dist2.sqrt();
@@ -660,7 +705,9 @@ fn next_event(
                     nee += m.eval(f_frame.to_local(wi), wo) * l.luminance() * cos_n * solid_angle;
                 }
             }
-            Light::Area(_) => unreachable!("handled above"),
+            Light::Area(_) | Light::Distant(_) | Light::Environment(_) => {
+                unreachable!("handled above")
+            }
         }
     }
     (nee, p_b)
@@ -683,6 +730,13 @@ fn connect(
 ) -> f64 {
     let k = scene.pick_light_index(rng.next_f64());
     let light = &scene.lights[k];
+    // A light at infinity has no centre to send photons from: picked, it
+    // gives no sample (its share is left out of `p_B` too, see
+    // [`next_event`], so the combination stays unbiased; its light comes
+    // by next-event estimation).
+    if light.is_directional() {
+        return 0.0;
+    }
     // Isotropic from points and spheres; a goniometric light's photons
     // follow its emission (so that p_B stays positive where it emits).
     let dir = match light {

@@ -11,15 +11,19 @@
 //! blocks it. Two strategies sample it (Veach 1997, ch. 9; seed 001):
 //!
 //! - **light sampling**: pick a source `k` with probability `P_k`
+//!   (an environment map: a direction drawn from the map's table, density
+//!   `L / int L dw`, so that `p_L = P_k L(wi) / F`)
 //!   proportional to its power among the sampled ones, then a point `y` on
 //!   it with density `p_A(y)` per area (proportional to its luminance; for a
-//!   sphere a direction uniform in the cone it subtends); per solid angle
+//!   sphere, or the sun's disc of a distant light, a direction uniform in
+//!   the cone it subtends); per solid angle
 //!   `p_L(wi) = P_k p_A(y) d^2 / |cos_y|` (`P_k / Omega_cone` for a sphere);
 //! - **BRDF sampling**: `wi` from the receiver's own density `p_B`
 //!   (`cos / pi` for illuminance, the material's sampler for luminance),
 //!   traced to the first surface: an emitter's front adds its luminance, a
 //!   sphere light (which does not block) adds its own where the ray enters it
-//!   before that surface.
+//!   before that surface; a ray that leaves the scene adds the luminance
+//!   of a distant light's disc it lies in.
 //!
 //! One sample of each is combined by the power heuristic (`beta = 2`,
 //! the default: `F = f(wi_L) p_L / (p_L^2 + p_B^2) + f(wi_B) p_B / (p_L^2 + p_B^2)`)
@@ -142,6 +146,8 @@ fn light_pdf(set: &LightSet, scene: &Scene, k: u32, x: DVec3, wi: DVec3, y: DVec
             }
             p / cone(*r, dist).0
         }
+        Light::Distant(dl) if dl.in_cone(wi) => p / dl.solid_angle(),
+        Light::Environment(env) => p * env.pdf(wi),
         _ => 0.0,
     }
 }
@@ -227,6 +233,27 @@ fn light_sample(
             }
             (light.luminance() * r, p_l, wi)
         }
+        Light::Distant(dl) => {
+            // Uniform in the sun's disc; lit where the ray leaves the scene.
+            let s = crate::sampling::cone::sample_uniform_cone(u, dl.sin_a, dl.cos_a);
+            let wi = Frame::from_normal(-dl.d).to_world(s.w);
+            let p_l = set.prob[k as usize] * s.pdf;
+            let (r, _) = response(rec, frame, wi);
+            if r <= 0.0 || scene.first_hit_from(x, wi).is_some() {
+                return (0.0, p_l, wi, true);
+            }
+            (dl.luminance() * r, p_l, wi)
+        }
+        Light::Environment(env) => {
+            // A direction drawn from the map; lit where the ray leaves the scene.
+            let (wi, pdf, le) = env.sample(u);
+            let p_l = set.prob[k as usize] * pdf;
+            let (r, _) = response(rec, frame, wi);
+            if r <= 0.0 || le <= 0.0 || scene.first_hit_from(x, wi).is_some() {
+                return (0.0, p_l, wi, true);
+            }
+            (le * r, p_l, wi)
+        }
         _ => (0.0, 0.0, DVec3::Z),
     };
     (f, p, wi, true)
@@ -259,6 +286,13 @@ fn emitters_along(
         let l = &scene.lights[k as usize];
         if matches!(l, Light::Sphere { .. }) && l.hit(x, wi, t_max).is_some() {
             each(l.luminance(), light_pdf(set, scene, k, x, wi, x, 0.0));
+        }
+        // A ray that leaves the scene meets the lights at infinity.
+        if hit.is_none() && l.is_directional() {
+            let le = l.escaped_luminance(wi);
+            if le > 0.0 {
+                each(le, light_pdf(set, scene, k, x, wi, x, 0.0));
+            }
         }
     }
 }

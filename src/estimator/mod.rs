@@ -184,6 +184,18 @@ pub fn exact_direct(scene: &Scene, k: usize) -> bool {
         } => false,
         Light::Point { .. } | Light::Gonio { .. } | Light::Spot(_) => true,
         Light::Sphere { .. } => scene.planes_only(),
+        // The sun as a point: one direction, one shadow ray. As a disc: in
+        // a scene of planes none of which the disc straddles (seen from any
+        // point, each plane then hides all of it or none), the axis decides.
+        Light::Distant(dl) => {
+            dl.collimated()
+                || (scene.planes_only()
+                    && scene
+                        .planes()
+                        .iter()
+                        .all(|pl| pl.n.dot(dl.d).abs() >= dl.sin_a))
+        }
+        Light::Environment(_) => false,
         Light::Area(a) => {
             if !a.is_uniform() {
                 return false;
@@ -222,8 +234,17 @@ pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
         .iter()
         .filter(|l| l.hit(o, d, t_max).is_some())
         .fold(0.0, |a, l| a + l.luminance());
-    let area = scene
-        .first_hit_from(o, d)
+    let hit = scene.first_hit_from(o, d);
+    // A ray that leaves the scene sees the lights at infinity.
+    let sky = if hit.is_none() {
+        scene
+            .lights
+            .iter()
+            .fold(0.0, |a, l| a + l.escaped_luminance(d))
+    } else {
+        0.0
+    };
+    let area = hit
         .filter(|h| h.t <= t_max)
         .and_then(|h| {
             let k = scene.surfaces[h.surface as usize].emitter?;
@@ -233,7 +254,7 @@ pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
             }
         })
         .unwrap_or(0.0);
-    spheres + area
+    spheres + area + sky
 }
 
 /// Trace the view ray from observer `o` [m] looking along unit `d` to its sub-point.
@@ -384,8 +405,25 @@ impl Receivers {
                         ),
                     });
                 }
-                if !exact[k] || (matches!(l, Light::Area(_)) && rec.constant_weight().is_none()) {
+                let extended = matches!(l, Light::Area(_))
+                    || matches!(l, Light::Distant(dl) if !dl.collimated());
+                if !exact[k] || (extended && rec.constant_weight().is_none()) {
                     continue; // sampled, see below
+                }
+                if let Light::Distant(dl) = l {
+                    // Lit where the ray towards the sun leaves the scene.
+                    if scene.first_hit_from(p, -dl.d).is_none() {
+                        direct[j] += match rec.response {
+                            Response::Illuminance => dl.direct_illuminance(n),
+                            _ if dl.collimated() => {
+                                l.direct_weighted(p, n, &|wi| rec.weight(&frames[j], wi))
+                            }
+                            _ => {
+                                dl.direct_illuminance(n) * rec.constant_weight().unwrap_or(f64::NAN)
+                            }
+                        };
+                    }
+                    continue;
                 }
                 // What `exact` admits lies wholly on one side of every plane
                 // (or in it) and nothing else can hide it, so its centre
@@ -408,7 +446,11 @@ impl Receivers {
         }
         // Sources sampled per batch: those without an exact form anywhere,
         // and every non-point source at a receiver whose response varies.
-        let non_point = |k: &usize| !scene.lights[*k].is_point_like();
+        // (A collimated sun is exact for any response.)
+        let non_point = |k: &usize| {
+            let l = &scene.lights[*k];
+            !l.is_point_like() && !matches!(l, Light::Distant(dl) if dl.collimated())
+        };
         let sets_of = [
             (0..scene.lights.len())
                 .filter(|&k| !exact[k])
@@ -908,6 +950,7 @@ pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame) -> f64 {
         * scene
             .lights
             .iter()
+            .filter(|l| !l.is_directional())
             .map(|l| (l.position() - p).length())
             .fold(f64::INFINITY, f64::min);
     if !r.is_finite() || r <= 0.0 {

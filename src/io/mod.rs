@@ -1,6 +1,7 @@
 //! Formats only: CSV point lists in, CSV results out, plots. No physics.
 
 pub mod csvio;
+pub mod envmap;
 pub mod image;
 pub mod interrupt;
 pub mod photometry;

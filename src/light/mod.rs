@@ -15,8 +15,11 @@
 
 pub mod angle_grid;
 pub mod area;
+pub mod distant;
+pub mod environment;
 pub mod goniometric;
 pub mod lambert;
+pub mod median_cut;
 pub mod radial_profile;
 pub mod sky;
 pub mod spot;
@@ -25,6 +28,8 @@ pub mod sun_position;
 use crate::math::quadrature::panel;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
 pub use area::{AreaLight, AreaShape};
+pub use distant::{Distant, StartRegion};
+pub use environment::{Environment, Mapping};
 use glam::DVec3;
 pub use goniometric::Goniometric;
 pub use spot::Spot;
@@ -51,6 +56,10 @@ pub enum Light {
     Area(std::sync::Arc<AreaLight>),
     /// Spot light.
     Spot(Spot),
+    /// Distant (directional) light: the sun ([`Distant`]).
+    Distant(std::sync::Arc<Distant>),
+    /// Environment light from an HDR map ([`Environment`]).
+    Environment(std::sync::Arc<Environment>),
 }
 
 /// The luminous opening of a goniometric luminaire, for near-field
@@ -214,6 +223,35 @@ impl Light {
             Light::Gonio { dist, .. } => dist.power(),
             Light::Area(a) => a.power(),
             Light::Spot(sp) => sp.power(),
+            Light::Distant(dl) => dl.power(),
+            Light::Environment(env) => env.power(),
+        }
+    }
+
+    /// Whether the light lies at infinity (distant or environment light):
+    /// it has no position, and its chains start on a plane upstream of the
+    /// scene ([`StartRegion`]).
+    pub fn is_directional(&self) -> bool {
+        matches!(self, Light::Distant(_) | Light::Environment(_))
+    }
+
+    /// Set the start region of a light at infinity (no effect on others).
+    pub fn set_region(&mut self, region: &StartRegion) {
+        match self {
+            Light::Distant(dl) => std::sync::Arc::make_mut(dl).region = region.clone(),
+            Light::Environment(env) => std::sync::Arc::make_mut(env).region = region.clone(),
+            _ => {}
+        }
+    }
+
+    /// Luminance [cd/m^2] seen along a ray that leaves the scene in unit
+    /// direction `d` (from the observer): a distant light's disc where `d`
+    /// lies in it; 0 otherwise.
+    pub fn escaped_luminance(&self, d: DVec3) -> f64 {
+        match self {
+            Light::Distant(dl) if dl.in_cone(d) => dl.luminance(),
+            Light::Environment(env) => env.luminance(d),
+            _ => 0.0,
         }
     }
 
@@ -263,7 +301,9 @@ impl Light {
         match self {
             Light::Point { i, .. } => *i,
             Light::Spot(sp) => sp.intensity(w),
-            Light::Sphere { .. } | Light::Area(_) => 0.0,
+            Light::Sphere { .. } | Light::Area(_) | Light::Distant(_) | Light::Environment(_) => {
+                0.0
+            }
             Light::Gonio { frame, dist, .. } => dist.intensity_world(frame, w),
         }
     }
@@ -308,6 +348,9 @@ impl Light {
     ) -> EmissionSample {
         match *self {
             Light::Area(ref a) => a.sample_emission(u_dir, u_pos),
+            // The stratified uniforms go to the start point.
+            Light::Distant(ref dl) => dl.sample_emission(u_dir, u_pos),
+            Light::Environment(ref env) => env.sample_emission(u_dir, u_pos),
             Light::Spot(ref sp) => {
                 let d = sp.sample(u_dir, u_extra);
                 let i = sp.intensity(d);
@@ -404,9 +447,12 @@ impl Light {
         }
     }
 
-    /// Position of a point light, centre of a sphere or an area source [m].
+    /// Position of a point light, centre of a sphere or an area source [m];
+    /// for a light at infinity the centre of its start region.
     pub fn position(&self) -> DVec3 {
         match *self {
+            Light::Distant(ref dl) => dl.region.c,
+            Light::Environment(ref env) => env.region.c,
             Light::Point { p, .. } | Light::Gonio { p, .. } => p,
             Light::Spot(ref sp) => sp.p,
             Light::Sphere { c, .. } => c,
@@ -419,7 +465,12 @@ impl Light {
     /// [`AreaLight::emitted`]).
     pub fn luminance(&self) -> f64 {
         match *self {
-            Light::Point { .. } | Light::Gonio { .. } | Light::Area(_) | Light::Spot(_) => 0.0,
+            Light::Point { .. }
+            | Light::Gonio { .. }
+            | Light::Area(_)
+            | Light::Spot(_)
+            | Light::Distant(_)
+            | Light::Environment(_) => 0.0,
             Light::Sphere { r, i, .. } => i / (PI * r * r),
         }
     }
@@ -429,7 +480,7 @@ impl Light {
     /// illuminance).
     pub fn contains(&self, x: DVec3) -> bool {
         match *self {
-            Light::Area(_) => false,
+            Light::Area(_) | Light::Distant(_) | Light::Environment(_) => false,
             Light::Point { p, .. } | Light::Gonio { p, .. } | Light::Spot(Spot { p, .. }) => {
                 (p - x).length() <= 1e-12 * p.abs().max_element().max(x.abs().max_element())
             }
@@ -442,7 +493,12 @@ impl Light {
     /// area source (a surface of the scene, met by the scene's intersection).
     pub fn hit(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<f64> {
         match *self {
-            Light::Point { .. } | Light::Gonio { .. } | Light::Area(_) | Light::Spot(_) => None,
+            Light::Point { .. }
+            | Light::Gonio { .. }
+            | Light::Area(_)
+            | Light::Spot(_)
+            | Light::Distant(_)
+            | Light::Environment(_) => None,
             Light::Sphere { c, r, .. } => {
                 let oc = o - c;
                 let b = oc.dot(d);
@@ -468,6 +524,9 @@ impl Light {
     pub fn direct_illuminance(&self, x: DVec3, n: DVec3) -> f64 {
         match *self {
             Light::Area(ref a) => a.direct_exact(x, n).unwrap_or(f64::NAN),
+            Light::Distant(ref dl) => dl.direct_illuminance(n),
+            // Sampled (MIS of the map and the receiver's lobe).
+            Light::Environment(_) => f64::NAN,
             // Emission from an opening has no closed form: sampled.
             Light::Gonio {
                 opening: Some(_), ..
@@ -522,6 +581,8 @@ impl Light {
             | Light::Gonio {
                 opening: Some(_), ..
             } => f64::NAN,
+            Light::Distant(ref dl) if dl.collimated() => dl.direct_illuminance(n) * w(-dl.d),
+            Light::Distant(_) | Light::Environment(_) => f64::NAN,
             Light::Point { p, .. } | Light::Gonio { p, .. } | Light::Spot(Spot { p, .. }) => {
                 let wi = (p - x).normalize();
                 self.direct_illuminance(x, n) * w(wi)

@@ -4,8 +4,10 @@
 //! (so tests can drive it) and returns a named record with its pdf.
 
 pub mod alias;
+pub mod cone;
 pub mod qmc;
 pub mod rng;
+pub mod sphere_table;
 pub mod warp;
 
 pub use rng::Philox4x32;

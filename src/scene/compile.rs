@@ -150,24 +150,42 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
             _ => None,
         })
         .collect();
-    let (lights, notes): (Vec<Light>, Vec<Option<String>>) = desc
-        .light
-        .iter()
-        .map(|l| light(l, ctx, &planes))
-        .collect::<Result<Vec<_>, _>>()?
-        .into_iter()
-        .unzip();
-    let names: Vec<String> = desc
-        .light
-        .iter()
-        .enumerate()
-        .map(|(k, l)| {
-            l.get_ref()
-                .name
-                .as_ref()
-                .map_or_else(|| format!("light #{}", k + 1), |n| n.get_ref().clone())
-        })
-        .collect();
+    let mut lights = Vec::with_capacity(desc.light.len());
+    let mut notes = Vec::with_capacity(desc.light.len());
+    let mut names = Vec::with_capacity(desc.light.len());
+    for (k, l) in desc.light.iter().enumerate() {
+        let (light, note) = light(l, ctx, &planes)?;
+        let name = l
+            .get_ref()
+            .name
+            .as_ref()
+            .map_or_else(|| format!("light #{}", k + 1), |n| n.get_ref().clone());
+        // Median cut: the map becomes N distant lights.
+        if let (Light::Environment(env), Some(n)) = (&light, median_cut_request(l, ctx)?) {
+            let cut = crate::light::median_cut::median_cut(env, n).map_err(|m| {
+                let sp = l.get_ref().lights.as_ref().map_or(l.span(), Spanned::span);
+                ctx.invalid(sp, "lights", m)
+            })?;
+            notes.push(note.map(|n0| {
+                format!("{n0}; median cut into {n} distant lights (an approximation: see the README for its bias)")
+            }));
+            names.push(format!("{name} [median cut 1/{n}]"));
+            for m in 1..n {
+                notes.push(None);
+                names.push(format!("{name} [median cut {}/{n}]", m + 1));
+            }
+            for c in cut {
+                let region = crate::light::StartRegion::fit(None, &[], &[]);
+                lights.push(Light::Distant(std::sync::Arc::new(
+                    crate::light::Distant::new(-c.wi, c.e_n, 0.0, region),
+                )));
+            }
+            continue;
+        }
+        lights.push(light);
+        notes.push(note);
+        names.push(name);
+    }
     // Every value was checked above with its line; what `build` checks again
     // cannot fail here.
     let mut scene =
@@ -586,6 +604,35 @@ fn light(
         }
     };
     let kind = d.kind.get_ref().as_str();
+    if kind == "environment" {
+        return environment(l, ctx);
+    }
+    not_for(
+        kind,
+        &[
+            ("scale", d.scale.as_ref().map(Spanned::span)),
+            (
+                "horizontal_illuminance",
+                d.horizontal_illuminance.as_ref().map(Spanned::span),
+            ),
+            ("mapping", d.mapping.as_ref().map(Spanned::span)),
+            ("sampling", d.sampling.as_ref().map(Spanned::span)),
+            ("lights", d.lights.as_ref().map(Spanned::span)),
+        ],
+    )?;
+    if kind == "distant" {
+        return distant(l, ctx);
+    }
+    not_for(
+        kind,
+        &[
+            ("illuminance", d.illuminance.as_ref().map(Spanned::span)),
+            (
+                "angular_diameter",
+                d.angular_diameter.as_ref().map(Spanned::span),
+            ),
+        ],
+    )?;
     if kind == "rectangle" || kind == "disc" {
         return area(l, ctx);
     }
@@ -739,9 +786,250 @@ fn light(
             d.kind.span(),
             "type",
             format!(
-                "unknown light type `{other}` (this version knows: point, sphere, spot, ies, ldt, rectangle, disc)"
+                "unknown light type `{other}` (this version knows: point, sphere, spot, ies, ldt, rectangle, disc, distant, environment)"
             ),
         )),
+    }
+}
+
+/// A distant light (`type = "distant"`): `direction` (the direction the
+/// light travels, from the sun towards the scene), `illuminance` [lx] on a
+/// plane normal to it and `angular_diameter` [deg] (default 0). Its start
+/// region is fitted when the scene is built.
+fn distant(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String>), SceneError> {
+    let d = l.get_ref();
+    let others = [
+        ("position", d.position.as_ref().map(Spanned::span)),
+        ("center", d.center.as_ref().map(Spanned::span)),
+        ("radius", d.radius.as_ref().map(Spanned::span)),
+        ("intensity", d.intensity.as_ref().map(Spanned::span)),
+        ("flux", d.flux.as_ref().map(Spanned::span)),
+        ("file", d.file.as_ref().map(Spanned::span)),
+        ("aim", d.aim.as_ref().map(Spanned::span)),
+        ("rotate", d.rotate.as_ref().map(Spanned::span)),
+        ("multiplier", d.multiplier.as_ref().map(Spanned::span)),
+        ("opening", d.opening.as_ref().map(Spanned::span)),
+        ("inner", d.inner.as_ref().map(Spanned::span)),
+        ("outer", d.outer.as_ref().map(Spanned::span)),
+        ("corner", d.corner.as_ref().map(Spanned::span)),
+        ("edge1", d.edge1.as_ref().map(Spanned::span)),
+        ("edge2", d.edge2.as_ref().map(Spanned::span)),
+        ("normal", d.normal.as_ref().map(Spanned::span)),
+        ("luminance", d.luminance.as_ref().map(Spanned::span)),
+        ("sides", d.sides.as_ref().map(Spanned::span)),
+        ("profile", d.profile.as_ref().map(Spanned::span)),
+        ("material", d.material.as_ref().map(Spanned::span)),
+    ];
+    if let Some((name, Some(span))) = others.iter().find(|f| f.1.is_some()) {
+        return Err(ctx.invalid(
+            span.clone(),
+            name,
+            "not allowed for a `distant` light (it takes `direction`, `illuminance`, `angular_diameter`)",
+        ));
+    }
+    let dir = ctx.unit_vec(
+        ctx.required(&d.direction, l.span(), "direction")?,
+        "direction",
+    )?;
+    let es = ctx.required(&d.illuminance, l.span(), "illuminance")?;
+    let e_n = ctx.nonneg(es, "illuminance")?;
+    if e_n > MAX_INTENSITY {
+        return Err(ctx.invalid(
+            es.span(),
+            "illuminance",
+            format!("out of range: at most {MAX_INTENSITY:e} lx; results scale exactly with it, so rescale the input"),
+        ));
+    }
+    let diam = match &d.angular_diameter {
+        None => 0.0,
+        Some(a) => {
+            let x = *a.get_ref();
+            let max = crate::light::Distant::MAX_DIAMETER_DEG;
+            if !(x.is_finite() && (0.0..=max).contains(&x)) {
+                return Err(ctx.invalid(
+                    a.span(),
+                    "angular_diameter",
+                    format!(
+                        "must lie in [0, {max}] degrees, got {}",
+                        crate::io::format_number(x)
+                    ),
+                ));
+            }
+            x
+        }
+    };
+    let region = crate::light::StartRegion::fit(None, &[], &[]);
+    let light = crate::light::Distant::new(dir, e_n, diam.to_radians(), region);
+    Ok((Light::Distant(std::sync::Arc::new(light)), None))
+}
+
+/// An environment light (`type = "environment"`): `file` (an HDR map,
+/// relative to the scene file), `mapping` (`"equirect"`, default, or
+/// `"angular"`), `rotate` [deg] about the vertical, and `scale` (pixel value
+/// times scale is luminance [cd/m^2]; default 1) or `horizontal_illuminance`
+/// [lx] (the map scaled to give it on an unobstructed horizontal plane).
+fn environment(
+    l: &Spanned<LightDesc>,
+    ctx: &SourceCtx,
+) -> Result<(Light, Option<String>), SceneError> {
+    use crate::light::{Environment, Mapping};
+    let d = l.get_ref();
+    let others = [
+        ("position", d.position.as_ref().map(Spanned::span)),
+        ("center", d.center.as_ref().map(Spanned::span)),
+        ("radius", d.radius.as_ref().map(Spanned::span)),
+        ("intensity", d.intensity.as_ref().map(Spanned::span)),
+        ("flux", d.flux.as_ref().map(Spanned::span)),
+        ("aim", d.aim.as_ref().map(Spanned::span)),
+        ("multiplier", d.multiplier.as_ref().map(Spanned::span)),
+        ("opening", d.opening.as_ref().map(Spanned::span)),
+        ("direction", d.direction.as_ref().map(Spanned::span)),
+        ("inner", d.inner.as_ref().map(Spanned::span)),
+        ("outer", d.outer.as_ref().map(Spanned::span)),
+        ("corner", d.corner.as_ref().map(Spanned::span)),
+        ("edge1", d.edge1.as_ref().map(Spanned::span)),
+        ("edge2", d.edge2.as_ref().map(Spanned::span)),
+        ("normal", d.normal.as_ref().map(Spanned::span)),
+        ("luminance", d.luminance.as_ref().map(Spanned::span)),
+        ("sides", d.sides.as_ref().map(Spanned::span)),
+        ("profile", d.profile.as_ref().map(Spanned::span)),
+        ("material", d.material.as_ref().map(Spanned::span)),
+        ("illuminance", d.illuminance.as_ref().map(Spanned::span)),
+        (
+            "angular_diameter",
+            d.angular_diameter.as_ref().map(Spanned::span),
+        ),
+    ];
+    if let Some((name, Some(span))) = others.iter().find(|f| f.1.is_some()) {
+        return Err(ctx.invalid(
+            span.clone(),
+            name,
+            "not allowed for an `environment` light (it takes `file`, `mapping`, `rotate`, `scale` or `horizontal_illuminance`)",
+        ));
+    }
+    median_cut_request(l, ctx)?;
+    let fs = ctx.required(&d.file, l.span(), "file")?;
+    let path = ctx.relative(fs.get_ref());
+    let map = crate::io::envmap::read_luminance_map(&path)
+        .map_err(|m| ctx.invalid(fs.span(), "file", m))?;
+    let mapping = match &d.mapping {
+        None => Mapping::Equirect,
+        Some(m) => match m.get_ref().as_str() {
+            "equirect" => Mapping::Equirect,
+            "angular" => Mapping::Angular,
+            other => {
+                return Err(ctx.invalid(
+                    m.span(),
+                    "mapping",
+                    format!("unknown mapping `{other}` (use \"equirect\" or \"angular\")"),
+                ));
+            }
+        },
+    };
+    let rotate = match &d.rotate {
+        None => 0.0,
+        Some(r) => {
+            let x = *r.get_ref();
+            if !x.is_finite() {
+                return Err(ctx.invalid(r.span(), "rotate", "must be finite [deg]"));
+            }
+            x.to_radians()
+        }
+    };
+    let build = |scale: f64, span: Range<usize>, field: &str| {
+        Environment::new(&map.y, map.width, map.height, mapping, scale, rotate)
+            .map_err(|m| ctx.invalid(span, field, m))
+    };
+    let env = match (&d.scale, &d.horizontal_illuminance) {
+        (Some(_), Some(h)) => {
+            return Err(ctx.invalid(
+                h.span(),
+                "horizontal_illuminance",
+                "give either `scale` or `horizontal_illuminance` [lx], not both",
+            ));
+        }
+        (Some(s), None) => {
+            let k = ctx.nonneg(s, "scale")?;
+            build(k, s.span(), "scale")?
+        }
+        (None, Some(h)) => {
+            let e = ctx.nonneg(h, "horizontal_illuminance")?;
+            let unit = build(1.0, fs.span(), "file")?;
+            let e1 = unit.horizontal_illuminance();
+            if e1 <= 0.0 {
+                return Err(ctx.invalid(
+                    h.span(),
+                    "horizontal_illuminance",
+                    "the map's upper hemisphere is black: no scale gives a horizontal illuminance",
+                ));
+            }
+            build(e / e1, h.span(), "horizontal_illuminance")?
+        }
+        (None, None) => build(1.0, fs.span(), "file")?,
+    };
+    if !(env.integral().is_finite() && env.integral() <= MAX_INTENSITY) {
+        return Err(ctx.invalid(
+            fs.span(),
+            "file",
+            format!("the map's luminance integrated over the sphere must be finite and at most {MAX_INTENSITY:e} cd/m^2 sr: rescale it"),
+        ));
+    }
+    let note = format!(
+        "environment map `{}`: {} x {} pixels ({}), {:.6e} lx on an unobstructed horizontal plane, int L dw = {:.6e} cd/m^2 sr",
+        fs.get_ref(),
+        map.width,
+        map.height,
+        if mapping == Mapping::Angular {
+            "angular, resampled"
+        } else {
+            "equirectangular"
+        },
+        env.horizontal_illuminance(),
+        env.integral()
+    );
+    Ok((Light::Environment(std::sync::Arc::new(env)), Some(note)))
+}
+
+/// The number of median-cut lights an environment light asks for
+/// (`sampling = "median-cut"`, `lights = N`, default 64, a power of two up
+/// to 4096), or `None` for importance sampling (`sampling = "importance"`,
+/// the default).
+fn median_cut_request(
+    l: &Spanned<LightDesc>,
+    ctx: &SourceCtx,
+) -> Result<Option<usize>, SceneError> {
+    let d = l.get_ref();
+    let cut = match &d.sampling {
+        None => false,
+        Some(s) => match s.get_ref().as_str() {
+            "importance" => false,
+            "median-cut" => true,
+            other => {
+                return Err(ctx.invalid(
+                    s.span(),
+                    "sampling",
+                    format!("unknown sampling `{other}` (use \"importance\" or \"median-cut\")"),
+                ));
+            }
+        },
+    };
+    match (&d.lights, cut) {
+        (Some(n), false) => {
+            Err(ctx.invalid(n.span(), "lights", "only with `sampling = \"median-cut\"`"))
+        }
+        (None, false) => Ok(None),
+        (None, true) => Ok(Some(64)),
+        (Some(n), true) => {
+            let v = *n.get_ref();
+            if !(1..=4096).contains(&v) || !(v as u64).is_power_of_two() {
+                return Err(ctx.invalid(
+                    n.span(),
+                    "lights",
+                    format!("must be a power of two from 1 to 4096, got {v}"),
+                ));
+            }
+            Ok(Some(v as usize))
+        }
     }
 }
 

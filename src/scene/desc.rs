@@ -130,7 +130,8 @@ pub struct MaterialDesc {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
-    /// Light kind: `"point"`, `"sphere"`, `"ies"` or `"ldt"`.
+    /// Light kind: `"point"`, `"sphere"`, `"spot"`, `"ies"`, `"ldt"`,
+    /// `"rectangle"`, `"disc"`, `"distant"` or `"environment"`.
     #[serde(rename = "type")]
     pub kind: Spanned<String>,
     /// Optional name used in messages and summaries.
@@ -147,13 +148,15 @@ pub struct LightDesc {
     /// luminaire, the flux its table is scaled to (exclusive with `multiplier`).
     pub flux: Option<Spanned<f64>>,
     /// Photometric file of a goniometric luminaire (`type = "ies"` or
-    /// `"ldt"`), relative to the scene file.
+    /// `"ldt"`) or the HDR map of an environment light, relative to the
+    /// scene file.
     pub file: Option<Spanned<String>>,
     /// Direction of a goniometric luminaire's photometric nadir (gamma = 0);
     /// default `[0, 0, -1]`.
     pub aim: Option<Spanned<Vec3>>,
     /// Turn of a goniometric luminaire about its nadir [deg], from C0 along
-    /// the world `+x` axis (projected); default 0.
+    /// the world `+x` axis (projected), or of an environment map about the
+    /// vertical `+z` (counter-clockwise seen from above); default 0.
     pub rotate: Option<Spanned<f64>>,
     /// Factor on a goniometric luminaire's candela values; default 1.
     pub multiplier: Option<Spanned<f64>>,
@@ -161,7 +164,8 @@ pub struct LightDesc {
     /// file gives (near-field accuracy) instead of from its position alone;
     /// default false.
     pub opening: Option<Spanned<bool>>,
-    /// Beam direction of a spot light (normalised; non-zero).
+    /// Beam direction of a spot light, or the direction a distant light
+    /// travels (from the sun towards the scene); normalised, non-zero.
     pub direction: Option<Spanned<Vec3>>,
     /// Inner cone half-angle of a spot light [deg]: full intensity inside.
     pub inner: Option<Spanned<f64>>,
@@ -185,4 +189,23 @@ pub struct LightDesc {
     pub profile: Option<Spanned<toml::Value>>,
     /// How an area source's surface reflects; default black.
     pub material: Option<Spanned<MaterialDesc>>,
+    /// Illuminance of a distant light on a plane normal to its direction [lx].
+    pub illuminance: Option<Spanned<f64>>,
+    /// Angular diameter of a distant light's disc [deg]; default 0 (a point
+    /// at infinity); the sun: 0.53.
+    pub angular_diameter: Option<Spanned<f64>>,
+    /// Factor from an environment map's pixel value to luminance [cd/m^2
+    /// per unit of pixel value]. Exclusive with `horizontal_illuminance`.
+    pub scale: Option<Spanned<f64>>,
+    /// Scale an environment map so that it gives this illuminance [lx] on
+    /// an unobstructed horizontal plane facing up. Exclusive with `scale`.
+    pub horizontal_illuminance: Option<Spanned<f64>>,
+    /// An environment map's layout: `"equirect"` (default) or `"angular"`.
+    pub mapping: Option<Spanned<String>>,
+    /// How an environment light is sampled: `"importance"` (default: the
+    /// map itself, importance-sampled) or `"median-cut"` (replaced by
+    /// `lights` distant lights of equal energy, an approximation).
+    pub sampling: Option<Spanned<String>>,
+    /// Number of median-cut lights (a power of two; default 64).
+    pub lights: Option<Spanned<i64>>,
 }

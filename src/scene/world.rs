@@ -391,6 +391,20 @@ impl Scene {
                     }
                     (a.center(), 0.0)
                 }
+                Light::Distant(ref dl) => {
+                    if let Err(message) = dl.check() {
+                        return Err(bad(message));
+                    }
+                    (DVec3::ZERO, 0.0)
+                }
+                Light::Environment(ref env) => {
+                    if !(env.integral().is_finite() && env.integral() > 0.0) {
+                        return Err(bad(
+                            "an environment map needs a finite luminance, not all zero".into(),
+                        ));
+                    }
+                    (DVec3::ZERO, 0.0)
+                }
             };
             if !pos.is_finite() {
                 return Err(bad(format!(
@@ -525,7 +539,64 @@ impl Scene {
         }
         scene.light_names = (1..=lights.len()).map(|k| format!("light #{k}")).collect();
         scene.set_lights(lights);
+        scene.fit_directional(&[]);
         scene.with_accel(Accel::Auto)
+    }
+
+    /// Bounding box [m] of the finite shapes (`None`: there are none).
+    pub fn finite_bounds(&self) -> Option<(DVec3, DVec3)> {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        let mut add = |a: DVec3, b: DVec3| {
+            lo = lo.min(a.min(b));
+            hi = hi.max(a.max(b));
+        };
+        for (r, _) in &self.rects {
+            for p in [r.o, r.o + r.e1, r.o + r.e2, r.o + r.e1 + r.e2] {
+                add(p, p);
+            }
+        }
+        for (d, _) in &self.discs {
+            add(d.plane.p - DVec3::splat(d.r), d.plane.p + DVec3::splat(d.r));
+        }
+        for (s, _) in &self.spheres {
+            add(s.c - DVec3::splat(s.r), s.c + DVec3::splat(s.r));
+        }
+        for (b, _) in &self.boxes {
+            add(b.lo, b.hi);
+        }
+        for (m, _) in &self.meshes {
+            let (a, b) = m.bounds();
+            add(a, b);
+        }
+        for (o, _) in &self.shs {
+            let r = DVec3::splat(o.bounds().1);
+            add(o.center() - r, o.center() + r);
+        }
+        lo.x.is_finite().then_some((lo, hi))
+    }
+
+    /// Fit the start regions of the lights at infinity
+    /// ([`crate::light::StartRegion`]) to the finite shapes, the planes and
+    /// `points` [m] (the receivers, when known: with infinite planes the
+    /// answer is exact whatever the fit, which only steers efficiency), and
+    /// renew the lights' pick table. Nothing changes without such lights.
+    pub fn fit_directional(&mut self, points: &[DVec3]) {
+        if !self.lights.iter().any(Light::is_directional) {
+            return;
+        }
+        let planes: Vec<(DVec3, DVec3)> = self.planes.iter().map(|p| (p.n, p.p)).collect();
+        let region = crate::light::StartRegion::fit(self.finite_bounds(), &planes, points);
+        let mut lights = std::mem::take(&mut self.lights);
+        for l in &mut lights {
+            l.set_region(&region);
+        }
+        self.set_lights(lights);
+    }
+
+    /// Whether some light lies at infinity (distant or environment).
+    pub fn has_directional(&self) -> bool {
+        self.lights.iter().any(Light::is_directional)
     }
 
     /// Name the lights (in their order) for messages and summaries.
@@ -632,7 +703,7 @@ impl Scene {
     pub fn sealed(&self, k: usize) -> bool {
         const PROBES: usize = 32;
         let l = &self.lights[k];
-        if matches!(l, Light::Area(_)) {
+        if matches!(l, Light::Area(_)) || l.is_directional() {
             return false;
         }
         let p = l.position();

@@ -181,7 +181,8 @@ impl Tallies {
     /// Root mean square of the relative standard error of the total over the receivers.
     pub fn rms_rel_error(&self, direct: &[f64]) -> f64 {
         let n = self.estimated.len().max(1) as f64;
-        let s: f64 = self.rel_errors(direct).map(|r| r * r).sum();
+        // A fold from +0: an empty f64 sum is -0, which printed as "-0.000e0".
+        let s = self.rel_errors(direct).fold(0.0, |a, r| a + r * r);
         (s / n).sqrt()
     }
 }

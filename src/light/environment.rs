@@ -1,0 +1,309 @@
+//! An environment light: luminance arriving from every direction at
+//! infinity, given by an HDR map (a sky, a light probe).
+//!
+//! **Axes.** The map's own frame has `+z` up; `theta` is measured from `+z`
+//! and `phi` from `+x` towards `+y`. An *equirectangular* map of `W x H`
+//! pixels covers `phi` from 0 at its left edge to `2 pi` at its right edge
+//! (column `j` spans `[2 pi j / W, 2 pi (j + 1) / W]`) and `theta` from 0
+//! (the zenith, the top row) to `pi` (the nadir, the bottom row; row `i`
+//! spans `[pi i / H, pi (i + 1) / H]`). An *angular* (mirror-ball light
+//! probe, Debevec's angular map) image is a disc: its centre looks along
+//! `+x`, its top along `+z`, its right along `-y` (as seen by a viewer
+//! looking along `+x`), and the angle from `+x` grows linearly with the
+//! distance from the centre, to 180 degrees on the rim. The light is
+//! turned by `rotate` about the vertical: a map feature at `phi` appears
+//! at world azimuth `phi + rotate`.
+//!
+//! **Luminance.** A pixel's value (its `Y`, exactly the value of a grey
+//! pixel; [`crate::io::envmap::luminance_of`]) times `scale` is the
+//! luminance [cd/m^2] arriving from the pixel's directions. The light is
+//! the piecewise-constant function of an equirectangular table: the map
+//! itself, or an angular map resampled onto a `2N x N` table (`N` its
+//! side; each cell the mean of 4 x 4 points, equal in solid angle). Every
+//! number (direct light, chains, views) uses that one function, and the
+//! table's [`SphereTable`] samples it exactly in proportion to luminance.
+//!
+//! **Chains** start like a distant light's ([`super::StartRegion`]): a
+//! direction `wi` drawn from the table (density `L(wi) / F`, `F = int L
+//! dw`), the light travelling along `-wi`, a start point on the plane
+//! across it with density `p_s`; each carries `F / p_s` [lm].
+
+use super::StartRegion;
+use crate::sampling::sphere_table::SphereTable;
+use crate::sampling::warp::Frame;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// How the map's pixels cover the sphere.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mapping {
+    /// Equirectangular (latitude-longitude).
+    Equirect,
+    /// Angular (mirror-ball light probe).
+    Angular,
+}
+
+/// An environment light (see the module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Environment {
+    /// Luminance [cd/m^2] per cell of the map's frame (scale applied).
+    table: SphereTable,
+    /// `(sin, cos)` of the turn about `+z` [rad].
+    turn: (f64, f64),
+    /// Where chains start.
+    pub region: StartRegion,
+}
+
+impl Environment {
+    /// The light of a map of `width x height` pixel values `y` (row 0 at
+    /// the top) with `mapping`, times `scale`, turned by `rotate` [rad].
+    pub fn new(
+        y: &[f64],
+        width: usize,
+        height: usize,
+        mapping: Mapping,
+        scale: f64,
+        rotate: f64,
+    ) -> Result<Self, String> {
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(format!("scale must be finite and >= 0, got {scale}"));
+        }
+        let (values, rows, cols) = match mapping {
+            Mapping::Equirect => (y.iter().map(|v| v * scale).collect(), height, width),
+            Mapping::Angular => {
+                let n = width.max(height);
+                (resample_angular(y, width, height, n, scale), n, 2 * n)
+            }
+        };
+        let table = SphereTable::new(values, rows, cols).map_err(|e| match e {
+            crate::sampling::sphere_table::TableError::Empty => {
+                "the map is black: an environment light needs some luminance".to_string()
+            }
+            e => e.to_string(),
+        })?;
+        Ok(Self {
+            table,
+            turn: rotate.sin_cos(),
+            region: StartRegion::fit(None, &[], &[]),
+        })
+    }
+
+    /// Rows and columns of the table.
+    pub fn table_size(&self) -> (usize, usize) {
+        self.table.size()
+    }
+
+    /// Luminance [cd/m^2] of cell `(i, j)`.
+    pub fn cell_value(&self, i: usize, j: usize) -> f64 {
+        self.table.value(i, j)
+    }
+
+    /// Solid angle [sr] of a cell of row `i`.
+    pub fn cell_solid_angle(&self, i: usize) -> f64 {
+        self.table.cell_solid_angle(i)
+    }
+
+    /// World direction of the centre of cell `(i, j)` (mid `theta`, mid
+    /// `phi`; indices clamped to the table).
+    pub fn cell_direction(&self, i: usize, j: usize) -> DVec3 {
+        let (rows, cols) = self.table.size();
+        let (i, j) = (i.min(rows - 1), j.min(cols - 1));
+        let theta = PI * (i as f64 + 0.5) / rows as f64;
+        let phi = 2.0 * PI * (j as f64 + 0.5) / cols as f64;
+        self.to_world(theta.cos(), phi)
+    }
+
+    /// The map frame's `(cos theta, phi)` of world direction `w` (unit).
+    #[inline]
+    fn to_map(&self, w: DVec3) -> (f64, f64) {
+        let (s, c) = self.turn;
+        // Undo the turn: map = R(-rotate) world.
+        let x = c * w.x + s * w.y;
+        let y = -s * w.x + c * w.y;
+        (w.z.clamp(-1.0, 1.0), y.atan2(x).rem_euclid(2.0 * PI))
+    }
+
+    /// World direction of map coordinates.
+    #[inline]
+    fn to_world(&self, cos_theta: f64, phi: f64) -> DVec3 {
+        let st = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+        let (sp, cp) = phi.sin_cos();
+        let (x, y) = (st * cp, st * sp);
+        let (s, c) = self.turn;
+        DVec3::new(c * x - s * y, s * x + c * y, cos_theta)
+    }
+
+    /// Luminance [cd/m^2] arriving from unit world direction `wi` (towards the sky).
+    #[inline]
+    pub fn luminance(&self, wi: DVec3) -> f64 {
+        let (ct, phi) = self.to_map(wi);
+        let (i, j) = self.table.cell_of(ct, phi);
+        self.table.value(i, j)
+    }
+
+    /// Density [1/sr] of [`Self::sample`] at `wi`: `L(wi) / F`.
+    #[inline]
+    pub fn pdf(&self, wi: DVec3) -> f64 {
+        let (ct, phi) = self.to_map(wi);
+        self.table.pdf(ct, phi)
+    }
+
+    /// A direction towards the sky drawn in proportion to luminance, with
+    /// its density [1/sr] and luminance [cd/m^2].
+    #[inline]
+    pub fn sample(&self, u: [f64; 2]) -> (DVec3, f64, f64) {
+        let s = self.table.sample(u);
+        (
+            self.to_world(s.cos_theta, s.phi),
+            s.pdf,
+            self.table.value(s.cell.0, s.cell.1),
+        )
+    }
+
+    /// `F = int L dw` over the sphere [cd/m^2 sr].
+    pub fn integral(&self) -> f64 {
+        self.table.integral()
+    }
+
+    /// Illuminance [lx] on an unobstructed horizontal plane facing up:
+    /// `int_{upper} L cos dw`, exact for the table (each cell `L (cos^2
+    /// theta_i - cos^2 theta_i+1) / 2 dphi`, clipped at the horizon).
+    pub fn horizontal_illuminance(&self) -> f64 {
+        let (rows, cols) = self.table.size();
+        let dphi = 2.0 * PI / cols as f64;
+        (0..rows)
+            .map(|i| {
+                let (c0, c1) = self.table.row_edges(i);
+                let (c0, c1) = (c0.max(0.0), c1.max(0.0));
+                let w = 0.5 * (c0 * c0 - c1 * c1) * dphi;
+                if w <= 0.0 {
+                    0.0
+                } else {
+                    (0..cols).map(|j| self.table.value(i, j)).sum::<f64>() * w
+                }
+            })
+            .sum()
+    }
+
+    /// The chains' pick weight [lm]: `F` times the start region's nominal area.
+    pub fn power(&self) -> f64 {
+        self.integral() * self.region.nominal_area(1.0)
+    }
+
+    /// An emitted ray: a direction from `u_dir`, a start point from `u_pos`.
+    pub fn sample_emission(&self, u_pos: [f64; 2], u_dir: [f64; 2]) -> super::EmissionSample {
+        let (wi, pdf_dir, le) = self.sample(u_dir);
+        let d = -wi;
+        let (s, pdf_pos) = self.region.sample_point(&Frame::from_normal(d), 1.0, u_pos);
+        super::EmissionSample {
+            o: self.region.upstream(s, d),
+            d,
+            le,
+            cos: 1.0,
+            pdf_pos,
+            pdf_dir,
+            delta_pos: false,
+            delta_dir: false,
+            phi: self.integral() / pdf_pos,
+        }
+    }
+}
+
+/// Direction (map frame) of angular-map image coordinates `a` (right) and
+/// `b` (up) in [-1, 1]; `None` outside the disc.
+pub fn angular_direction(a: f64, b: f64) -> Option<DVec3> {
+    let r = a.hypot(b);
+    if r > 1.0 {
+        return None;
+    }
+    let g = PI * r;
+    let (sg, cg) = g.sin_cos();
+    if r == 0.0 {
+        return Some(DVec3::X);
+    }
+    // Right is -y, up is +z.
+    Some(DVec3::new(cg, -sg * a / r, sg * b / r))
+}
+
+/// Image coordinates `(a, b)` of a map-frame direction on the angular map.
+pub fn angular_coords(w: DVec3) -> (f64, f64) {
+    let r = w.x.clamp(-1.0, 1.0).acos() / PI;
+    let s = w.y.hypot(w.z);
+    if s == 0.0 {
+        return (r, 0.0);
+    }
+    (r * -w.y / s, r * w.z / s)
+}
+
+/// Resample an angular map onto an `2n x n` equirectangular table (times
+/// `scale`): each cell the mean of 4 x 4 points equal in solid angle
+/// (`cos theta` and `phi` at the quarter points), each the nearest pixel.
+fn resample_angular(y: &[f64], w: usize, h: usize, n: usize, scale: f64) -> Vec<f64> {
+    let (rows, cols) = (n, 2 * n);
+    let mut out = Vec::with_capacity(rows * cols);
+    for i in 0..rows {
+        let (c0, c1) = (
+            (PI * i as f64 / rows as f64).cos(),
+            (PI * (i + 1) as f64 / rows as f64).cos(),
+        );
+        for j in 0..cols {
+            let mut sum = 0.0;
+            for a in 0..4 {
+                let ct = c0 + (c1 - c0) * (a as f64 + 0.5) / 4.0;
+                for b in 0..4 {
+                    let phi = 2.0 * PI * (j as f64 + (b as f64 + 0.5) / 4.0) / cols as f64;
+                    let st = (1.0 - ct * ct).max(0.0).sqrt();
+                    let d = DVec3::new(st * phi.cos(), st * phi.sin(), ct);
+                    let (u, v) = angular_coords(d);
+                    let x = (((u + 1.0) / 2.0 * w as f64) as usize).min(w - 1);
+                    let yy = (((1.0 - v) / 2.0 * h as f64) as usize).min(h - 1);
+                    sum += y[yy * w + x];
+                }
+            }
+            out.push(sum / 16.0 * scale);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn angular_map_round_trips_and_axes() {
+        for (a, b) in [(0.3, 0.2), (-0.7, 0.1), (0.0, -0.9), (0.5, 0.5)] {
+            let d = angular_direction(a, b).unwrap();
+            let (a2, b2) = angular_coords(d);
+            assert!((a2 - a).abs() < 1e-12 && (b2 - b).abs() < 1e-12);
+        }
+        assert_eq!(angular_direction(0.0, 0.0), Some(DVec3::X));
+        // Top of the disc, half way: 90 degrees from +x towards +z.
+        let up = angular_direction(0.0, 0.5).unwrap();
+        assert!((up - DVec3::Z).length() < 1e-12);
+        let right = angular_direction(0.5, 0.0).unwrap();
+        assert!((right + DVec3::Y).length() < 1e-12);
+        assert!(angular_direction(0.9, 0.9).is_none());
+    }
+
+    #[test]
+    fn rotation_and_lookup_follow_the_axes() {
+        // 4 x 2 map: upper row values 1, 2, 3, 4 by phi quadrant, lower row 0.
+        let y = [1.0, 2.0, 3.0, 4.0, 0.0, 0.0, 0.0, 0.0];
+        let e = Environment::new(&y, 4, 2, Mapping::Equirect, 2.0, 0.0).unwrap();
+        let up = |phi: f64| DVec3::new(phi.cos() * 0.6, phi.sin() * 0.6, 0.8);
+        assert_eq!(e.luminance(up(0.1)), 2.0);
+        assert_eq!(e.luminance(up(PI / 2.0 + 0.1)), 4.0);
+        assert_eq!(e.luminance(-DVec3::Z), 0.0);
+        let r = Environment::new(&y, 4, 2, Mapping::Equirect, 2.0, PI / 2.0).unwrap();
+        assert_eq!(r.luminance(up(PI / 2.0 + 0.1)), 2.0);
+        // Uniform upper hemisphere L: E_h = pi L.
+        let u = Environment::new(&[5.0, 5.0, 0.0, 0.0], 2, 2, Mapping::Equirect, 1.0, 0.0).unwrap();
+        assert!((u.horizontal_illuminance() - 5.0 * PI).abs() < 1e-12);
+        for k in 0..100 {
+            let s = u.sample([(k as f64 + 0.5) / 100.0, 0.37]);
+            assert!(s.0.z >= 0.0 && s.2 == 5.0);
+            assert!((u.pdf(s.0) - s.1).abs() < 1e-15);
+        }
+    }
+}

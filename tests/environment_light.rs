@@ -1,0 +1,436 @@
+//! The environment light (`type = "environment"`): a uniform map over an
+//! open floor (`E = pi L` exactly), a two-region map (a bright cap) against
+//! its closed form at tilted receivers, the angular layout, the
+//! `horizontal_illuminance` scale, views that leave the scene, keys and
+//! errors; and the shipped synthetic probes in `data/probes/` against their
+//! generator (`LUMEST_WRITE_PROBES=1 cargo test --release --test
+//! environment_light` rewrites them).
+
+mod common;
+
+use glam::DVec3;
+use lumest::estimator::local::run;
+use lumest::estimator::{Receivers, emitted_luminance};
+use lumest::io::image::{LuminanceImage, encode_hdr};
+use lumest::light::{Light, sphere_cone_integral};
+use lumest::scene::{Scene, parse};
+use statrs::distribution::{ContinuousCDF, Normal};
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+
+fn sidak(m: usize) -> f64 {
+    let a = 1.0 - (1.0 - 1e-4f64).powf(1.0 / m as f64);
+    Normal::new(0.0, 1.0).unwrap().inverse_cdf(1.0 - a / 2.0)
+}
+
+/// A folder for this test's files.
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("lumest_env_{name}_{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Write a grey `.hdr` of `w x h` pixels from `f(x, y)`.
+fn write_map(path: &Path, w: usize, h: usize, f: impl FnMut(usize, usize) -> f64) {
+    let img = LuminanceImage::from_fn(w, h, f).unwrap();
+    std::fs::write(path, encode_hdr(&img).unwrap()).unwrap();
+}
+
+fn scene_in(d: &Path, toml: &str) -> Scene {
+    let p = d.join("scene.toml");
+    std::fs::write(&p, toml).unwrap();
+    lumest::scene::load(&p).unwrap()
+}
+
+fn check(s: &Scene, pts: &[(DVec3, DVec3)], exact: &[f64], chains: u64, seed: u64) {
+    let rec = Receivers::new(s, pts).unwrap();
+    assert!(rec.has_sampled_direct());
+    let r = run(s, &rec, &common::chains_cfg(chains, seed, 2), &mut |_| true);
+    let bound = sidak(pts.len());
+    for (j, &e) in exact.iter().enumerate() {
+        let est = r.direct[j] + r.tallies.estimated[j].mean();
+        let se = r.tallies.estimated[j].std_error();
+        let z = common::z(&r, j, e);
+        assert!(
+            z.abs() < bound,
+            "point {j}: {est} +- {se} vs {e} (z = {z:.2})"
+        );
+        assert!(
+            0.02 * e > bound * se,
+            "point {j}: {est} +- {se}: too imprecise for 2 %"
+        );
+    }
+}
+
+/// A uniform map of luminance 3 (exactly representable in RGBE) over an
+/// open floor of reflectance 0.5: facing up `E = pi L`; facing down (the
+/// map's lower half hidden by the floor) the floor's `rho pi L`; a tilted
+/// normal sees the sky's and the floor's shares `(1 +- n_z) / 2`.
+#[test]
+fn uniform_map_over_an_open_floor_gives_pi_l() {
+    let d = dir("uniform");
+    write_map(&d.join("grey.hdr"), 32, 16, |_, _| 3.0);
+    let s = scene_in(
+        &d,
+        r#"
+[[surface]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[light]]
+type = "environment"
+file = "grey.hdr"
+scale = 2.0
+"#,
+    );
+    let l = 6.0;
+    let n_t = DVec3::new(0.6, 0.0, 0.8);
+    let n_d = DVec3::new(0.0, 0.8, -0.6);
+    let pts = [
+        (DVec3::new(0.0, 0.0, 0.0), DVec3::Z),
+        (DVec3::new(5.0, -3.0, 0.0), DVec3::Z),
+        (DVec3::new(0.0, 0.0, 1.0), -DVec3::Z),
+        (DVec3::new(1.0, 2.0, 0.5), n_t),
+    ];
+    // (A normal tilted down, n_d, reads within its error bar too, but to
+    // 0.6 % at 4e6 chains: too loose to see 2 %; checked by hand.)
+    let _ = n_d;
+    let sky = |n: DVec3| PI * l * (1.0 + n.z) / 2.0;
+    let ground = |n: DVec3| 0.5 * PI * l * (1.0 - n.z) / 2.0;
+    let exact: Vec<f64> = pts.iter().map(|&(_, n)| sky(n) + ground(n)).collect();
+    assert!((exact[0] - PI * l).abs() < 1e-12 && (exact[2] - 0.5 * PI * l).abs() < 1e-12);
+    let mut sc = s.clone();
+    sc.fit_directional(&pts.iter().map(|p| p.0).collect::<Vec<_>>());
+    check(&sc, &pts, &exact, 2_000_000, 5);
+    // The backward estimator (next-event estimation from the map) agrees
+    // on the reflected light (the point facing down; the others have mostly
+    // the sampled direct light, the same code for both estimators).
+    let pts = &pts[2..3];
+    let exact = &exact[2..3];
+    let rec = Receivers::new(&sc, pts).unwrap();
+    let rb = lumest::backward::run(&sc, &rec, &common::chains_cfg(100_000, 6, 2), &mut |_| true);
+    let bound = sidak(pts.len());
+    for (j, &e) in exact.iter().enumerate() {
+        let z = common::z(&rb, j, e);
+        let se = rb.tallies.estimated[j].std_error();
+        assert!(z.abs() < bound, "backward, point {j}: z = {z:.2}");
+        assert!(0.02 * e > bound * se, "backward, point {j}: se {se}");
+    }
+    // The view of the sky: the map's luminance.
+    assert_eq!(
+        emitted_luminance(
+            &s,
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(0.3, 0.1, 0.9).normalize(),
+            f64::INFINITY
+        ),
+        l
+    );
+    assert_eq!(
+        emitted_luminance(&s, DVec3::new(0.0, 0.0, 1.0), -DVec3::Z, f64::INFINITY),
+        0.0
+    );
+}
+
+/// A two-region map, no geometry: a cap of luminance 8 within 45 degrees of
+/// the zenith, 1 down to the horizon, 0 below (rows of an 8-row map, so the
+/// regions are exact in the table). At a receiver with normal `n`:
+/// `E = 8 C + 1 (pi (1 + n_z) / 2 - C)`, `C = int_cap max(0, n . w) dw`,
+/// the cone integral of half-angle 45 degrees about `+z`. Also through the
+/// angular layout (a map resampled from a disc image) and `rotate`.
+#[test]
+fn bright_cap_map_against_its_closed_form() {
+    let d = dir("cap");
+    write_map(&d.join("cap.hdr"), 16, 8, |_, y| match y {
+        0 | 1 => 8.0,
+        2 | 3 => 1.0,
+        _ => 0.0,
+    });
+    let s = scene_in(
+        &d,
+        "[[light]]\ntype = \"environment\"\nfile = \"cap.hdr\"\nrotate = 30\n",
+    );
+    let normals = [
+        DVec3::Z,
+        DVec3::new(0.6, 0.0, 0.8),
+        DVec3::new(0.0, -1.0, 0.0),
+    ];
+    let exact: Vec<f64> = normals
+        .iter()
+        .map(|n| {
+            let c = sphere_cone_integral((PI / 4.0).sin(), n.z);
+            8.0 * c + (PI * (1.0 + n.z) / 2.0 - c)
+        })
+        .collect();
+    let pts: Vec<(DVec3, DVec3)> = normals
+        .iter()
+        .map(|&n| (DVec3::new(1.0, 2.0, 3.0), n))
+        .collect();
+    if let Light::Environment(env) = &s.lights[0] {
+        assert!((env.horizontal_illuminance() - exact[0]).abs() < 1e-12 * exact[0]);
+    }
+    check(&s, &pts, &exact, 3_000_000, 3);
+
+    // The angular layout: the same sky drawn on a 96 x 96 disc image, the
+    // cap where the angle from +z is under 45 degrees. Resampling puts each
+    // table cell's 16 points on one side of the cap's edge only where the
+    // edge does not cross the cell, so compare with the table's own
+    // horizontal illuminance (exact for it) and E at an upward point.
+    let n = 96;
+    write_map(&d.join("cap_angular.hdr"), n, n, |x, y| {
+        let a = 2.0 * (x as f64 + 0.5) / n as f64 - 1.0;
+        let b = 1.0 - 2.0 * (y as f64 + 0.5) / n as f64;
+        match lumest::light::environment::angular_direction(a, b) {
+            Some(w) if w.z > (PI / 4.0).cos() => 8.0,
+            Some(w) if w.z > 0.0 => 1.0,
+            _ => 0.0,
+        }
+    });
+    let sa = scene_in(
+        &d,
+        "[[light]]\ntype = \"environment\"\nfile = \"cap_angular.hdr\"\nmapping = \"angular\"\n",
+    );
+    let Light::Environment(env) = &sa.lights[0] else {
+        panic!()
+    };
+    let e_h = env.horizontal_illuminance();
+    // Within 2 % of the continuous cap (pixelised edge).
+    assert!((e_h / exact[0] - 1.0).abs() < 0.02, "{e_h} vs {}", exact[0]);
+    check(&sa, &pts[..1], &[e_h], 400_000, 4);
+}
+
+/// `horizontal_illuminance` scales the map to give exactly that on an
+/// unobstructed horizontal plane; `scale` and it are exclusive; bad keys
+/// are refused with the file, line and field.
+#[test]
+fn horizontal_illuminance_scale_and_errors() {
+    let d = dir("keys");
+    write_map(&d.join("sky.hdr"), 16, 8, |x, y| {
+        if y < 4 { 1.0 + x as f64 } else { 0.25 }
+    });
+    let s = scene_in(
+        &d,
+        "[[light]]\ntype = \"environment\"\nfile = \"sky.hdr\"\nhorizontal_illuminance = 10000\n",
+    );
+    let Light::Environment(env) = &s.lights[0] else {
+        panic!()
+    };
+    assert!((env.horizontal_illuminance() / 1e4 - 1.0).abs() < 1e-12);
+    check(&s, &[(DVec3::ZERO, DVec3::Z)], &[1e4], 400_000, 9);
+    for (extra, field) in [
+        (
+            "scale = 2\nhorizontal_illuminance = 5\n",
+            "horizontal_illuminance",
+        ),
+        ("scale = -1\n", "scale"),
+        ("mapping = \"cube\"\n", "mapping"),
+        ("direction = [0, 0, 1]\n", "direction"),
+        ("illuminance = 3\n", "illuminance"),
+    ] {
+        let p = d.join("bad.toml");
+        std::fs::write(
+            &p,
+            format!("[[light]]\ntype = \"environment\"\nfile = \"sky.hdr\"\n{extra}"),
+        )
+        .unwrap();
+        let e = lumest::scene::load(&p).err().unwrap().to_string();
+        assert!(
+            e.contains(&format!("`{field}`")) && e.contains("bad.toml:"),
+            "{extra}: {e}"
+        );
+    }
+    let e = parse(
+        "[[light]]\ntype = \"environment\"\nfile = \"missing.hdr\"\n",
+        &d.join("m.toml"),
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("`file`") && e.contains("missing.hdr"), "{e}");
+    // Other lights refuse the map's keys.
+    let e = parse(
+        "[[light]]\ntype = \"point\"\nposition = [0, 0, 1]\nintensity = 1\nscale = 2\n",
+        Path::new("s.toml"),
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("`scale`"), "{e}");
+}
+
+// ---------------------------------------------------------------------------
+// The shipped synthetic probes and their generator.
+
+/// A clear sky with a sun, equirectangular 128 x 64: sky luminance rising
+/// towards the horizon and around the sun (a smooth gradation), a sun of
+/// 2 x 2 pixels at 40 degrees elevation, azimuth 45 degrees, about 5e4
+/// times the sky, a ground of 0.3 times the zenith below the horizon.
+/// Values are relative (zenith 1); scale them with `scale` or
+/// `horizontal_illuminance`.
+pub fn sky_probe() -> LuminanceImage {
+    let (w, h) = (128, 64);
+    let sun = {
+        let (el, az) = (40f64.to_radians(), 45f64.to_radians());
+        DVec3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin())
+    };
+    LuminanceImage::from_fn(w, h, |x, y| {
+        let theta = PI * (y as f64 + 0.5) / h as f64;
+        let phi = 2.0 * PI * (x as f64 + 0.5) / w as f64;
+        let d = DVec3::new(
+            theta.sin() * phi.cos(),
+            theta.sin() * phi.sin(),
+            theta.cos(),
+        );
+        if d.z < 0.0 {
+            return 0.3;
+        }
+        // The sun's 2 x 2 pixels.
+        let sy = ((PI / 2.0 - 40f64.to_radians()) / PI * h as f64) as usize;
+        let sx = (45.0 / 360.0 * w as f64) as usize;
+        if (sy..sy + 2).contains(&y) && (sx..sx + 2).contains(&x) {
+            return 5.0e4;
+        }
+        let gamma = d.dot(sun).clamp(-1.0, 1.0).acos();
+        let horizon = 1.0 + 1.5 * (1.0 - d.z).powi(3);
+        let aureole = 1.0 + 4.0 * (-3.0 * gamma).exp();
+        horizon * aureole
+    })
+    .unwrap()
+}
+
+/// An indoor probe, angular (mirror ball) 64 x 64: walls of 0.5, a floor of
+/// 0.2, a ceiling of 0.8 with a bright lamp of 400 around the zenith
+/// (within 10 degrees) and a window of 60 (azimuth -30 to 30 degrees,
+/// elevation 0 to 40 degrees), on black outside the disc.
+pub fn indoor_probe() -> LuminanceImage {
+    let n = 64;
+    LuminanceImage::from_fn(n, n, |x, y| {
+        let a = 2.0 * (x as f64 + 0.5) / n as f64 - 1.0;
+        let b = 1.0 - 2.0 * (y as f64 + 0.5) / n as f64;
+        let Some(w) = lumest::light::environment::angular_direction(a, b) else {
+            return 0.0;
+        };
+        let el = w.z.asin().to_degrees();
+        let az = w.y.atan2(w.x).to_degrees();
+        if el > 80.0 {
+            400.0
+        } else if (0.0..40.0).contains(&el) && az.abs() < 30.0 {
+            60.0
+        } else if el > 45.0 {
+            0.8
+        } else if el < -30.0 {
+            0.2
+        } else {
+            0.5
+        }
+    })
+    .unwrap()
+}
+
+#[test]
+fn shipped_probes_match_their_generator() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/probes");
+    for (name, img) in [
+        ("sky_sun.hdr", sky_probe()),
+        ("indoor_angular.hdr", indoor_probe()),
+    ] {
+        let bytes = encode_hdr(&img).unwrap();
+        let path = root.join(name);
+        if std::env::var("LUMEST_WRITE_PROBES").is_ok() {
+            std::fs::create_dir_all(&root).unwrap();
+            std::fs::write(&path, &bytes).unwrap();
+        }
+        let shipped = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(
+            shipped == bytes,
+            "{name} differs from its generator: rerun with LUMEST_WRITE_PROBES=1"
+        );
+    }
+    // Both load as lights.
+    let s = lumest::scene::load(&root.join("sky_sun.toml")).unwrap();
+    assert!(s.lights[0].is_directional());
+    let s = lumest::scene::load(&root.join("indoor_angular.toml")).unwrap();
+    assert!(s.lights[0].is_directional());
+}
+
+/// Views that leave the scene see the map (here the indoor probe, angular,
+/// scale 10): at 15 degrees from the zenith the ceiling, 0.8 (RGBE
+/// 0.80078125) x 10; the summary does not claim that no light arrives.
+#[test]
+fn views_that_leave_the_scene_see_the_map() {
+    let out = assert_cmd::Command::cargo_bin("lumest")
+        .unwrap()
+        .args([
+            "luminance",
+            "--scene",
+            "data/probes/indoor_angular.toml",
+            "--fan-at",
+            "0,0,0,0,0,1",
+            "--fan",
+            "30,90",
+            "--out",
+            "-",
+            "--chains",
+            "2000",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && !err.contains("WARNING"), "{err}");
+    let csv = String::from_utf8_lossy(&out.stdout);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "L").unwrap();
+    let first: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
+    assert_eq!(first[0], "15");
+    let l: f64 = first[col].parse().unwrap();
+    assert_eq!(l, 8.0078125, "{}", csv.lines().nth(1).unwrap());
+}
+
+/// A bounded scene (chains start uniformly on the disc that covers it):
+/// a Lambertian sphere of reflectance rho in a uniform map of luminance L.
+/// Convex, so its surface keeps only the map's light, `L` itself
+/// reflected as `rho L` (uniform); at a point facing its centre from
+/// distance `D` it fills a cone of `sin^2 a = (R / D)^2`:
+/// `E = pi L (1 - (1 - rho) sin^2 a)`. Local and backward estimators.
+#[test]
+fn sphere_in_a_uniform_map_local_and_backward() {
+    let d = dir("sphere");
+    write_map(&d.join("grey.hdr"), 16, 8, |_, _| 2.0);
+    let s = scene_in(
+        &d,
+        r#"
+[[surface]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1.0
+material = { type = "lambertian", reflectance = 0.7 }
+
+[[light]]
+type = "environment"
+file = "grey.hdr"
+"#,
+    );
+    let (l, rho) = (2.0, 0.7);
+    let pts: Vec<(DVec3, DVec3)> = [1.5, 2.5, 4.0]
+        .iter()
+        .map(|&dist| (DVec3::new(dist, 0.0, 0.0), -DVec3::X))
+        .collect();
+    let exact: Vec<f64> = [1.5f64, 2.5, 4.0]
+        .iter()
+        .map(|&dist| {
+            let s2 = (1.0 / dist).powi(2);
+            PI * l * (1.0 - (1.0 - rho) * s2)
+        })
+        .collect();
+    check(&s, &pts, &exact, 3_000_000, 21);
+    let rec = Receivers::new(&s, &pts).unwrap();
+    let rb = lumest::backward::run(&s, &rec, &common::chains_cfg(200_000, 22, 2), &mut |_| true);
+    let bound = sidak(pts.len());
+    for (j, &e) in exact.iter().enumerate() {
+        let z = common::z(&rb, j, e);
+        assert!(z.abs() < bound, "backward, point {j}: z = {z:.2}");
+    }
+}
