@@ -170,7 +170,7 @@ fn scene_cases() -> Vec<Case> {
         case(Ch::Scene, "byte-order mark before the first table", text(format!("\u{feff}{SCENE}")), Same),
         case(Ch::Scene, "CRLF line ends", text(SCENE.replace('\n', "\r\n")), Same),
         case(Ch::Scene, "comments and blank lines everywhere", text(SCENE.replace('\n', "  # note\n\n")), Same),
-        scene_add("unknown top-level key", "lights = 1\n", Error("unknown field `lights`")),
+        scene_add("unknown key", "lumens = 1\n", Error("unknown field `lumens`")),
         scene_add("`[surface]` after `[[surface]]` (single brackets)", "[surface]\ntype = \"plane\"\n", Error("write `[[surface]]` with double brackets")),
         case(
             Ch::Scene,
