@@ -173,6 +173,43 @@ pub fn result_cells_plus(r: &RunResult, j: usize, extra: f64) -> Vec<String> {
     c
 }
 
+/// The daylight-factor columns (`--daylight-factor`), in percent.
+pub const DAYLIGHT_COLUMNS: [&str; 4] = ["DF", "DF_stderr", "DF_sky", "DF_sky_stderr"];
+
+/// Daylight factor cells of receiver `j` for the unobstructed horizontal
+/// illuminance `e_h` [lx] (exact): `100 E / e_h` and the sky component
+/// `100 E_direct / e_h` (the direct light: exact plus sampled), with their
+/// standard errors (those of `E` and of the sampled direct light, scaled).
+fn daylight_cells(r: &RunResult, j: usize, e_h: f64) -> Vec<String> {
+    let w = &r.tallies.estimated[j];
+    let k = 100.0 / e_h;
+    let sampled = r.tallies.sampled_direct.get(j);
+    let direct = r.direct[j] + sampled.map_or(0.0, |s| s.mean());
+    vec![
+        format_number(k * (r.direct[j] + w.mean())),
+        format_number(k * w.std_error()),
+        format_number(k * direct),
+        format_number(k * sampled.map_or(0.0, |s| s.std_error())),
+    ]
+}
+
+/// The illuminance [lx] the scene's daylight (sky, sun, environment and
+/// other distant lights) gives on an unobstructed horizontal plane facing
+/// up, exactly; `None` when the scene has none.
+pub fn daylight_reference(scene: &Scene) -> Option<f64> {
+    use crate::light::Light;
+    let parts: Vec<f64> = scene
+        .lights
+        .iter()
+        .filter_map(|l| match l {
+            Light::Environment(env) => Some(env.horizontal_illuminance()),
+            Light::Distant(_) => Some(l.direct_illuminance(glam::DVec3::ZERO, glam::DVec3::Z)),
+            _ => None,
+        })
+        .collect();
+    (!parts.is_empty()).then(|| parts.iter().sum())
+}
+
 /// Cells of an exact result `l` with no reflected light (a view that sees
 /// nothing or a black back side, possibly through an emitting sphere).
 fn exact_cells(l: f64, orders: u32) -> Vec<String> {
@@ -331,6 +368,9 @@ pub struct Job {
     pub emitted: Vec<f64>,
     /// The compiled receivers: points first, then the views that meet a front side.
     pub receivers: Receivers,
+    /// With `--daylight-factor`: the unobstructed horizontal illuminance
+    /// [lx] that daylight factors divide by.
+    pub daylight: Option<f64>,
 }
 
 impl Job {
@@ -390,6 +430,7 @@ impl Job {
             view_receiver,
             emitted,
             receivers,
+            daylight: None,
         })
     }
 
@@ -407,10 +448,16 @@ impl Job {
         };
         let mut headers = t.headers.clone();
         headers.extend(result_headers("E", orders));
+        if self.daylight.is_some() {
+            headers.extend(DAYLIGHT_COLUMNS.map(String::from));
+        }
         let rows = t.rows.iter().enumerate().map(|(j, row)| {
             let mut c = row.clone();
             c.resize(t.headers.len(), String::new());
             c.extend(result_cells(r, j));
+            if let Some(e_h) = self.daylight {
+                c.extend(daylight_cells(r, j, e_h));
+            }
             c
         });
         stage_csv(out, &headers, rows)
@@ -623,6 +670,23 @@ pub(crate) fn measure_with(
             views.map_or("-", |v| v.0),
         )?;
     }
+    if run_args.daylight_factor {
+        anyhow::ensure!(
+            job.points.is_some(),
+            "--daylight-factor adds columns to the points' results: give --points"
+        );
+        let e_h = daylight_reference(&scene).filter(|e| *e > 0.0).ok_or_else(|| {
+            anyhow::anyhow!(
+                "--daylight-factor needs daylight in the scene: a `sky`, `sun`, `environment` or \
+                 `distant` light whose unobstructed horizontal illuminance is positive"
+            )
+        })?;
+        eprintln!(
+            "lumest: daylight factors divide by {} lx, the unobstructed horizontal illuminance of the scene's daylight (exact)",
+            format_number(e_h)
+        );
+        job.daylight = Some(e_h);
+    }
     check_tally_size(
         cfg.orders,
         job.points.as_ref().map_or(0, |t| t.rows.len())
@@ -631,7 +695,9 @@ pub(crate) fn measure_with(
     // The output repeats the input columns and adds the result columns: an
     // input column named like a result column would appear twice.
     if let (Some((input, _)), Some(t)) = (points, &job.points) {
-        reserved_columns(&t.headers, &result_headers("E", cfg.orders), input)?;
+        let mut names = result_headers("E", cfg.orders);
+        names.extend(DAYLIGHT_COLUMNS.map(String::from));
+        reserved_columns(&t.headers, &names, input)?;
     }
     if let (Some((input, _)), Some((t, _))) = (views, &job.views) {
         let mut names = result_headers("L", cfg.orders);

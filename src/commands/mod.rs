@@ -107,6 +107,13 @@ pub struct RunArgs {
         allow_negative_numbers = true
     )]
     pub checkpoint_every: f64,
+    /// Add daylight factors to the points' results: `DF = 100 E / E_h` [%]
+    /// with `E_h` the illuminance the scene's sky, sun and environment
+    /// lights give on an unobstructed horizontal plane (exact), and the sky
+    /// component `DF_sky` from the direct light alone, each with its
+    /// standard error.
+    #[arg(long = "daylight-factor")]
+    pub daylight_factor: bool,
     /// Continue the run whose checkpoint this is (same scene, points, seed,
     /// `--chains` and settings): the result is the uninterrupted run's, bit
     /// for bit.

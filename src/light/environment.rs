@@ -29,6 +29,7 @@
 //! across it with density `p_s`; each carries `F / p_s` [lm].
 
 use super::StartRegion;
+use super::sky::Sky;
 use crate::sampling::sphere_table::SphereTable;
 use crate::sampling::warp::Frame;
 use glam::DVec3;
@@ -52,6 +53,11 @@ pub struct Environment {
     turn: (f64, f64),
     /// Where chains start.
     pub region: StartRegion,
+    /// An analytic sky ([`Self::from_sky`]): its luminance is exact, and the
+    /// table only draws the directions.
+    sky: Option<Sky>,
+    /// `int L dw` over the sphere [cd/m^2 sr] of the analytic sky.
+    sky_integral: f64,
 }
 
 impl Environment {
@@ -85,7 +91,63 @@ impl Environment {
             table,
             turn: rotate.sin_cos(),
             region: StartRegion::fit(None, &[], &[]),
+            sky: None,
+            sky_integral: 0.0,
         })
+    }
+
+    /// The light of an analytic sky ([`Sky`], world axes: `+z` up). Its
+    /// luminance is evaluated exactly in every direction; directions are
+    /// drawn from a `2n x n` table of the sky's mean luminance per cell (4 x
+    /// 4 points equal in solid angle each, and at least 1e-9 of the largest
+    /// cell wherever the sky is bright), so each weight `L(w) / pdf(w)` is
+    /// exact and bounded. The horizon is a row edge (`n` even).
+    pub fn from_sky(sky: Sky, n: usize) -> Result<Self, String> {
+        let n = (n + n % 2).max(8);
+        let (rows, cols) = (n, 2 * n);
+        let mut values = Vec::with_capacity(rows * cols);
+        for i in 0..rows {
+            for j in 0..cols {
+                let mut sum = 0.0;
+                for a in 0..4 {
+                    // cos theta at the quarter points of the row's span.
+                    let (c0, c1) = (
+                        (PI * i as f64 / rows as f64).cos(),
+                        (PI * (i + 1) as f64 / rows as f64).cos(),
+                    );
+                    let ct = c0 + (c1 - c0) * (a as f64 + 0.5) / 4.0;
+                    let st = (1.0 - ct * ct).max(0.0).sqrt();
+                    for b in 0..4 {
+                        let phi = 2.0 * PI * (j as f64 + (b as f64 + 0.5) / 4.0) / cols as f64;
+                        let (sp, cp) = phi.sin_cos();
+                        sum += sky.luminance(DVec3::new(st * cp, st * sp, ct));
+                    }
+                }
+                values.push(sum / 16.0);
+            }
+        }
+        let max = values.iter().copied().fold(0.0, f64::max);
+        // Every cell above the horizon is bright somewhere (the CIE skies
+        // are positive): keep its density positive however dim its mean.
+        for (k, v) in values.iter_mut().enumerate() {
+            if k / cols < rows / 2 || sky.ground_luminance() > 0.0 {
+                *v = v.max(1e-9 * max);
+            }
+        }
+        let table = SphereTable::new(values, rows, cols).map_err(|e| e.to_string())?;
+        let sky_integral = sky.integral();
+        Ok(Self {
+            table,
+            turn: (0.0, 1.0),
+            region: StartRegion::fit(None, &[], &[]),
+            sky: Some(sky),
+            sky_integral,
+        })
+    }
+
+    /// The analytic sky, if this light is one.
+    pub fn sky(&self) -> Option<&Sky> {
+        self.sky.as_ref()
     }
 
     /// Rows and columns of the table.
@@ -136,6 +198,9 @@ impl Environment {
     /// Luminance [cd/m^2] arriving from unit world direction `wi` (towards the sky).
     #[inline]
     pub fn luminance(&self, wi: DVec3) -> f64 {
+        if let Some(sky) = &self.sky {
+            return sky.luminance(wi);
+        }
         let (ct, phi) = self.to_map(wi);
         let (i, j) = self.table.cell_of(ct, phi);
         self.table.value(i, j)
@@ -153,22 +218,30 @@ impl Environment {
     #[inline]
     pub fn sample(&self, u: [f64; 2]) -> (DVec3, f64, f64) {
         let s = self.table.sample(u);
-        (
-            self.to_world(s.cos_theta, s.phi),
-            s.pdf,
-            self.table.value(s.cell.0, s.cell.1),
-        )
+        let w = self.to_world(s.cos_theta, s.phi);
+        let l = match &self.sky {
+            Some(sky) => sky.luminance(w),
+            None => self.table.value(s.cell.0, s.cell.1),
+        };
+        (w, s.pdf, l)
     }
 
     /// `F = int L dw` over the sphere [cd/m^2 sr].
     pub fn integral(&self) -> f64 {
-        self.table.integral()
+        if self.sky.is_some() {
+            self.sky_integral
+        } else {
+            self.table.integral()
+        }
     }
 
     /// Illuminance [lx] on an unobstructed horizontal plane facing up:
     /// `int_{upper} L cos dw`, exact for the table (each cell `L (cos^2
     /// theta_i - cos^2 theta_i+1) / 2 dphi`, clipped at the horizon).
     pub fn horizontal_illuminance(&self) -> f64 {
+        if let Some(sky) = &self.sky {
+            return sky.horizontal_illuminance();
+        }
         let (rows, cols) = self.table.size();
         let dphi = 2.0 * PI / cols as f64;
         (0..rows)
@@ -204,7 +277,11 @@ impl Environment {
             pdf_dir,
             delta_pos: false,
             delta_dir: false,
-            phi: self.integral() / pdf_pos,
+            // A map's density is its luminance over F: the weight is F.
+            phi: match self.sky {
+                Some(_) => le / pdf_dir / pdf_pos,
+                None => self.integral() / pdf_pos,
+            },
         }
     }
 }

@@ -197,11 +197,23 @@ impl Sky {
         }
     }
 
+    /// `int L dOmega` over the whole sphere [cd/m^2 sr]: the sky by the
+    /// quadrature of [`Self::horizontal_illuminance`] without the cosine,
+    /// and the ground's `2 pi L_ground`.
+    pub fn integral(&self) -> f64 {
+        self.hemisphere(false) + 2.0 * PI * self.l_ground
+    }
+
     /// Illuminance [lx] the sky alone gives on an unobstructed horizontal
     /// plane, `int L cos Z dOmega` over the upper hemisphere: Gauss-Legendre
     /// panels in `cos Z` (16 x 20 nodes) and in the azimuth from the sun
     /// (32 x 20 nodes, the distribution being smooth and periodic).
     pub fn horizontal_illuminance(&self) -> f64 {
+        self.hemisphere(true)
+    }
+
+    /// `int L (cos Z if cosine) dOmega` over the upper hemisphere.
+    fn hemisphere(&self, cosine: bool) -> f64 {
         use crate::math::quadrature::{CompensatedSum, panel};
         let sun_az = match self.model {
             SkyModel::General { sun, .. } => sun.y.atan2(sun.x),
@@ -229,7 +241,7 @@ impl Sky {
                             a1,
                         );
                     }
-                    ring * cz
+                    if cosine { ring * cz } else { ring }
                 },
                 c0,
                 c1,

@@ -604,6 +604,29 @@ fn light(
         }
     };
     let kind = d.kind.get_ref().as_str();
+    if kind == "sky" || kind == "sun" {
+        return daylight(l, ctx);
+    }
+    // The keys of the sky and the sun belong to them alone.
+    let sky_keys = [
+        ("sky", d.sky.as_ref().map(Spanned::span)),
+        (
+            "zenith_luminance",
+            d.zenith_luminance.as_ref().map(Spanned::span),
+        ),
+        (
+            "ground_luminance",
+            d.ground_luminance.as_ref().map(Spanned::span),
+        ),
+        ("sun_altitude", d.sun_altitude.as_ref().map(Spanned::span)),
+        ("sun_azimuth", d.sun_azimuth.as_ref().map(Spanned::span)),
+        ("date", d.date.as_ref().map(Spanned::span)),
+        ("time", d.time.as_ref().map(Spanned::span)),
+        ("utc_offset", d.utc_offset.as_ref().map(Spanned::span)),
+        ("latitude", d.latitude.as_ref().map(Spanned::span)),
+        ("longitude", d.longitude.as_ref().map(Spanned::span)),
+    ];
+    not_for(kind, &sky_keys)?;
     if kind == "environment" {
         return environment(l, ctx);
     }
@@ -786,7 +809,7 @@ fn light(
             d.kind.span(),
             "type",
             format!(
-                "unknown light type `{other}` (this version knows: point, sphere, spot, ies, ldt, rectangle, disc, distant, environment)"
+                "unknown light type `{other}` (this version knows: point, sphere, spot, ies, ldt, rectangle, disc, distant, environment, sky, sun)"
             ),
         )),
     }
@@ -831,6 +854,18 @@ fn distant(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<Str
         ctx.required(&d.direction, l.span(), "direction")?,
         "direction",
     )?;
+    distant_along(l, ctx, dir, 0.0)
+}
+
+/// A distant light travelling along unit `dir` with the `illuminance` and
+/// `angular_diameter` [deg] (default `diam`) of `l`.
+fn distant_along(
+    l: &Spanned<LightDesc>,
+    ctx: &SourceCtx,
+    dir: DVec3,
+    default_diam: f64,
+) -> Result<(Light, Option<String>), SceneError> {
+    let d = l.get_ref();
     let es = ctx.required(&d.illuminance, l.span(), "illuminance")?;
     let e_n = ctx.nonneg(es, "illuminance")?;
     if e_n > MAX_INTENSITY {
@@ -841,7 +876,7 @@ fn distant(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<Str
         ));
     }
     let diam = match &d.angular_diameter {
-        None => 0.0,
+        None => default_diam,
         Some(a) => {
             let x = *a.get_ref();
             let max = crate::light::Distant::MAX_DIAMETER_DEG;
@@ -861,6 +896,346 @@ fn distant(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<Str
     let region = crate::light::StartRegion::fit(None, &[], &[]);
     let light = crate::light::Distant::new(dir, e_n, diam.to_radians(), region);
     Ok((Light::Distant(std::sync::Arc::new(light)), None))
+}
+
+/// Every optional key of a `[[light]]` table with its span, if given.
+fn light_keys(d: &LightDesc) -> Vec<(&'static str, Option<Range<usize>>)> {
+    macro_rules! keys {
+        ($($f:ident),*) => { vec![$((stringify!($f), d.$f.as_ref().map(Spanned::span))),*] };
+    }
+    keys!(
+        position,
+        center,
+        radius,
+        intensity,
+        flux,
+        file,
+        aim,
+        rotate,
+        multiplier,
+        opening,
+        direction,
+        inner,
+        outer,
+        corner,
+        edge1,
+        edge2,
+        normal,
+        luminance,
+        sides,
+        profile,
+        material,
+        illuminance,
+        angular_diameter,
+        scale,
+        horizontal_illuminance,
+        mapping,
+        sampling,
+        lights,
+        sky,
+        zenith_luminance,
+        ground_luminance,
+        sun_altitude,
+        sun_azimuth,
+        date,
+        time,
+        utc_offset,
+        latitude,
+        longitude
+    )
+}
+
+/// The sun's unit direction (towards it) from `sun_altitude` and
+/// `sun_azimuth` [deg], or from `date`, `time`, `utc_offset`, `latitude`
+/// and `longitude` ([`crate::light::sun_position`]), with a note.
+fn sun_position(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(DVec3, String), SceneError> {
+    use crate::light::sun_position::{UtcTime, solar_position, sun_direction};
+    let d = l.get_ref();
+    let finite = |v: &Spanned<f64>, field: &str, lo: f64, hi: f64| {
+        let x = *v.get_ref();
+        if x.is_finite() && (lo..=hi).contains(&x) {
+            Ok(x)
+        } else {
+            Err(ctx.invalid(
+                v.span(),
+                field,
+                format!(
+                    "must lie in [{lo}, {hi}], got {}",
+                    crate::io::format_number(x)
+                ),
+            ))
+        }
+    };
+    if let (Some(alt), Some(az)) = (&d.sun_altitude, &d.sun_azimuth) {
+        for (k, v) in [
+            ("date", d.date.as_ref().map(Spanned::span)),
+            ("time", d.time.as_ref().map(Spanned::span)),
+            ("latitude", d.latitude.as_ref().map(Spanned::span)),
+            ("longitude", d.longitude.as_ref().map(Spanned::span)),
+            ("utc_offset", d.utc_offset.as_ref().map(Spanned::span)),
+        ] {
+            if let Some(span) = v {
+                return Err(ctx.invalid(
+                    span,
+                    k,
+                    "give the sun's position either by `sun_altitude` and `sun_azimuth` or by date, time and place, not both",
+                ));
+            }
+        }
+        let a = finite(alt, "sun_altitude", -90.0, 90.0)?;
+        let z = finite(az, "sun_azimuth", -360.0, 360.0)?;
+        return Ok((
+            sun_direction(a, z),
+            format!("sun at altitude {a} deg, azimuth {z} deg"),
+        ));
+    }
+    if let Some(x) = d.sun_altitude.as_ref().or(d.sun_azimuth.as_ref()) {
+        let field = if d.sun_altitude.is_some() {
+            "sun_altitude"
+        } else {
+            "sun_azimuth"
+        };
+        return Err(ctx.invalid(
+            x.span(),
+            field,
+            "give both `sun_altitude` and `sun_azimuth` [deg]",
+        ));
+    }
+    let ds = ctx.required(&d.date, l.span(), "date (or sun_altitude and sun_azimuth)")?;
+    let ts = ctx.required(&d.time, l.span(), "time")?;
+    let lat = finite(
+        ctx.required(&d.latitude, l.span(), "latitude")?,
+        "latitude",
+        -90.0,
+        90.0,
+    )?;
+    let lon = finite(
+        ctx.required(&d.longitude, l.span(), "longitude")?,
+        "longitude",
+        -180.0,
+        180.0,
+    )?;
+    let off = match &d.utc_offset {
+        Some(o) => finite(o, "utc_offset", -14.0, 14.0)?,
+        None => 0.0,
+    };
+    let date: Vec<&str> = ds.get_ref().split('-').collect();
+    let ymd = match date.as_slice() {
+        [y, m, dd] => (
+            y.parse::<i32>().ok(),
+            m.parse::<u32>().ok(),
+            dd.parse::<u32>().ok(),
+        ),
+        _ => (None, None, None),
+    };
+    let (year, month, day) = match ymd {
+        (Some(y), Some(m), Some(dd))
+            if (1800..=2200).contains(&y) && (1..=12).contains(&m) && (1..=31).contains(&dd) =>
+        {
+            (y, m, dd)
+        }
+        _ => {
+            return Err(ctx.invalid(
+                ds.span(),
+                "date",
+                format!(
+                    "`{}` is not a date YYYY-MM-DD (years 1800-2200)",
+                    ds.get_ref()
+                ),
+            ));
+        }
+    };
+    let hms: Vec<Option<f64>> = ts
+        .get_ref()
+        .split(':')
+        .map(|x| x.parse::<f64>().ok())
+        .collect();
+    let hour = match hms.as_slice() {
+        [Some(h), Some(m)] if (0.0..24.0).contains(h) && (0.0..60.0).contains(m) => h + m / 60.0,
+        [Some(h), Some(m), Some(sec)]
+            if (0.0..24.0).contains(h) && (0.0..60.0).contains(m) && (0.0..61.0).contains(sec) =>
+        {
+            h + m / 60.0 + sec / 3600.0
+        }
+        _ => {
+            return Err(ctx.invalid(
+                ts.span(),
+                "time",
+                format!("`{}` is not a clock time HH:MM or HH:MM:SS", ts.get_ref()),
+            ));
+        }
+    };
+    // Local clock time to UTC (the day may change; the Julian day handles
+    // hours outside 0-24).
+    let t = UtcTime {
+        year,
+        month,
+        day,
+        hour: hour - off,
+    };
+    let p = solar_position(&t, lat, lon);
+    Ok((
+        sun_direction(p.altitude, p.azimuth),
+        format!(
+            "sun on {} at {} (UTC{off:+}) at latitude {lat}, longitude {lon}: altitude {:.3} deg, azimuth {:.3} deg (NOAA/Meeus, no refraction)",
+            ds.get_ref(),
+            ts.get_ref(),
+            p.altitude,
+            p.azimuth
+        ),
+    ))
+}
+
+/// A CIE sky (`type = "sky"`: `sky`, `zenith_luminance` [cd/m^2] or
+/// `horizontal_illuminance` [lx], `ground_luminance`, and the sun's
+/// position for the general skies) as an environment light with an exact
+/// luminance ([`crate::light::Environment::from_sky`]); or the sun (`type =
+/// "sun"`: a distant light from the sun's position with `illuminance` [lx]
+/// normal to it and `angular_diameter`, default 0.53 degrees).
+fn daylight(
+    l: &Spanned<LightDesc>,
+    ctx: &SourceCtx,
+) -> Result<(Light, Option<String>), SceneError> {
+    use crate::light::sky::{Sky, SkyModel};
+    let d = l.get_ref();
+    let kind = d.kind.get_ref().as_str();
+    let sun_keys = [
+        "sun_altitude",
+        "sun_azimuth",
+        "date",
+        "time",
+        "utc_offset",
+        "latitude",
+        "longitude",
+    ];
+    let allowed: Vec<&str> = if kind == "sun" {
+        let mut v = vec!["illuminance", "angular_diameter"];
+        v.extend(sun_keys);
+        v
+    } else {
+        let mut v = vec![
+            "sky",
+            "zenith_luminance",
+            "horizontal_illuminance",
+            "ground_luminance",
+        ];
+        v.extend(sun_keys);
+        v
+    };
+    for (name, span) in light_keys(d) {
+        if let Some(span) = span
+            && !allowed.contains(&name)
+        {
+            return Err(ctx.invalid(
+                span,
+                name,
+                format!(
+                    "not allowed for a `{kind}` light (it takes {})",
+                    allowed.join(", ")
+                ),
+            ));
+        }
+    }
+    if kind == "sun" {
+        let (to_sun, note) = sun_position(l, ctx)?;
+        if to_sun.z < 0.0 {
+            return Err(ctx.invalid(
+                l.span(),
+                "sun",
+                format!("{note}: the sun is below the horizon"),
+            ));
+        }
+        let (light, _) = distant_along(l, ctx, -to_sun, 0.53)?;
+        return Ok((light, Some(note)));
+    }
+    let ms = ctx.required(&d.sky, l.span(), "sky")?;
+    let name = ms.get_ref().as_str();
+    let general = match name {
+        "overcast" => None,
+        "clear" => Some(12u8),
+        other => match other
+            .strip_prefix("cie-")
+            .and_then(|k| k.parse::<u8>().ok())
+        {
+            Some(k) if (1..=15).contains(&k) => Some(k),
+            _ => {
+                return Err(ctx.invalid(
+                    ms.span(),
+                    "sky",
+                    format!("unknown sky `{other}` (use \"overcast\", \"clear\" or \"cie-1\" to \"cie-15\")"),
+                ));
+            }
+        },
+    };
+    let (model, mut note) = match general {
+        None => {
+            if let Some((k, Some(span))) = light_keys(d)
+                .into_iter()
+                .find(|(k, s)| sun_keys.contains(k) && s.is_some())
+            {
+                return Err(ctx.invalid(
+                    span,
+                    k,
+                    "the traditional CIE overcast sky does not depend on the sun: leave out its position",
+                ));
+            }
+            (
+                SkyModel::TraditionalOvercast,
+                "traditional CIE overcast sky".to_string(),
+            )
+        }
+        Some(k) => {
+            let (sun, note) = sun_position(l, ctx)?;
+            (
+                SkyModel::General { kind: k, sun },
+                format!("CIE general sky type {k}, {note}"),
+            )
+        }
+    };
+    let sky = Sky::new(model).map_err(|e| ctx.invalid(l.span(), "sky", e.to_string()))?;
+    let sky = match (&d.zenith_luminance, &d.horizontal_illuminance) {
+        (Some(z), None) => sky
+            .with_zenith_luminance(ctx.nonneg(z, "zenith_luminance")?)
+            .map_err(|e| ctx.invalid(z.span(), "zenith_luminance", e.to_string()))?,
+        (None, Some(h)) => sky
+            .with_horizontal_illuminance(ctx.nonneg(h, "horizontal_illuminance")?)
+            .map_err(|e| ctx.invalid(h.span(), "horizontal_illuminance", e.to_string()))?,
+        (Some(_), Some(h)) => {
+            return Err(ctx.invalid(
+                h.span(),
+                "horizontal_illuminance",
+                "give either `zenith_luminance` [cd/m^2] or `horizontal_illuminance` [lx], not both",
+            ));
+        }
+        (None, None) => {
+            return Err(ctx.invalid(
+                l.span(),
+                "zenith_luminance",
+                "a sky needs `zenith_luminance` [cd/m^2] or `horizontal_illuminance` [lx]",
+            ));
+        }
+    };
+    let sky = match &d.ground_luminance {
+        Some(g) => sky
+            .with_ground_luminance(ctx.nonneg(g, "ground_luminance")?)
+            .map_err(|e| ctx.invalid(g.span(), "ground_luminance", e.to_string()))?,
+        None => sky,
+    };
+    if sky.zenith_luminance() > MAX_INTENSITY || sky.ground_luminance() > MAX_INTENSITY {
+        return Err(ctx.invalid(
+            l.span(),
+            "zenith_luminance",
+            format!("out of range: luminances at most {MAX_INTENSITY:e} cd/m^2"),
+        ));
+    }
+    note = format!(
+        "{note}: zenith luminance {:.6e} cd/m^2, {:.6e} lx on an unobstructed horizontal plane",
+        sky.zenith_luminance(),
+        sky.horizontal_illuminance()
+    );
+    let env = crate::light::Environment::from_sky(sky, 256)
+        .map_err(|m| ctx.invalid(l.span(), "sky", m))?;
+    Ok((Light::Environment(std::sync::Arc::new(env)), Some(note)))
 }
 
 /// An environment light (`type = "environment"`): `file` (an HDR map,

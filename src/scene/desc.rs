@@ -131,7 +131,8 @@ pub struct MaterialDesc {
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
     /// Light kind: `"point"`, `"sphere"`, `"spot"`, `"ies"`, `"ldt"`,
-    /// `"rectangle"`, `"disc"`, `"distant"` or `"environment"`.
+    /// `"rectangle"`, `"disc"`, `"distant"`, `"environment"`, `"sky"` or
+    /// `"sun"`.
     #[serde(rename = "type")]
     pub kind: Spanned<String>,
     /// Optional name used in messages and summaries.
@@ -208,4 +209,27 @@ pub struct LightDesc {
     pub sampling: Option<Spanned<String>>,
     /// Number of median-cut lights (a power of two; default 64).
     pub lights: Option<Spanned<i64>>,
+    /// A sky's luminance distribution: `"overcast"` (the traditional CIE
+    /// overcast sky), `"clear"` (the CIE standard clear sky, general type
+    /// 12) or `"cie-1"` ... `"cie-15"` (ISO 15469 general sky types).
+    pub sky: Option<Spanned<String>>,
+    /// A sky's zenith luminance [cd/m^2]. Exclusive with `horizontal_illuminance`.
+    pub zenith_luminance: Option<Spanned<f64>>,
+    /// A sky's uniform luminance below the horizon [cd/m^2]; default 0.
+    pub ground_luminance: Option<Spanned<f64>>,
+    /// The sun's altitude above the horizon [deg] (with `sun_azimuth`).
+    pub sun_altitude: Option<Spanned<f64>>,
+    /// The sun's azimuth from north (`+y`) towards east (`+x`) [deg].
+    pub sun_azimuth: Option<Spanned<f64>>,
+    /// Local date `YYYY-MM-DD` for the sun's position (with `time`,
+    /// `latitude`, `longitude`, optional `utc_offset`).
+    pub date: Option<Spanned<String>>,
+    /// Local clock time `HH:MM` or `HH:MM:SS`.
+    pub time: Option<Spanned<String>>,
+    /// Local time minus UTC [h]; default 0.
+    pub utc_offset: Option<Spanned<f64>>,
+    /// Latitude [deg], north positive.
+    pub latitude: Option<Spanned<f64>>,
+    /// Longitude [deg], east positive.
+    pub longitude: Option<Spanned<f64>>,
 }
