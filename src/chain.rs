@@ -124,8 +124,15 @@ pub fn trace_ex<F: FnMut(&Collision)>(
     // A ray leaving an area source starts on its emitting surface, which may
     // lie in another surface's plane (a panel set into the ceiling): like
     // an observer's, it meets no flat surface through its origin.
-    let mut from_emitter =
-        matches!(light, crate::light::Light::Area(_)) || light.emits_from_opening();
+    let through_portal = light.is_directional() && scene.has_portals();
+    let mut from_emitter = matches!(light, crate::light::Light::Area(_))
+        || light.emits_from_opening()
+        || through_portal;
+    // A ray started on a portal carries light only if nothing blocks it
+    // between the light and the portal ([`crate::light::portal`]).
+    if through_portal && q > 0.0 && scene.first_hit_from(ray.o, -ray.d).is_some() {
+        q = 0.0;
+    }
     // A point light on a surface stands on its reflecting side
     // ([`Scene::light_surface`]): a ray into the surface meets it at once.
     let mut on_surface = scene.light_surface(k_light);

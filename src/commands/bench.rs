@@ -67,7 +67,7 @@ pub fn shapes(a: &BenchArgs, list: &str) -> anyhow::Result<()> {
         counts
             .iter()
             .all(|&n| n >= 1.0 && n.fract() == 0.0 && n <= 1e7),
-        "--shapes: every count must be a whole number from 1 to 1e7, got {list}"
+        "--shapes: every count must be a whole number, at least 1 and at most 1e7, got {list}"
     );
     let counts: Vec<usize> = counts.into_iter().map(|x| x as usize).collect();
     let t = match &a.time {

@@ -147,7 +147,11 @@ fn light_pdf(set: &LightSet, scene: &Scene, k: u32, x: DVec3, wi: DVec3, y: DVec
             p / cone(*r, dist).0
         }
         Light::Distant(dl) if dl.in_cone(wi) => p / dl.solid_angle(),
-        Light::Environment(env) => p * env.pdf(wi),
+        // With portals, map directions are drawn through them.
+        Light::Environment(env) => match scene.portals() {
+            Some(portals) => p * portals.pdf(x, wi),
+            None => p * env.pdf(wi),
+        },
         _ => 0.0,
     }
 }
@@ -245,8 +249,18 @@ fn light_sample(
             (dl.luminance() * r, p_l, wi)
         }
         Light::Environment(env) => {
-            // A direction drawn from the map; lit where the ray leaves the scene.
-            let (wi, pdf, le) = env.sample(u);
+            // A direction drawn from the map, or through a point of the
+            // portals (uniform over their area); lit where the ray leaves
+            // the scene. (Sky that a receiver sees elsewhere than through a
+            // portal is still found by the receiver's own sampling, which
+            // MIS then weighs alone.)
+            let (wi, pdf, le) = match scene.portals() {
+                Some(portals) => match portals.sample_direction(x, u) {
+                    Some((wi, pdf)) => (wi, pdf, env.luminance(wi)),
+                    None => return (0.0, 0.0, DVec3::Z, true),
+                },
+                None => env.sample(u),
+            };
             let p_l = set.prob[k as usize] * pdf;
             let (r, _) = response(rec, frame, wi);
             if r <= 0.0 || le <= 0.0 || scene.first_hit_from(x, wi).is_some() {

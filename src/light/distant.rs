@@ -79,6 +79,12 @@ pub struct StartRegion {
     pub rho_max: f64,
     /// The infinite planes, as unit normal `n` and offset `n . p` [m].
     pub planes: Vec<(DVec3, f64)>,
+    /// The scene's portals: chains start on them instead
+    /// ([`super::portal`]); `None`: no portals.
+    pub portals: Option<std::sync::Arc<super::portal::Portals>>,
+    /// The light's flux [lm] through the portals, unobstructed (its pick
+    /// weight with portals; set with them by [`super::Light::set_region`]).
+    pub portal_flux: f64,
 }
 
 impl StartRegion {
@@ -119,6 +125,8 @@ impl StartRegion {
             has_finite: finite.is_some(),
             rho_max: Self::truncation() * if r0 > 0.0 { r0 } else { 1.0 },
             planes: planes.iter().map(|&(n, p)| (n, n.dot(p))).collect(),
+            portals: None,
+            portal_flux: 0.0,
         }
     }
 
@@ -340,7 +348,16 @@ impl Distant {
 
     /// The chains' pick weight [lm] (see the module docs).
     pub fn power(&self) -> f64 {
+        if self.region.portals.is_some() {
+            return self.region.portal_flux;
+        }
         self.e_n * self.region.nominal_area(self.cos_a)
+    }
+
+    /// The flux [lm] the light sends through `portals`, unobstructed (the
+    /// disc counted as collimated along its axis).
+    pub fn flux_through(&self, portals: &super::portal::Portals) -> f64 {
+        portals.flux(std::iter::once((-self.d, self.e_n, 1.0)))
     }
 
     /// Unoccluded illuminance [lx] on a receiver with unit normal `n`:
@@ -361,13 +378,28 @@ impl Distant {
     /// point at infinity), started upstream of everything.
     pub fn sample_emission(&self, u_pos: [f64; 2], u_dir: [f64; 2]) -> super::EmissionSample {
         let frame = Frame::from_normal(self.d);
-        let (s, pdf_pos) = self.region.sample_point(&frame, self.cos_a, u_pos);
         let (w, le, cos, pdf_dir) = if self.collimated() {
             (self.d, self.e_n, 1.0, 1.0)
         } else {
             let ds = sample_cosine_cone(u_dir, self.sin_a);
             (frame.to_world(ds.w), self.luminance(), ds.w.z, ds.pdf)
         };
+        if let Some(portals) = &self.region.portals {
+            // Illuminance (collimated) or luminance (a disc) across the portal.
+            let (o, pdf_pos, phi) = portals.emission(w, le, pdf_dir, u_pos);
+            return super::EmissionSample {
+                o,
+                d: w,
+                le,
+                cos,
+                pdf_pos,
+                pdf_dir,
+                delta_pos: false,
+                delta_dir: self.collimated(),
+                phi,
+            };
+        }
+        let (s, pdf_pos) = self.region.sample_point(&frame, self.cos_a, u_pos);
         super::EmissionSample {
             o: self.region.upstream(s, w),
             d: w,

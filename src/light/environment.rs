@@ -260,13 +260,46 @@ impl Environment {
 
     /// The chains' pick weight [lm]: `F` times the start region's nominal area.
     pub fn power(&self) -> f64 {
+        if self.region.portals.is_some() {
+            return self.region.portal_flux;
+        }
         self.integral() * self.region.nominal_area(1.0)
+    }
+
+    /// The flux [lm] the light sends through `portals`, unobstructed (over
+    /// the cells of its table: exact for a map, the cell means for a sky).
+    pub fn flux_through(&self, portals: &super::portal::Portals) -> f64 {
+        let (rows, cols) = self.table.size();
+        let cells = (0..rows).flat_map(move |i| {
+            (0..cols).map(move |j| {
+                (
+                    self.cell_direction(i, j),
+                    self.table.value(i, j),
+                    self.table.cell_solid_angle(i),
+                )
+            })
+        });
+        portals.flux(cells)
     }
 
     /// An emitted ray: a direction from `u_dir`, a start point from `u_pos`.
     pub fn sample_emission(&self, u_pos: [f64; 2], u_dir: [f64; 2]) -> super::EmissionSample {
         let (wi, pdf_dir, le) = self.sample(u_dir);
         let d = -wi;
+        if let Some(portals) = &self.region.portals {
+            let (o, pdf_pos, phi) = portals.emission(d, le, pdf_dir, u_pos);
+            return super::EmissionSample {
+                o,
+                d,
+                le,
+                cos: 1.0,
+                pdf_pos,
+                pdf_dir,
+                delta_pos: false,
+                delta_dir: false,
+                phi,
+            };
+        }
         let (s, pdf_pos) = self.region.sample_point(&Frame::from_normal(d), 1.0, u_pos);
         super::EmissionSample {
             o: self.region.upstream(s, d),

@@ -20,6 +20,7 @@ pub mod environment;
 pub mod goniometric;
 pub mod lambert;
 pub mod median_cut;
+pub mod portal;
 pub mod radial_profile;
 pub mod sky;
 pub mod spot;
@@ -238,8 +239,20 @@ impl Light {
     /// Set the start region of a light at infinity (no effect on others).
     pub fn set_region(&mut self, region: &StartRegion) {
         match self {
-            Light::Distant(dl) => std::sync::Arc::make_mut(dl).region = region.clone(),
-            Light::Environment(env) => std::sync::Arc::make_mut(env).region = region.clone(),
+            Light::Distant(dl) => {
+                let dl = std::sync::Arc::make_mut(dl);
+                dl.region = region.clone();
+                if let Some(p) = &region.portals {
+                    dl.region.portal_flux = dl.flux_through(p);
+                }
+            }
+            Light::Environment(env) => {
+                let env = std::sync::Arc::make_mut(env);
+                env.region = region.clone();
+                if let Some(p) = &region.portals {
+                    env.region.portal_flux = env.flux_through(p);
+                }
+            }
             _ => {}
         }
     }

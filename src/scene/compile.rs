@@ -219,6 +219,36 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
             ));
         }
     }
+    if !desc.portal.is_empty() {
+        let mut list = Vec::with_capacity(desc.portal.len());
+        for p in &desc.portal {
+            let d = p.get_ref();
+            let corner = ctx.finite_vec(&d.corner, "corner")?;
+            let e1 = ctx.finite_vec(&d.edge1, "edge1")?;
+            let e2 = ctx.finite_vec(&d.edge2, "edge2")?;
+            let portal = crate::light::portal::Portal::new(corner, e1, e2).ok_or_else(|| {
+                ctx.invalid(
+                    d.edge2.span(),
+                    "edge2",
+                    "a portal's edges must span a parallelogram of non-zero area",
+                )
+            })?;
+            list.push(portal);
+        }
+        if !scene.has_directional() {
+            return Err(ctx.invalid(
+                desc.portal[0].span(),
+                "portal",
+                "portals let in the light of `distant`, `environment`, `sky` and `sun` lights, and the scene has none",
+            ));
+        }
+        scene.notes.push(format!(
+            "{} portal(s) of {:.4e} m^2 in all: the chains of the lights at infinity start on them (light entering elsewhere is left out)",
+            list.len(),
+            list.iter().map(|p| p.area).sum::<f64>()
+        ));
+        scene.set_portals(crate::light::portal::Portals::new(list));
+    }
     Ok(scene.with_light_names(names))
 }
 

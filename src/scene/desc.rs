@@ -36,6 +36,25 @@ pub struct SceneDesc {
     /// Light sources, `[[light]]` tables.
     #[serde(default)]
     pub light: Vec<Spanned<LightDesc>>,
+    /// Portals, `[[portal]]` tables: the openings through which the light of
+    /// distant, environment, sky and sun lights enters.
+    #[serde(default)]
+    pub portal: Vec<Spanned<PortalDesc>>,
+}
+
+/// One `[[portal]]` table: a parallelogram whose normal `edge1 x edge2`
+/// points into the scene [m].
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PortalDesc {
+    /// Optional name.
+    pub name: Option<Spanned<String>>,
+    /// A corner [m].
+    pub corner: Spanned<Vec3>,
+    /// First edge [m].
+    pub edge1: Spanned<Vec3>,
+    /// Second edge [m].
+    pub edge2: Spanned<Vec3>,
 }
 
 /// One `[[surface]]` table. Which fields are required (and allowed) depends

@@ -253,6 +253,8 @@ pub const MAX_PLANES: usize = 64;
 pub struct Scene {
     /// Surfaces (a box contributes six, one per face).
     pub surfaces: Vec<Surface>,
+    /// Portals of the lights at infinity ([`Self::set_portals`]).
+    portals: Option<std::sync::Arc<crate::light::portal::Portals>>,
     /// Infinite planes (front side towards the normal); `plane_surface[i]` is its surface.
     pub planes: Vec<Plane>,
     plane_surface: Vec<u32>,
@@ -424,6 +426,7 @@ impl Scene {
     /// [`Scene::build`] after its checks.
     fn build_checked(specs: Vec<SurfaceSpec>, lights: Vec<Light>) -> Self {
         let mut scene = Scene {
+            portals: None,
             surfaces: Vec::new(),
             planes: Vec::new(),
             plane_surface: Vec::new(),
@@ -586,7 +589,8 @@ impl Scene {
             return;
         }
         let planes: Vec<(DVec3, DVec3)> = self.planes.iter().map(|p| (p.n, p.p)).collect();
-        let region = crate::light::StartRegion::fit(self.finite_bounds(), &planes, points);
+        let mut region = crate::light::StartRegion::fit(self.finite_bounds(), &planes, points);
+        region.portals = self.portals.clone();
         let mut lights = std::mem::take(&mut self.lights);
         for l in &mut lights {
             l.set_region(&region);
@@ -597,6 +601,23 @@ impl Scene {
     /// Whether some light lies at infinity (distant or environment).
     pub fn has_directional(&self) -> bool {
         self.lights.iter().any(Light::is_directional)
+    }
+
+    /// Let the light of the lights at infinity in through `portals` only:
+    /// their chains start there ([`crate::light::portal`]).
+    pub fn set_portals(&mut self, portals: crate::light::portal::Portals) {
+        self.portals = Some(std::sync::Arc::new(portals));
+        self.fit_directional(&[]);
+    }
+
+    /// Whether the chains of the lights at infinity start on portals.
+    pub fn has_portals(&self) -> bool {
+        self.portals.is_some()
+    }
+
+    /// The portals, if any.
+    pub fn portals(&self) -> Option<&crate::light::portal::Portals> {
+        self.portals.as_deref()
     }
 
     /// Name the lights (in their order) for messages and summaries.
