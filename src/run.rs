@@ -465,9 +465,8 @@ pub fn drive(
     let start = Instant::now();
     let stop = cfg.stop;
     assert!(
-        cfg.shard.is_none()
-            || (stop.chains.is_some() && stop.time.is_none() && stop.rel_error.is_none()),
-        "a shard needs a run of a fixed number of chains"
+        cfg.shard.is_none() || stop.time.is_none(),
+        "a shard needs a run of a fixed number of chains, or a --rel-error plan"
     );
     let mut bs = cfg
         .batch_size
@@ -495,8 +494,10 @@ pub fn drive(
         r.time_sizing = time_sizing;
         return r;
     };
+    // Every shard runs the whole pilot (deterministic), so all plan alike.
     let pilot_cfg = RunConfig {
         seed: cfg.seed ^ PILOT_KEY,
+        shard: None,
         ..cfg.clone()
     };
     let pilot_bs = pilot_batch_size(bs);
@@ -513,9 +514,8 @@ pub fn drive(
     // time limit the run proper stops at a default cap.
     let per_chain = pilot.wall / pilot.chains.max(1) as f64;
     let estimated_time = per_chain * planned as f64 * bs as f64;
-    let default_cap = stop
-        .time
-        .is_none()
+    // (A shard has no time cap: its batches must all be there to merge.)
+    let default_cap = (stop.time.is_none() && cfg.shard.is_none())
         .then_some(stop.rel_error_cap.unwrap_or(DEFAULT_REL_ERROR_CAP));
     let capped = RunConfig {
         stop: Stop {

@@ -61,8 +61,14 @@ pub struct IlluminanceArgs {
     /// Run shard `I/M` of a `--chains` run (batches I, I+M, I+2M, ...) and
     /// write its state to `--out` for `lumest merge` (shards 0 to M-1 merge
     /// into the single run's CSV, byte for byte).
-    #[arg(long, conflicts_with_all = ["views", "time", "rel_error"], requires = "chains")]
+    #[arg(long, conflicts_with_all = ["views", "time", "mpi"])]
     pub shard: Option<String>,
+    /// Run over the MPI ranks this process was started with (`mpirun -np R
+    /// lumest illuminance ... --mpi`): rank r traces the batches of shard
+    /// r/R, rank 0 folds them in batch order and writes `--out`, the same
+    /// bytes as one process. Needs a binary built with `--features mpi`.
+    #[arg(long, conflicts_with_all = ["views", "time"])]
+    pub mpi: bool,
     #[command(flatten)]
     pub run: RunArgs,
 }
@@ -871,6 +877,9 @@ fn per_second(count: f64, wall: f64) -> String {
 pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
     if let Some(shard) = &a.shard {
         return super::merge::run_shard(a, shard);
+    }
+    if a.mpi {
+        return super::mpi_run::run(a);
     }
     let views = a.views.as_deref().zip(a.views_out.as_deref());
     let referenced = scene::referenced_files(&a.scene);

@@ -44,23 +44,49 @@ fn parse_shard(s: &str) -> anyhow::Result<(u64, u64)> {
 /// Run one shard (`lumest illuminance ... --shard I/M`) and write its state.
 pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
     let (i, m) = parse_shard(shard)?;
-    anyhow::ensure!(
-        a.points != "-",
-        "--shard reads the points from a file (every shard must read the same one), not standard input"
-    );
     check_outputs(
         &[a.scene.as_path(), Path::new(&a.points)],
         &[("--out", Path::new(&a.out))],
     )?;
+    let state = shard_state(a, i, m)?;
+    write_atomic_with(&a.out, |w| state.write(w)).with_context(|| format!("writing {}", a.out))?;
+    eprintln!(
+        "lumest: shard {i}/{m}: {} of {} batches ({} chains each), {:.3} s; state written to {}",
+        state.batches.len(),
+        state.run.batches,
+        state.run.batch_size,
+        state.wall,
+        a.out
+    );
+    Ok(())
+}
+
+/// The state of shard `i` of `m` of the run `a` describes (batches `i, i +
+/// m, ...` of a `--chains` run; with `--rel-error`, every shard runs the
+/// same pilot, which is deterministic, and then its share of the planned
+/// batches).
+pub fn shard_state(a: &IlluminanceArgs, i: u64, m: u64) -> anyhow::Result<ShardState> {
+    anyhow::ensure!(
+        a.points != "-",
+        "--shard reads the points from a file (every shard must read the same one), not standard input"
+    );
     anyhow::ensure!(
         a.run.checkpoint.is_none() && a.run.resume.is_none(),
         "--shard writes its state when done: it takes no --checkpoint or --resume"
+    );
+    anyhow::ensure!(
+        a.run.chains.is_some() || a.run.rel_error.is_some(),
+        "a sharded run needs --chains (or --rel-error), the same for every shard"
     );
     let mut cfg = a.run.config()?;
     if a.estimator == EstimatorKind::Backward {
         a.run.check_local_only("backward")?;
     }
-    let chains = cfg.stop.chains.context("--shard needs --chains")?;
+    anyhow::ensure!(
+        cfg.stop.time.is_none(),
+        "a sharded run stops by --chains or --rel-error, not by --time (each shard would stop at its own batch)"
+    );
+    let chains = cfg.stop.chains.unwrap_or(0);
     let scene = crate::scene::load(&a.scene)?;
     let job = super::illuminance::Job::new(&scene, Some(&a.points), None)?;
     let table = job.points.as_ref().context("no points")?;
@@ -71,7 +97,7 @@ pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
         !crate::io::interrupt::interrupted(),
         "interrupted: a shard is written whole or not at all (run it again)"
     );
-    let state = ShardState {
+    Ok(ShardState {
         run: RunIdentity {
             batches: r.total_batches,
             chains,
@@ -90,17 +116,7 @@ pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
         rows: table.rows.clone(),
         comment_lines: table.comment_lines,
         batches: r.batches,
-    };
-    write_atomic_with(&a.out, |w| state.write(w)).with_context(|| format!("writing {}", a.out))?;
-    eprintln!(
-        "lumest: shard {i}/{m}: {} of {} batches ({} chains each), {:.3} s; state written to {}",
-        state.batches.len(),
-        state.run.batches,
-        state.run.batch_size,
-        state.wall,
-        a.out
-    );
-    Ok(())
+    })
 }
 
 /// Run `lumest merge`.
@@ -111,11 +127,18 @@ pub fn merge(a: &MergeArgs) -> anyhow::Result<()> {
     for p in &a.parts {
         let bytes = std::fs::read(p).with_context(|| format!("reading {p}"))?;
         let s = ShardState::read(&bytes).with_context(|| p.to_string())?;
-        states.push((p.as_str(), s));
+        states.push((p.clone(), s));
     }
+    merge_states(states, &a.out)
+}
+
+/// Fold the shards `states` (named for messages) of one run and write the
+/// single run's CSV to `out`.
+pub fn merge_states(mut states: Vec<(String, ShardState)>, out: &str) -> anyhow::Result<()> {
     let (first_name, first) = &states[0];
     let m = first.shard.1;
     let mut seen: Vec<Option<&str>> = vec![None; m as usize];
+    let first_name = first_name.as_str();
     for (name, s) in &states {
         let same = |what: &str, ok: bool| -> anyhow::Result<()> {
             anyhow::ensure!(
@@ -144,7 +167,7 @@ pub fn merge(a: &MergeArgs) -> anyhow::Result<()> {
         if let Some(other) = slot {
             anyhow::bail!("{name} and {other} are both shard {}/{m}", s.shard.0);
         }
-        *slot = Some(name);
+        *slot = Some(name.as_str());
     }
     let missing: Vec<String> = seen
         .iter()
@@ -215,16 +238,14 @@ pub fn merge(a: &MergeArgs) -> anyhow::Result<()> {
         c
     });
     let (staged, written) =
-        stage_csv(&a.out, &headers, rows).with_context(|| format!("writing {}", a.out))?;
+        stage_csv(out, &headers, rows).with_context(|| format!("writing {out}"))?;
     anyhow::ensure!(
         written == first.rows.len(),
         "rows were lost: {} of {} written",
         written,
         first.rows.len()
     );
-    staged
-        .commit()
-        .with_context(|| format!("writing {}", a.out))?;
+    staged.commit().with_context(|| format!("writing {out}"))?;
     eprintln!(
         "lumest: merged {m} shard(s): {} batches of {} chains, seed {}; {} rows written to {} \
          (the shards' wall times add up to {wall:.3} s)",
@@ -232,7 +253,7 @@ pub fn merge(a: &MergeArgs) -> anyhow::Result<()> {
         run.batch_size,
         run.seed,
         written,
-        if a.out == "-" { "<stdout>" } else { &a.out }
+        if out == "-" { "<stdout>" } else { out }
     );
     for line in super::illuminance::summary(&result).lines() {
         eprintln!("lumest: {line}");

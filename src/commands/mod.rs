@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod illuminance;
 pub mod merge;
+pub mod mpi_run;
 pub mod outputs;
 pub mod photometry;
 pub mod render;

@@ -1,0 +1,92 @@
+//! `mpirun -np R lumest illuminance ... --mpi`: the batches of a run over R
+//! MPI ranks. Rank r runs shard r/R ([`super::merge::shard_state`]: batches
+//! r, r + R, ...; with `--rel-error` every rank runs the same deterministic
+//! pilot and plans alike), sends its state to rank 0, which folds all the
+//! batches in index order ([`super::merge::merge_states`]) and writes
+//! `--out`: byte for byte what one process writes. Built only with the
+//! cargo feature `mpi` (the `mpi` crate over the system's MPI library).
+
+use super::illuminance::IlluminanceArgs;
+
+/// Run `lumest illuminance ... --mpi`.
+#[cfg(feature = "mpi")]
+pub fn run(a: &IlluminanceArgs) -> anyhow::Result<()> {
+    use crate::tally::shard::ShardState;
+    use mpi::datatype::PartitionMut;
+    use mpi::traits::*;
+    let universe =
+        mpi::initialize().ok_or_else(|| anyhow::anyhow!("MPI was initialised already"))?;
+    let world = universe.world();
+    let (rank, size) = (world.rank(), world.size());
+    let root = world.process_at_rank(0);
+    if rank == 0 {
+        super::outputs::check_outputs(
+            &[a.scene.as_path(), std::path::Path::new(&a.points)],
+            &[("--out", std::path::Path::new(&a.out))],
+        )?;
+    }
+    let t = std::time::Instant::now();
+    // A rank that fails still takes part in the gather (with an empty state),
+    // so that no rank waits forever; rank 0 then reports it.
+    let (bytes, failure) = match super::merge::shard_state(a, rank as u64, size as u64) {
+        Ok(state) => {
+            let mut b = Vec::new();
+            state.write(&mut b)?;
+            (b, None)
+        }
+        Err(e) => (Vec::new(), Some(e)),
+    };
+    let len = bytes.len() as u64;
+    if rank != 0 {
+        root.gather_into(&len);
+        root.gather_varcount_into(&bytes[..]);
+        if let Some(e) = failure {
+            return Err(e.context(format!("rank {rank}")));
+        }
+        return Ok(());
+    }
+    let mut lens = vec![0u64; size as usize];
+    root.gather_into_root(&len, &mut lens[..]);
+    let counts: Vec<i32> = lens.iter().map(|&l| l as i32).collect();
+    let displs: Vec<i32> = counts
+        .iter()
+        .scan(0i32, |acc, &c| {
+            let d = *acc;
+            *acc += c;
+            Some(d)
+        })
+        .collect();
+    let mut all = vec![0u8; lens.iter().sum::<u64>() as usize];
+    {
+        let mut partition = PartitionMut::new(&mut all[..], counts.clone(), &displs[..]);
+        root.gather_varcount_into_root(&bytes[..], &mut partition);
+    }
+    if let Some(e) = failure {
+        return Err(e.context("rank 0"));
+    }
+    let mut states = Vec::with_capacity(size as usize);
+    for (r, (&d, &c)) in displs.iter().zip(&counts).enumerate() {
+        anyhow::ensure!(c > 0, "rank {r} failed: see its message");
+        let s = ShardState::read(&all[d as usize..(d + c) as usize])
+            .map_err(|e| anyhow::anyhow!("rank {r}'s state: {e}"))?;
+        states.push((format!("rank {r}"), s));
+    }
+    let gathered = t.elapsed().as_secs_f64();
+    super::merge::merge_states(states, &a.out)?;
+    eprintln!(
+        "lumest: {size} MPI rank(s): {:.3} s to run and gather ({} bytes of batch state), {:.3} s in all",
+        gathered,
+        all.len(),
+        t.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// Without the `mpi` feature: a clear error.
+#[cfg(not(feature = "mpi"))]
+pub fn run(_a: &IlluminanceArgs) -> anyhow::Result<()> {
+    anyhow::bail!(
+        "--mpi needs a lumest built with MPI: `cargo build --release --features mpi` \
+         (with an MPI library and libclang installed, e.g. Debian's libopenmpi-dev and libclang-dev)"
+    )
+}
