@@ -2,6 +2,8 @@
 //! arguments and maps errors to exit codes).
 
 pub mod bench;
+pub mod figures;
+pub mod grid;
 pub mod illuminance;
 pub mod merge;
 pub mod outputs;
@@ -181,6 +183,7 @@ impl RunArgs {
             near: (near_radius, self.near_paths.unwrap_or(16)),
             near_auto,
             shard: None,
+            keep_batch_means: 0,
         })
     }
 }

@@ -82,9 +82,12 @@ use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 pub mod zcheck;
 
 mod batch;
+mod batch_means;
 pub mod shard;
+pub mod surface_figures;
 mod tallies;
 pub use batch::Batch;
+pub use batch_means::BatchMeans;
 pub use tallies::{Tallies, bucket, bucket_count};
 
 /// Mergeable running mean, variance, third and fourth central moments and
