@@ -177,7 +177,7 @@ pub fn summary_lines(g: &GridFigures, equal_weights: bool) -> Vec<String> {
         return out;
     };
     let method = match f.e_min.method {
-        crate::tally::surface_figures::Method::Bootstrap(r) => r,
+        crate::tally::surface_figures::Method::Extreme(r) => r,
         _ => 0,
     };
     out.push(format!(
@@ -228,7 +228,10 @@ pub fn summary_lines(g: &GridFigures, equal_weights: bool) -> Vec<String> {
     out.push(line("E_avg", " lx", &f.e_avg, 5) + " [batch means]");
     out.push(
         line("E_min", " lx", &f.e_min, 5)
-            + &format!(" [bootstrap over batches, {method} resamples, basic interval]"),
+            + &format!(
+                " [std error and bias: bootstrap over batches, {method} resamples; interval: \
+                 per-point t bounds]"
+            ),
     );
     out.push(line("E_max", " lx", &f.e_max, 5));
     out.push(line("U0 = E_min/E_avg", "", &f.u0, 4));

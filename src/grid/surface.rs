@@ -85,7 +85,7 @@ fn rectangle(
         }
     }
     for (w, s, f) in [(u, e1, "edge1"), (v, e2, "edge2")] {
-        if !(w.length() > 0.0) {
+        if w.length() <= 0.0 {
             return Err(invalid(ctx, s.span(), f, "has zero length"));
         }
     }
