@@ -260,6 +260,14 @@ fn bad_grid_keys() {
         e.contains("S.toml:") && e.contains("field `name`") && e.contains("unique"),
         "{e}"
     );
+    // A degenerate disc (which the scene compiler refuses too) gets an error, not NaN points.
+    let bad = ROOM.replace("normal = [0, 0, 1]", "normal = [0, 0, 0]")
+        + "[[grid]]\nname = \"t\"\nsurface = \"table\"\n";
+    let e = parse(&bad, Path::new("S.toml")).unwrap_err().to_string();
+    assert!(
+        e.contains("field `surface`") && e.contains("bad `center`, `normal` or `radius`"),
+        "{e}"
+    );
     let e = grids("[[grid]]\nname = \"a\"\n").unwrap_err();
     assert!(e.contains("field `surface`") && e.contains("corner"), "{e}");
     let e = grids("[[grid]]\nsurface = \"room.z_min\"\n").unwrap_err();

@@ -198,11 +198,18 @@ pub(super) fn patch_of_surface(
                     )));
                 };
                 let c = DVec3::from(*c.get_ref());
-                let mut n = DVec3::from(*n.get_ref()).normalize();
+                let n = DVec3::from(*n.get_ref());
+                let r = *r.get_ref();
+                if !(c.is_finite() && n.is_finite() && n.length() > 0.0 && r.is_finite() && r > 0.0)
+                {
+                    return Err(err(format!(
+                        "disc `{wanted}` has a bad `center`, `normal` or `radius`"
+                    )));
+                }
+                let mut n = n.normalize();
                 if s.sides.as_ref().is_some_and(|x| x.get_ref() == "back") {
                     n = -n;
                 }
-                let r = *r.get_ref();
                 let f = crate::sampling::warp::Frame::from_normal(n);
                 Ok(Patch {
                     origin: c - r * (f.s + f.t),
@@ -250,6 +257,9 @@ pub(super) fn patch_of_surface(
         if u.cross(v).dot(n) < 0.0 {
             std::mem::swap(&mut u, &mut v);
             std::mem::swap(&mut a, &mut bb);
+        }
+        if !(lo.is_finite() && hi.is_finite() && a > 0.0 && bb > 0.0 && hi[k] > lo[k]) {
+            return Err(err(format!("box `{base}` has a bad `min` or `max`")));
         }
         let mut origin = lo;
         origin[k] = if end == 1 { hi[k] } else { lo[k] };
