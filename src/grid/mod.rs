@@ -400,6 +400,16 @@ fn road_grid(g: &GridDesc, ctx: &SourceCtx, offset: f64) -> Result<Grid, SceneEr
     };
     let rows = road::rows_along(patch.a);
     let across = road::POINTS_PER_LANE * lanes;
+    // Refuse absurd counts before allocating.
+    if rows.saturating_mul(across) > MAX_GRID_POINTS {
+        let span = g.edge1.as_ref().map_or(g.name.span(), |e| e.span());
+        return Err(invalid(
+            ctx,
+            span,
+            "edge1",
+            format!("{rows} x {across} points; at most {MAX_GRID_POINTS} (a shorter field)"),
+        ));
+    }
     let (sa, sb) = (patch.a / rows as f64, patch.b / across as f64);
     let mut points = Vec::with_capacity(rows * across);
     for j in 0..across {
