@@ -177,6 +177,35 @@ fn grid_writes_points_and_illuminance_writes_figures() {
         e(0)
     );
 
+    // Same seed, other thread counts: the same figures, byte for byte.
+    for threads in ["1", "3"] {
+        let again = dir.path().join(format!("f{threads}.csv"));
+        lumest()
+            .args([
+                "illuminance",
+                "--chains",
+                "16384",
+                "--quiet",
+                "--threads",
+                threads,
+                "--scene",
+            ])
+            .arg(&scene)
+            .arg("--points")
+            .arg(&points)
+            .arg("--out")
+            .arg(dir.path().join(format!("e{threads}.csv")))
+            .arg("--figures-out")
+            .arg(&again)
+            .assert()
+            .success();
+        assert_eq!(
+            std::fs::read(&again).unwrap(),
+            f.as_bytes(),
+            "--threads {threads}"
+        );
+    }
+
     // --figures-out needs a grid column.
     let plain = dir.path().join("plain.csv");
     std::fs::write(&plain, "x,y,z,nx,ny,nz\n1,1,0.8,0,0,1\n").unwrap();
