@@ -1,7 +1,9 @@
 //! The `lumest` command line: arguments in, library calls, exit code out.
 
 use clap::{Parser, Subcommand};
-use lumest::commands::{bench, illuminance, merge, photometry, render, shfit, sobolev, validate};
+use lumest::commands::{
+    bench, grid, illuminance, merge, photometry, render, shfit, sobolev, validate,
+};
 use std::process::ExitCode;
 
 /// Monte Carlo illumination by local estimation, with exact references.
@@ -34,6 +36,8 @@ enum Command {
     Photometry(photometry::PhotometryArgs),
     /// Merge the shard states of a sharded `illuminance` run into its CSV.
     Merge(merge::MergeArgs),
+    /// Points of the scene's calculation surfaces (`[[grid]]`) as a points CSV.
+    Grid(grid::GridArgs),
 }
 
 fn main() -> ExitCode {
@@ -48,6 +52,7 @@ fn main() -> ExitCode {
         Command::ShFit(a) => shfit::sh_fit(a),
         Command::Photometry(a) => photometry::photometry(a),
         Command::Merge(a) => merge::merge(a),
+        Command::Grid(a) => grid::grid(a),
     };
     match res {
         Ok(()) => ExitCode::SUCCESS,

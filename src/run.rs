@@ -115,6 +115,10 @@ pub struct RunConfig {
     /// its first batches, then the batches after them (the result is the
     /// uninterrupted run's, bit for bit); `None`: start afresh.
     pub resume: Option<std::sync::Arc<crate::tally::checkpoint::Checkpoint>>,
+    /// Keep the per-batch means of receivers `0 .. keep_batch_means` in
+    /// [`Tallies::batch_means`] (for grid figures: 8 bytes per receiver
+    /// and batch); 0: none.
+    pub keep_batch_means: usize,
 }
 
 /// The command line's defaults: 100,000 chains, stratified, the near/far
@@ -137,6 +141,7 @@ impl Default for RunConfig {
             near_auto: true,
             shard: None,
             resume: None,
+            keep_batch_means: 0,
         }
     }
 }
@@ -427,7 +432,11 @@ pub fn planned_batches(pilot_batches: u64, r_p: f64, target: f64) -> u64 {
 /// The exact answer of work that emits nothing: zero batches.
 fn no_light(direct: &[f64], cfg: &RunConfig) -> RunResult {
     let mut tallies = Tallies::new(direct.len(), cfg.orders);
+    tallies.batch_means = crate::tally::BatchMeans::new(cfg.keep_batch_means.min(direct.len()));
     for _ in 0..MIN_BATCHES {
+        for j in 0..direct.len() {
+            tallies.batch_means.record(j, 0.0);
+        }
         for w in tallies
             .estimated
             .iter_mut()
@@ -564,6 +573,7 @@ fn drive_batches(
     tallies.near_plain = checks.near_plain;
     tallies.near_reach = checks.near_reach;
     tallies.enclosed = checks.enclosed;
+    tallies.batch_means = crate::tally::BatchMeans::new(cfg.keep_batch_means.min(n));
     let direct = work.direct().to_vec();
     let mut result = RunResult {
         direct: Vec::new(),

@@ -151,6 +151,21 @@ fn parsers_survive_mutated_inputs() {
     };
     fuzz(d, "scene_planes.toml", "s.toml", 2000, &scene_check);
     fuzz(d, "scene_lights.toml", "s.toml", 2000, &scene_check);
+    // Grids are read from a scene that compiles (as `lumest grid` does):
+    // every point finite, every area positive.
+    let grid_check = |p: &Path| -> Result<(), String> {
+        lumest::scene::load(p).map_err(|e| e.to_string())?;
+        let grids = lumest::grid::load(p).map_err(|e| e.to_string())?;
+        for g in &grids {
+            for q in &g.points {
+                if !(q.p.is_finite() && q.n.is_finite() && q.area.is_finite() && q.area > 0.0) {
+                    return Err(format!("NONFINITE grid point {q:?} in `{}`", g.name));
+                }
+            }
+        }
+        Ok(())
+    };
+    fuzz(d, "scene_grids.toml", "s.toml", 2000, &grid_check);
     fuzz(d, "points.csv", "p.csv", 2000, &|p| {
         let t = lumest::io::read_points(p.to_str().unwrap()).map_err(|e| e.to_string())?;
         match t

@@ -69,6 +69,10 @@ pub struct IlluminanceArgs {
     /// bytes as one process. Needs a binary built with `--features mpi`.
     #[arg(long, conflicts_with_all = ["views", "time"])]
     pub mpi: bool,
+    /// Write the grid figures (points grouped by the `grid` column, see
+    /// `lumest grid`) with their errors and verdicts to this CSV.
+    #[arg(long = "figures-out", conflicts_with = "shard")]
+    pub figures_out: Option<String>,
     #[command(flatten)]
     pub run: RunArgs,
 }
@@ -638,7 +642,19 @@ pub(crate) fn measure_with(
     estimator: EstimatorKind,
     run_args: &RunArgs,
 ) -> anyhow::Result<(Job, RunResult)> {
-    let cfg = run_args.config()?;
+    measure_full(scene_path, points, views, estimator, run_args, None)
+}
+
+/// [`measure_with`], also writing the grid figures to `figures_out`.
+pub(crate) fn measure_full(
+    scene_path: &std::path::Path,
+    points: Option<(&str, &str)>,
+    views: Option<(&str, Option<ViewTable>, &str)>,
+    estimator: EstimatorKind,
+    run_args: &RunArgs,
+    figures_out: Option<&str>,
+) -> anyhow::Result<(Job, RunResult)> {
+    let mut cfg = run_args.config()?;
     if estimator == EstimatorKind::Backward {
         run_args.check_local_only("backward")?;
     }
@@ -709,6 +725,24 @@ pub(crate) fn measure_with(
         let mut names = result_headers("L", cfg.orders);
         names.extend(["sx", "sy", "sz"].map(String::from));
         reserved_columns(&t.headers, &names, input)?;
+    }
+    // Points grouped by a `grid` column get grid figures, from their
+    // per-batch means.
+    let groups = match (points, &job.points) {
+        (Some((input, _)), Some(t)) => super::figures::grid_groups(t, input)?,
+        _ => None,
+    };
+    anyhow::ensure!(
+        figures_out.is_none() || groups.as_ref().is_some_and(|g| !g.0.is_empty()),
+        "--figures-out: the points have no `grid` column naming their grids (write them with `lumest grid`)"
+    );
+    let grids = if groups.is_some() {
+        crate::grid::load(scene_path)?
+    } else {
+        Vec::new()
+    };
+    if groups.is_some() {
+        cfg.keep_batch_means = job.points.as_ref().map_or(0, |t| t.rows.len());
     }
     eprintln!(
         "lumest: scene {}: {}",
@@ -785,6 +819,15 @@ pub(crate) fn measure_with(
         rows.push((line, n == t.rows.len()));
         staged.push((file, out));
     }
+    let figures = groups
+        .as_ref()
+        .map(|(g, _)| super::figures::grid_figures(&result, g, &grids));
+    if let (Some(out), Some(f)) = (figures_out, &figures) {
+        let headers: Vec<String> = super::figures::FIGURE_COLUMNS.map(String::from).to_vec();
+        let (file, _) = stage_csv(out, &headers, super::figures::figure_rows(f))
+            .with_context(|| format!("writing {out}"))?;
+        staged.push((file, out));
+    }
     anyhow::ensure!(
         rows.iter().all(|r| r.1),
         "rows were lost: {}",
@@ -806,6 +849,13 @@ pub(crate) fn measure_with(
         && let Some(line) = grid_summary(&result, t.rows.len())
     {
         eprintln!("lumest: {line}");
+    }
+    if let (Some(f), Some((_, equal))) = (&figures, &groups) {
+        for g in f {
+            for line in super::figures::summary_lines(g, *equal) {
+                eprintln!("lumest: {line}");
+            }
+        }
     }
     Ok((job, result))
 }
@@ -890,14 +940,19 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
         inputs.push(Path::new(v));
         outputs.push(("--views-out", Path::new(out)));
     }
+    if let Some(f) = &a.figures_out {
+        outputs.push(("--figures-out", Path::new(f)));
+    }
     check_outputs(&inputs, &outputs)?;
-    measure(
+    measure_full(
         &a.scene,
         Some((&a.points, &a.out)),
-        views,
+        views.map(|v| (v.0, None, v.1)),
         a.estimator,
         &a.run,
+        a.figures_out.as_deref(),
     )
+    .map(|_| ())
 }
 
 /// Run `lumest luminance`.

@@ -2,6 +2,8 @@
 //! arguments and maps errors to exit codes).
 
 pub mod bench;
+pub mod figures;
+pub mod grid;
 pub mod illuminance;
 pub mod merge;
 pub mod mpi_run;
@@ -226,6 +228,7 @@ impl RunArgs {
             near_auto,
             shard: None,
             resume: None,
+            keep_batch_means: 0,
         })
     }
 }

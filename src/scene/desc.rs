@@ -36,6 +36,10 @@ pub struct SceneDesc {
     /// Light sources, `[[light]]` tables.
     #[serde(default)]
     pub light: Vec<Spanned<LightDesc>>,
+    /// Calculation surfaces, `[[grid]]` tables (read by [`crate::grid`];
+    /// the compiled scene ignores them).
+    #[serde(default)]
+    pub grid: Vec<Spanned<GridDesc>>,
     /// Portals, `[[portal]]` tables: the openings through which the light of
     /// distant, environment, sky and sun lights enters.
     #[serde(default)]
@@ -251,4 +255,42 @@ pub struct LightDesc {
     pub latitude: Option<Spanned<f64>>,
     /// Longitude [deg], east positive.
     pub longitude: Option<Spanned<f64>>,
+}
+
+/// One `[[grid]]` table: a calculation surface (see [`crate::grid`]).
+/// A rectangle (`corner`, `edge1`, `edge2`) or a named surface of the
+/// scene (`surface = "desk 1.z_max"`), or a road field (`type = "road"`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridDesc {
+    /// The grid's name (unique in the file), written to the `grid` column.
+    pub name: Spanned<String>,
+    /// `"area"` (default: EN 12464-1 cells) or `"road"` (EN 13201-3 field).
+    #[serde(rename = "type")]
+    pub kind: Option<Spanned<String>>,
+    /// Name of a rectangle or disc of the scene, or `"BOX.FACE"` for a box
+    /// face (`x_min` .. `z_max`); exclusive with `corner`.
+    pub surface: Option<Spanned<String>>,
+    /// Corner of the grid's rectangle [m].
+    pub corner: Option<Spanned<[f64; 3]>>,
+    /// First edge [m] (a road field: along the road, between two luminaires).
+    pub edge1: Option<Spanned<[f64; 3]>>,
+    /// Second edge [m], perpendicular to `edge1`; the points face `edge1 x edge2`.
+    pub edge2: Option<Spanned<[f64; 3]>>,
+    /// Shift of the points along the grid's normal [m]; default 0.
+    pub offset: Option<Spanned<f64>>,
+    /// Largest cell side [m]; default: the EN 12464-1 rule.
+    pub spacing: Option<Spanned<f64>>,
+    /// Band left out along every edge [m]; default 0.
+    pub border: Option<Spanned<f64>>,
+    /// Lanes of a road field (3 points across each); default 1.
+    pub lanes: Option<Spanned<i64>>,
+    /// Receiver type of the points; default `"planar"`.
+    pub receiver: Option<Spanned<String>>,
+    /// Required maintained average illuminance [lx].
+    pub em: Option<Spanned<f64>>,
+    /// Required uniformity `U0 = E_min / E_avg` (dimensionless).
+    pub u0: Option<Spanned<f64>>,
+    /// Maintenance factor on the computed illuminance, in (0, 1]; default 1.
+    pub maintenance_factor: Option<Spanned<f64>>,
 }

@@ -11,8 +11,9 @@
 //! `collisions`, `scores` and `wall` (seconds so far); the body holds the
 //! tallies: every accumulator's exact state (count, then mean, M2, M3, M4,
 //! min, max as f64 bits) for the estimated part, the sampled direct light
-//! and each order bucket, the FOM snapshots, the `sparse` counts and the
-//! per-receiver checks; then the checksum trailer.
+//! and each order bucket, the FOM snapshots, the `sparse` counts, the
+//! per-receiver checks and the kept batch means of grid points (for the
+//! grid figures); then the checksum trailer.
 
 use super::state_file::*;
 use super::{Tallies, Welford};
@@ -93,6 +94,8 @@ impl Checkpoint {
         }
         let flat: Vec<u64> = t.near_vertices.iter().flatten().copied().collect();
         put_u64v(&mut w, &flat)?;
+        put_u64(&mut w, t.batch_means.receivers() as u64)?;
+        put_f64v(&mut w, t.batch_means.values())?;
         finish(w)
     }
 
@@ -114,6 +117,8 @@ impl Checkpoint {
         let [watched, near_plain, near_reach, enclosed] =
             [get_flags(r)?, get_flags(r)?, get_flags(r)?, get_flags(r)?];
         let flat = get_u64v(r)?;
+        let kept = get_u64(r)? as usize;
+        let batch_means = super::batch_means::BatchMeans::from_values(kept, get_f64v(r)?);
         if !body.is_empty() || flat.len() % 2 != 0 || estimated.len() as u64 != run.receivers {
             return Err(StateError::Damaged(
                 "the tallies do not fit the header".into(),
@@ -130,6 +135,7 @@ impl Checkpoint {
             near_reach,
             enclosed,
             near_vertices: flat.chunks(2).map(|c| [c[0], c[1]]).collect(),
+            batch_means,
         };
         Ok(Self {
             run,

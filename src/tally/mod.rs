@@ -82,11 +82,14 @@ use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 pub mod zcheck;
 
 mod batch;
+mod batch_means;
 pub mod checkpoint;
 pub mod shard;
 mod state_file;
+pub mod surface_figures;
 mod tallies;
 pub use batch::Batch;
+pub use batch_means::BatchMeans;
 pub use tallies::{Tallies, bucket, bucket_count};
 
 /// Mergeable running mean, variance, third and fourth central moments and

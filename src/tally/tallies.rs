@@ -1,7 +1,7 @@
 //! Per-receiver tallies over batch means: what the runner folds each batch
 //! into, in batch order.
 
-use super::{Diagnostics, Welford, relative_error};
+use super::{BatchMeans, Diagnostics, Welford, relative_error};
 
 /// Per-receiver tallies over batch means of the estimated quantity (the
 /// indirect illuminance [lx], or luminance [cd/m^2], per receiver).
@@ -32,6 +32,9 @@ pub struct Tallies {
     /// Per receiver: the near part's exposed and reached path vertices over
     /// the run (see [`crate::tally::Diagnostics::near_reach`]).
     pub near_vertices: Vec<[u64; 2]>,
+    /// The per-batch means of the estimated part of the first receivers
+    /// (none by default; see [`crate::run::RunConfig::keep_batch_means`]).
+    pub batch_means: BatchMeans,
 }
 
 /// The order bucket of light reflected `order >= 1` times when `orders`
@@ -66,6 +69,7 @@ impl Tallies {
             near_reach: vec![false; n],
             enclosed: Vec::new(),
             near_vertices: vec![[0; 2]; n],
+            batch_means: BatchMeans::default(),
         }
     }
 
@@ -97,6 +101,7 @@ impl Tallies {
             let d = direct_sums.get(j).map_or(0.0, |s| s * inv);
             let total: f64 = (0..buckets).map(|k| means[k * n + j]).sum::<f64>() + d;
             self.estimated[j].push(total);
+            self.batch_means.record(j, total);
             if let Some(w) = self.sampled_direct.get_mut(j) {
                 w.push(d);
             }

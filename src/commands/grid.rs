@@ -1,0 +1,107 @@
+//! `lumest grid`: the points of a scene's calculation surfaces (`[[grid]]`
+//! tables) as a points CSV for `lumest illuminance`.
+
+use super::outputs::check_outputs;
+use crate::grid::Grid;
+use crate::io::csvio::stage_csv;
+use crate::io::format_number;
+use anyhow::Context;
+use clap::Args;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `lumest grid`.
+#[derive(Args, Clone, Debug)]
+pub struct GridArgs {
+    /// Scene file (TOML) with `[[grid]]` tables.
+    #[arg(long)]
+    pub scene: PathBuf,
+    /// Only the grid of this name (default: every grid).
+    #[arg(long)]
+    pub name: Option<String>,
+    /// Output points CSV (`-`: standard output).
+    #[arg(long)]
+    pub out: String,
+}
+
+/// Columns of a grid points CSV: the points reader's `x,y,z,nx,ny,nz`, with
+/// `id` (1, 2, ... within each grid), `grid` (its name), `area` (the
+/// point's cell [m^2]) and `receiver` (its receiver type).
+pub const GRID_COLUMNS: [&str; 10] = [
+    "id", "grid", "x", "y", "z", "nx", "ny", "nz", "area", "receiver",
+];
+
+/// The CSV rows of grids, in [`GRID_COLUMNS`] order.
+pub fn grid_rows(grids: &[Grid]) -> impl Iterator<Item = Vec<String>> + '_ {
+    grids.iter().flat_map(|g| {
+        g.points.iter().enumerate().map(move |(k, q)| {
+            let mut row = vec![(k + 1).to_string(), g.name.clone()];
+            row.extend([q.p.x, q.p.y, q.p.z, q.n.x, q.n.y, q.n.z, q.area].map(format_number));
+            row.push(g.receiver.clone());
+            row
+        })
+    })
+}
+
+/// One summary line for a grid.
+pub fn describe(g: &Grid) -> String {
+    let mut reqs = Vec::new();
+    if let Some(em) = g.em {
+        reqs.push(format!("Em >= {} lx", format_number(em)));
+    }
+    if let Some(u0) = g.u0 {
+        reqs.push(format!("U0 >= {}", format_number(u0)));
+    }
+    format!(
+        "grid `{}`: {} points ({} x {} cells of {:.3} m x {:.3} m; {}), {:.4} m^2, receiver {}, maintenance factor {}{}",
+        g.name,
+        g.points.len(),
+        g.cells.0,
+        g.cells.1,
+        g.cell_size.0,
+        g.cell_size.1,
+        g.rule,
+        g.area(),
+        g.receiver,
+        format_number(g.maintenance_factor),
+        if reqs.is_empty() {
+            String::new()
+        } else {
+            format!(", requires {}", reqs.join(" and "))
+        }
+    )
+}
+
+/// Run `lumest grid`.
+pub fn grid(a: &GridArgs) -> anyhow::Result<()> {
+    check_outputs(&[a.scene.as_path()], &[("--out", Path::new(&a.out))])?;
+    // The scene must compile: a grid on a scene that does not is no use.
+    crate::scene::load(&a.scene)?;
+    let mut grids = crate::grid::load(&a.scene)?;
+    anyhow::ensure!(
+        !grids.is_empty(),
+        "{}: the scene has no [[grid]] table",
+        a.scene.display()
+    );
+    if let Some(name) = &a.name {
+        let names: Vec<String> = grids.iter().map(|g| format!("`{}`", g.name)).collect();
+        grids.retain(|g| &g.name == name);
+        anyhow::ensure!(
+            !grids.is_empty(),
+            "--name {name}: no grid of that name in {} (grids: {})",
+            a.scene.display(),
+            names.join(", ")
+        );
+    }
+    let headers: Vec<String> = GRID_COLUMNS.map(String::from).to_vec();
+    let (staged, n) = stage_csv(&a.out, &headers, grid_rows(&grids))
+        .with_context(|| format!("writing {}", a.out))?;
+    staged
+        .commit()
+        .with_context(|| format!("writing {}", a.out))?;
+    for g in &grids {
+        eprintln!("lumest: {}", describe(g));
+    }
+    let out = if a.out == "-" { "<stdout>" } else { &a.out };
+    eprintln!("lumest: {n} points written to {out}");
+    Ok(())
+}

@@ -1,0 +1,243 @@
+//! `lumest grid` and the grid figures of `lumest illuminance --figures-out`.
+
+use assert_cmd::Command;
+
+const SCENE: &str = r#"[[surface]]
+type = "box"
+name = "room"
+min = [0, 0, 0]
+max = [4, 3, 2.5]
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[light]]
+type = "point"
+position = [2, 1.5, 2.3]
+intensity = 300
+
+[[grid]]
+name = "work plane"
+surface = "room.z_min"
+offset = 0.8
+border = 0.5
+em = 1
+u0 = 0.1
+maintenance_factor = 0.8
+
+[[grid]]
+name = "wall"
+surface = "room.x_max"
+spacing = 1
+em = 1e6
+"#;
+
+fn lumest() -> Command {
+    Command::cargo_bin("lumest").unwrap()
+}
+
+#[test]
+fn grid_writes_points_and_illuminance_writes_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let points = dir.path().join("p.csv");
+    let out = lumest()
+        .args(["grid", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&points)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let text = std::fs::read_to_string(&points).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "id,grid,x,y,z,nx,ny,nz,area,receiver"
+    );
+    // Work plane 3 x 2 m: d = 3 m, p = 0.43 m, 7 x 5 cells; wall 3 x 2.5 m at 1 m: 3 x 3.
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 35 + 9, "{err}");
+    assert!(rows[0].starts_with("1,work plane,") && rows[0].ends_with(",planar"));
+    assert!(rows[35].starts_with("1,wall,4,"), "{}", rows[35]);
+    assert!(
+        err.contains("grid `work plane`: 35 points (7 x 5 cells"),
+        "{err}"
+    );
+
+    // One grid by name; an unknown name.
+    let one = dir.path().join("one.csv");
+    lumest()
+        .args(["grid", "--name", "wall", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&one)
+        .assert()
+        .success();
+    assert_eq!(std::fs::read_to_string(&one).unwrap().lines().count(), 10);
+    let out = lumest()
+        .args(["grid", "--name", "floor", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&one)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no grid of that name"));
+
+    // The run: figures per grid, with verdicts.
+    let res = dir.path().join("e.csv");
+    let figs = dir.path().join("f.csv");
+    let out = lumest()
+        .args(["illuminance", "--chains", "16384", "--quiet", "--scene"])
+        .arg(&scene)
+        .arg("--points")
+        .arg(&points)
+        .arg("--out")
+        .arg(&res)
+        .arg("--figures-out")
+        .arg(&figs)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let f = std::fs::read_to_string(&figs).unwrap();
+    let mut lines = f.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "grid,figure,unit,value,std_error,ci95_low,ci95_high,bias,method,required,verdict,points,left_out,flagged,area,maintenance_factor,batches"
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 10);
+    let names: Vec<(&str, &str)> = rows.iter().map(|r| (r[0], r[1])).collect();
+    assert_eq!(
+        names[..5],
+        [
+            ("work plane", "E_avg"),
+            ("work plane", "E_min"),
+            ("work plane", "E_max"),
+            ("work plane", "U0"),
+            ("work plane", "Ud"),
+        ]
+    );
+    // Em 1 lx and U0 0.1 are met, 1e6 lx is not; the others have no requirement.
+    assert_eq!((rows[0][9], rows[0][10]), ("1", "met"));
+    assert_eq!((rows[3][9], rows[3][10]), ("0.1", "met"));
+    assert_eq!((rows[5][9], rows[5][10]), ("1000000", "not met"));
+    assert_eq!(rows[1][10], "");
+    assert_eq!(rows[0][8], "batch-means");
+    assert!(rows[1][8].starts_with("bootstrap-") && rows[1][8].ends_with("+t-bounds"));
+    // Area weights: 6 m^2 of work plane and 7.5 m^2 of wall; factor 0.8, then 1.
+    assert!((rows[0][14].parse::<f64>().unwrap() - 6.0).abs() < 1e-9);
+    assert!((rows[5][14].parse::<f64>().unwrap() - 7.5).abs() < 1e-9);
+    assert_eq!((rows[0][15], rows[5][15]), ("0.8", "1"));
+    // Every value lies in its interval; E_min <= E_avg <= E_max.
+    for r in &rows {
+        let v: Vec<f64> = r[3..7].iter().map(|x| x.parse().unwrap()).collect();
+        assert!(v[2] <= v[0] && v[0] <= v[3] && v[1] > 0.0, "{r:?}");
+    }
+    let e = |r: usize| rows[r][3].parse::<f64>().unwrap();
+    assert!(e(1) <= e(0) && e(0) <= e(2));
+    // The summary.
+    assert!(
+        err.contains("grid `work plane`: 35 points, 6.000 m^2, maintenance factor 0.8"),
+        "{err}"
+    );
+    assert!(
+        err.contains("requirements: Em >= 1 lx: met; U0 >= 0.1: met"),
+        "{err}"
+    );
+    assert!(
+        err.contains("requirements: Em >= 1000000 lx: not met"),
+        "{err}"
+    );
+
+    // The maintenance factor scales E_avg: the run's mean of the same points times 0.8.
+    let res_text = std::fs::read_to_string(&res).unwrap();
+    let mut rl = res_text.lines();
+    let header: Vec<&str> = rl.next().unwrap().split(',').collect();
+    let (ci, ei, ai) = (
+        header.iter().position(|h| *h == "grid").unwrap(),
+        header.iter().position(|h| *h == "E").unwrap(),
+        header.iter().position(|h| *h == "area").unwrap(),
+    );
+    let (mut s, mut w) = (0.0, 0.0);
+    for l in rl {
+        let c: Vec<&str> = l.split(',').collect();
+        if c[ci] == "work plane" {
+            let a: f64 = c[ai].parse().unwrap();
+            s += a * c[ei].parse::<f64>().unwrap();
+            w += a;
+        }
+    }
+    assert!(
+        (0.8 * s / w - e(0)).abs() < 1e-9 * e(0),
+        "{} {}",
+        0.8 * s / w,
+        e(0)
+    );
+
+    // Same seed, other thread counts: the same figures, byte for byte.
+    for threads in ["1", "3"] {
+        let again = dir.path().join(format!("f{threads}.csv"));
+        lumest()
+            .args([
+                "illuminance",
+                "--chains",
+                "16384",
+                "--quiet",
+                "--threads",
+                threads,
+                "--scene",
+            ])
+            .arg(&scene)
+            .arg("--points")
+            .arg(&points)
+            .arg("--out")
+            .arg(dir.path().join(format!("e{threads}.csv")))
+            .arg("--figures-out")
+            .arg(&again)
+            .assert()
+            .success();
+        assert_eq!(
+            std::fs::read(&again).unwrap(),
+            f.as_bytes(),
+            "--threads {threads}"
+        );
+    }
+
+    // --figures-out needs a grid column.
+    let plain = dir.path().join("plain.csv");
+    std::fs::write(&plain, "x,y,z,nx,ny,nz\n1,1,0.8,0,0,1\n").unwrap();
+    let out = lumest()
+        .args(["illuminance", "--chains", "1000", "--quiet", "--scene"])
+        .arg(&scene)
+        .arg("--points")
+        .arg(&plain)
+        .arg("--out")
+        .arg(dir.path().join("x.csv"))
+        .arg("--figures-out")
+        .arg(dir.path().join("y.csv"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no `grid` column"));
+    // A bad area weight names the file, line and field.
+    std::fs::write(
+        &plain,
+        "grid,area,x,y,z,nx,ny,nz\na,0.5,1,1,0.8,0,0,1\na,-1,2,1,0.8,0,0,1\n",
+    )
+    .unwrap();
+    let out = lumest()
+        .args(["illuminance", "--chains", "1000", "--quiet", "--scene"])
+        .arg(&scene)
+        .arg("--points")
+        .arg(&plain)
+        .arg("--out")
+        .arg(dir.path().join("x.csv"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("plain.csv:3: field `area`"), "{err}");
+}
