@@ -68,6 +68,9 @@ pub struct Stop {
     /// Time limit [s] of a `rel_error` run given no `time`; `None`:
     /// [`DEFAULT_REL_ERROR_CAP`].
     pub rel_error_cap: Option<f64>,
+    /// The `rel_error` target is on the root mean square of the points'
+    /// relative errors (`--rms-error`) rather than on the largest.
+    pub rms: bool,
 }
 
 /// Fewest batches for a standard error (and for the `--rel-error` rule).
@@ -383,9 +386,12 @@ pub struct Pilot {
     pub batch_size: u64,
     /// Wall time of the pilot [s].
     pub wall: f64,
-    /// Largest relative error over the receivers after the pilot,
-    /// rescaled to batches of the run proper.
+    /// Largest (or, for an RMS target, root mean square) relative error
+    /// over the receivers after the pilot, rescaled to batches of the run
+    /// proper.
     pub rel_error: f64,
+    /// The target is on the RMS relative error (`--rms-error`).
+    pub rms: bool,
     /// Batches planned for the run proper.
     pub planned: u64,
     /// Wall time the planned batches need at the pilot's pace [s]
@@ -515,7 +521,11 @@ pub fn drive(
     if pilot.reason == StopReason::Observer {
         return pilot;
     }
-    let r_p = pilot.tallies.max_rel_error(&pilot.direct);
+    let r_p = if stop.rms {
+        pilot.tallies.rms_rel_error(&pilot.direct)
+    } else {
+        pilot.tallies.max_rel_error(&pilot.direct)
+    };
     // R^2 falls like 1 / chains: rescale the pilot's error to batches of `bs`.
     let r_p = r_p * (pilot_bs as f64 / bs as f64).sqrt();
     let planned = planned_batches(pilot.tallies.batches(), r_p, target);
@@ -543,6 +553,7 @@ pub fn drive(
         batch_size: pilot_bs,
         wall: pilot.wall,
         rel_error: r_p,
+        rms: stop.rms,
         planned,
         estimated_time,
         default_cap,

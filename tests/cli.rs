@@ -794,3 +794,80 @@ fn render_refuses_a_dash_prefix_and_non_square_lens_samples() {
         "{err}"
     );
 }
+
+/// `--rms-error X` (issue 15 item 2) plans the run by the root mean square
+/// of the points' relative errors: the CSV's RMS meets the target, the run
+/// takes no more chains than `--rel-error X` (a max target), and the two
+/// targets exclude each other.
+#[test]
+fn rms_error_targets_the_root_mean_square() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |flag: &str, out: &str| {
+        let p = dir.path().join(out);
+        let o = lumest()
+            .args([
+                "illuminance",
+                "--scene",
+                "data/sobolev.toml",
+                "--points",
+                "data/sobolev_points.csv",
+            ])
+            .args(["--out", p.to_str().unwrap(), flag, "3e-3", "--quiet"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{err}");
+        let text = std::fs::read_to_string(p).unwrap();
+        let rows = csv_rows(&text);
+        let r: Vec<f64> = rows
+            .iter()
+            .map(|r| r["E_rel_err"].parse().unwrap())
+            .collect();
+        let rms = (r.iter().map(|x| x * x).sum::<f64>() / r.len() as f64).sqrt();
+        let chains: u64 = err
+            .split_whitespace()
+            .skip_while(|w| *w != "receivers,")
+            .nth(1)
+            .unwrap()
+            .parse()
+            .unwrap();
+        (err, rms, r.iter().copied().fold(0.0, f64::max), chains)
+    };
+    let (err, rms, max, c_rms) = run("--rms-error", "rms.csv");
+    assert!(
+        err.contains("--rms-error 3.000e-3") && err.contains("achieved RMS R"),
+        "{err}"
+    );
+    assert!(rms <= 3e-3, "RMS {rms}");
+    assert!(max > rms, "{max} {rms}");
+    let (_, _, max_rel, c_max) = run("--rel-error", "max.csv");
+    assert!(max_rel <= 3e-3 && c_rms <= c_max, "{c_rms} vs {c_max}");
+    let o = lumest()
+        .args([
+            "illuminance",
+            "--scene",
+            "data/sobolev.toml",
+            "--points",
+            "data/sobolev_points.csv",
+        ])
+        .args(["--out", "-", "--rms-error", "1e-2", "--rel-error", "1e-2"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let o = lumest()
+        .args([
+            "illuminance",
+            "--scene",
+            "data/sobolev.toml",
+            "--points",
+            "data/sobolev_points.csv",
+        ])
+        .args(["--out", "-", "--rms-error", "-1"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("--rms-error must be positive"),
+        "{err}"
+    );
+}

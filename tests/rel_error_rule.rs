@@ -175,6 +175,7 @@ fn an_unreachable_target_stops_at_the_time_cap() {
             time: None,
             rel_error: Some(1e-7),
             rel_error_cap: Some(0.3),
+            rms: false,
         },
         ..RunConfig::default()
     };

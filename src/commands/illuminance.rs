@@ -330,9 +330,15 @@ pub fn summary(r: &RunResult) -> String {
     }
     if let Some(p) = &r.pilot {
         let target = p.target;
+        // An RMS target (`--rms-error`) is judged by the RMS, a max target by the max.
+        let (flag, what, max) = if p.rms {
+            ("--rms-error", "RMS", rms)
+        } else {
+            ("--rel-error", "max", max)
+        };
         text += &format!(
-            "\n--rel-error {target:.3e}: a pilot of {} batches of {} chains ({:.3} s, own streams) \
-             gave max R {:.3e} per batch of {}, so {} fresh batches were planned; achieved max R \
+            "\n{flag} {target:.3e}: a pilot of {} batches of {} chains ({:.3} s, own streams) \
+             gave {what} R {:.3e} per batch of {}, so {} fresh batches were planned; achieved {what} R \
              {max:.3e}{}",
             p.batches,
             p.batch_size,

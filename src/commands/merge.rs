@@ -75,7 +75,7 @@ pub fn shard_state(a: &IlluminanceArgs, i: u64, m: u64) -> anyhow::Result<ShardS
         "--shard writes its state when done: it takes no --checkpoint or --resume"
     );
     anyhow::ensure!(
-        a.run.chains.is_some() || a.run.rel_error.is_some(),
+        a.run.chains.is_some() || a.run.rel_error.is_some() || a.run.rms_error.is_some(),
         "a sharded run needs --chains (or --rel-error), the same for every shard"
     );
     let mut cfg = a.run.config()?;

@@ -52,8 +52,16 @@ pub struct RunArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub time: Option<f64>,
     /// Stop when the largest relative standard error of E over the points is below this.
-    #[arg(long = "rel-error", allow_negative_numbers = true)]
+    #[arg(
+        long = "rel-error",
+        allow_negative_numbers = true,
+        conflicts_with = "rms_error"
+    )]
     pub rel_error: Option<f64>,
+    /// Stop when the root mean square of the points' relative standard
+    /// errors is below this (the same pilot rule as `--rel-error`).
+    #[arg(long = "rms-error", allow_negative_numbers = true)]
+    pub rms_error: Option<f64>,
     /// Seed of the random streams.
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
@@ -143,8 +151,9 @@ impl RunArgs {
         let mut stop = Stop {
             chains: self.chains,
             time: self.time,
-            rel_error: self.rel_error,
+            rel_error: self.rel_error.or(self.rms_error),
             rel_error_cap: None,
+            rms: self.rms_error.is_some(),
         };
         if let Some(t) = stop.time {
             anyhow::ensure!(
@@ -156,7 +165,12 @@ impl RunArgs {
         if let Some(r) = stop.rel_error {
             anyhow::ensure!(
                 r.is_finite() && r > 0.0,
-                "--rel-error must be positive, got {}",
+                "{} must be positive, got {}",
+                if stop.rms {
+                    "--rms-error"
+                } else {
+                    "--rel-error"
+                },
                 crate::io::format_number(r)
             );
         }
