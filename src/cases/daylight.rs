@@ -9,7 +9,8 @@
 //!   `E_h = 7 pi L_z / 9` facing up; facing the four horizontal directions,
 //!   a midpoint rule over the hemisphere (checked itself against the closed
 //!   form `E_v = L_z (3 pi + 8) / 18`).
-//! - **(c)** a point distant light over a black floor, at angles 0 to 120
+//! - **(c)** a distant light over a black floor, a point and a 0.53 degree
+//!   disc, at angles 0 to 120
 //!   degrees to the receivers' normals: `E = E_n max(0, cos)`, exact; the
 //!   rows check the exact part to rounding.
 //! - **(d)** a 2 x 1.2 m window in a black 4 x 4 x 3 m room under the
@@ -310,16 +311,20 @@ fn overcast_sky(dir: &Path) -> anyhow::Result<Reference> {
     })
 }
 
-/// (c) A point distant light (E_n = 80,000 lx, 35 degrees up) over a black
-/// floor; receivers at angles 0-120 degrees to the beam.
-fn distant_light(dir: &Path) -> anyhow::Result<Reference> {
+/// (c) A distant light (E_n = 80,000 lx, 35 degrees up) over a black floor,
+/// a point (`diameter` 0) or a disc of `diameter` [deg]; receivers at
+/// angles 0-120 degrees to the beam. A uniform disc wholly above the
+/// receiver's horizon gives exactly `E_n cos` too (`L n . int_cap w dw`
+/// with `int_cap w dw = pi sin^2(d/2)` times the axis); none of the angles
+/// is within the disc's radius of 90 degrees.
+fn distant_light(dir: &Path, diameter: f64) -> anyhow::Result<Reference> {
     let e_n = 80000.0;
     let (h, a) = (35f64.to_radians(), 140f64.to_radians());
     let to_sun = DVec3::new(h.cos() * a.cos(), h.cos() * a.sin(), h.sin());
     let d = -to_sun;
     let scene = build(
         &format!(
-            "{}[[light]]\ntype = \"distant\"\ndirection = [{:?}, {:?}, {:?}]\nilluminance = {e_n:?}\n",
+            "{}[[light]]\ntype = \"distant\"\ndirection = [{:?}, {:?}, {:?}]\nilluminance = {e_n:?}\nangular_diameter = {diameter:?}\n",
             floor(0.0),
             d.x,
             d.y,
@@ -351,11 +356,19 @@ fn distant_light(dir: &Path) -> anyhow::Result<Reference> {
     ));
     // Zeros last.
     pts.sort_by_key(|p| p.3 == 0.0);
+    let (key, title) = if diameter == 0.0 {
+        ("c_distant_light".to_string(), "point".to_string())
+    } else {
+        (
+            "c_distant_disc".to_string(),
+            format!("disc of {diameter} deg"),
+        )
+    };
     Ok(Reference {
-        key: "c_distant_light".into(),
-        title:
-            "(c) distant light (80 klx, 35 deg up) over a black floor: E_n cos at 0-120 deg (exact)"
-                .into(),
+        key,
+        title: format!(
+            "(c) distant light ({title}, 80 klx, 35 deg up) over a black floor: E_n cos at 0-120 deg (exact)"
+        ),
         scene,
         labels: pts.iter().map(|p| p.0.clone()).collect(),
         receivers: illum(&pts.iter().map(|p| (p.1, p.2)).collect::<Vec<_>>()),
@@ -684,7 +697,7 @@ fn report_table(dir: &Path, r: &Reference, rows: &[Checkpoint]) -> anyhow::Resul
     print_table(rows);
     let name = format!("daylight_{}", r.key);
     if rows.iter().any(|c| c.rms_err > 0.0 || c.rms_r > 0.0) {
-        if !r.approximation && rows.len() > 1 {
+        if !r.approximation && rows.len() > 1 && rows.iter().all(|c| c.rms_r > 0.0) {
             let slope = loglog_slope(&rows.iter().map(|c| (c.time, c.rms_r)).collect::<Vec<_>>());
             println!("log-log slope of the estimated R against time: {slope:.3} (ideal -0.5)");
         }
@@ -879,7 +892,8 @@ pub fn validate_daylight(a: &DaylightArgs) -> anyhow::Result<()> {
         refs.push(overcast_sky(&dir)?);
     }
     if want('c') {
-        refs.push(distant_light(&dir)?);
+        refs.push(distant_light(&dir, 0.0)?);
+        refs.push(distant_light(&dir, 0.53)?);
     }
     if want('d') {
         refs.push(window_room(&dir, false)?);
