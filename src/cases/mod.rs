@@ -6,6 +6,7 @@
 
 pub mod box_room;
 pub mod case;
+pub mod daylight;
 pub mod flux_balance;
 pub mod integrating_sphere;
 pub mod luminaires;

@@ -1,6 +1,7 @@
 //! `lumest validate`: the validation cases of [`crate::cases`], by name.
 
 use crate::cases::box_room::{BoxArgs, validate_box};
+use crate::cases::daylight::{DaylightArgs, validate_daylight};
 use crate::cases::integrating_sphere::{SphereArgs, validate_sphere};
 use crate::cases::luminaires::{LuminairesArgs, validate_luminaires};
 use crate::cases::plate::{PlateArgs, validate_plate};
@@ -27,6 +28,10 @@ pub enum ValidateCase {
     /// Every light kind against references: closed forms, sampled direct light (error against
     /// time), flux balance in a black box, and the variance of the direct-light strategies.
     Luminaires(LuminairesArgs),
+    /// Daylight against references (issue 13): a uniform environment, the CIE overcast sky,
+    /// a distant light, a window of a black room with and without a portal, and the probe
+    /// `sky_sun.hdr` by importance sampling against median cut (error against time, z test).
+    Daylight(DaylightArgs),
 }
 
 /// Run a validation case.
@@ -38,6 +43,7 @@ pub fn validate(case: &ValidateCase) -> anyhow::Result<()> {
         ValidateCase::BoxFlux(a) => &a.report,
         ValidateCase::Stress(a) => &a.report,
         ValidateCase::Luminaires(a) => &a.case.report,
+        ValidateCase::Daylight(a) => &a.case.report,
     };
     // Before the run: a report "folder" that is a file was found only when
     // the tables were written, after the whole run.
@@ -53,5 +59,6 @@ pub fn validate(case: &ValidateCase) -> anyhow::Result<()> {
         ValidateCase::BoxFlux(a) => validate_box(a),
         ValidateCase::Stress(a) => validate_stress(a),
         ValidateCase::Luminaires(a) => validate_luminaires(a),
+        ValidateCase::Daylight(a) => validate_daylight(a),
     }
 }
