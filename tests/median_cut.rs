@@ -12,7 +12,6 @@ use lumest::estimator::local::run;
 use lumest::io::envmap::read_luminance_map;
 use lumest::scene::parse;
 use statrs::distribution::{ContinuousCDF, Normal};
-use std::f64::consts::PI;
 use std::path::Path;
 
 /// The receivers' normals: up, tilted 45 degrees towards the sun's azimuth
@@ -32,38 +31,9 @@ fn normals() -> Vec<(&'static str, DVec3)> {
     ]
 }
 
-/// `sum_pixels L int_pixel max(0, n . w) dw`, 8 x 8 midpoints per pixel
-/// uniform in `cos theta` and `phi` (equal solid angles), the map's axes
-/// restated from the README: row 0 the zenith, column 0 at `+x`, `phi`
-/// towards `+y`.
+/// `sum_pixels L int_pixel max(0, n . w) dw` ([`lumest::reference::envmap`]).
 fn quadrature(y: &[f64], w: usize, h: usize, scale: f64, n: DVec3) -> f64 {
-    let m = 8;
-    let mut sum = 0.0;
-    for i in 0..h {
-        let (c0, c1) = (
-            (PI * i as f64 / h as f64).cos(),
-            (PI * (i + 1) as f64 / h as f64).cos(),
-        );
-        let omega = (c0 - c1) * 2.0 * PI / w as f64 / (m * m) as f64;
-        for j in 0..w {
-            let l = y[i * w + j] * scale;
-            if l == 0.0 {
-                continue;
-            }
-            let mut acc = 0.0;
-            for a in 0..m {
-                let ct = c0 + (c1 - c0) * (a as f64 + 0.5) / m as f64;
-                let st = (1.0 - ct * ct).max(0.0).sqrt();
-                for b in 0..m {
-                    let phi = 2.0 * PI * (j as f64 + (b as f64 + 0.5) / m as f64) / w as f64;
-                    let d = DVec3::new(st * phi.cos(), st * phi.sin(), ct);
-                    acc += n.dot(d).max(0.0);
-                }
-            }
-            sum += l * acc * omega;
-        }
-    }
-    sum
+    lumest::reference::envmap::pixel_quadrature(y, w, h, scale, n)
 }
 
 fn scene(extra: &str) -> lumest::scene::Scene {

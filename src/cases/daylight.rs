@@ -481,41 +481,6 @@ fn window_sky_component(lz: f64, p: DVec3, n: DVec3) -> f64 {
     })
 }
 
-/// `sum_pixels L int_pixel max(0, n . w) dw` of an equirectangular map
-/// (`y` row-major, row 0 the zenith, column 0 at `+x`, `phi` towards `+y`,
-/// as the README states), 8 x 8 midpoints per pixel uniform in `cos theta`
-/// and `phi` (equal solid angles).
-fn pixel_quadrature(y: &[f64], w: usize, h: usize, scale: f64, n: DVec3) -> f64 {
-    let m = 8;
-    let mut sum = 0.0;
-    for i in 0..h {
-        let (c0, c1) = (
-            (PI * i as f64 / h as f64).cos(),
-            (PI * (i + 1) as f64 / h as f64).cos(),
-        );
-        let omega = (c0 - c1) * 2.0 * PI / w as f64 / (m * m) as f64;
-        for j in 0..w {
-            let l = y[i * w + j] * scale;
-            if l == 0.0 {
-                continue;
-            }
-            let mut acc = 0.0;
-            for a in 0..m {
-                let ct = c0 + (c1 - c0) * (a as f64 + 0.5) / m as f64;
-                let st = (1.0 - ct * ct).max(0.0).sqrt();
-                for b in 0..m {
-                    let phi = 2.0 * PI * (j as f64 + (b as f64 + 0.5) / m as f64) / w as f64;
-                    acc += n
-                        .dot(DVec3::new(st * phi.cos(), st * phi.sin(), ct))
-                        .max(0.0);
-                }
-            }
-            sum += l * acc * omega;
-        }
-    }
-    sum
-}
-
 /// The methods of (e): importance sampling, then median cut with N lights.
 const PROBE_METHODS: [(&str, Option<usize>); 4] = [
     ("importance", None),
@@ -542,7 +507,9 @@ fn probe(dir: &Path, probe: &Path) -> anyhow::Result<Vec<Reference>> {
     ];
     let exact: Vec<f64> = normals
         .iter()
-        .map(|&(_, n)| pixel_quadrature(&map.y, map.width, map.height, scale, n))
+        .map(|&(_, n)| {
+            crate::reference::envmap::pixel_quadrature(&map.y, map.width, map.height, scale, n)
+        })
         .collect();
     let file = probe
         .canonicalize()

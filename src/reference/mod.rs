@@ -6,6 +6,7 @@
 pub mod area_source;
 pub mod closed_form;
 pub mod disc_profile;
+pub mod envmap;
 pub mod quadrature;
 pub mod sobolev;
 
