@@ -903,8 +903,18 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
         .map(|&j| r.tallies.estimated[j].std_error())
         .sum::<f64>()
         / m;
-    let min = e.iter().copied().fold(f64::INFINITY, f64::min);
-    let max = e.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    // A NaN estimate makes the extremes NaN too (`f64::min` would drop it).
+    let pick = |f: fn(f64, f64) -> f64| {
+        move |a: f64, b: f64| {
+            if a.is_nan() || b.is_nan() {
+                f64::NAN
+            } else {
+                f(a, b)
+            }
+        }
+    };
+    let min = e.iter().copied().fold(f64::INFINITY, pick(f64::min));
+    let max = e.iter().copied().fold(f64::NEG_INFINITY, pick(f64::max));
     Some(format!(
         "points: E_avg {} lx (std error <= {se_bound:.2e}), E_min {} lx, E_max {} lx, \
          uniformity U0 = E_min/E_avg = {}{note}",
@@ -1050,4 +1060,48 @@ fn fan_plot(job: &Job, r: &RunResult, path: &str, part: PlotPart) -> anyhow::Res
     crate::io::image::write_polar_png(path, &samples, scale, title)?;
     eprintln!("lumest: wrote {path}");
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The grid line's extremes keep a NaN estimate (principle: aggregates
+    /// never drop NaN); finite estimates give their plain min and max.
+    #[test]
+    fn grid_summary_keeps_nan() {
+        let result = |vals: &[f64]| {
+            let mut tallies = crate::run::Tallies::new(vals.len(), 0);
+            for _ in 0..2 {
+                for (w, &v) in tallies.estimated.iter_mut().zip(vals) {
+                    w.push(v);
+                }
+            }
+            RunResult {
+                direct: vec![0.0; vals.len()],
+                tallies,
+                chains: 2,
+                batch_size: 1,
+                collisions: 0,
+                scores: 0,
+                wall: 1.0,
+                threads: 1,
+                reason: crate::run::StopReason::Chains,
+                pilot: None,
+                time_sizing: None,
+                batches: Vec::new(),
+                total_batches: 0,
+            }
+        };
+        let line = grid_summary(&result(&[1.0, 2.0, 4.0]), 3).unwrap();
+        assert!(
+            line.contains("E_min 1.0000 lx") && line.contains("E_max 4.0000 lx"),
+            "{line}"
+        );
+        let line = grid_summary(&result(&[1.0, f64::NAN, 4.0]), 3).unwrap();
+        assert!(
+            line.contains("E_min NaN") && line.contains("E_max NaN"),
+            "{line}"
+        );
+    }
 }
