@@ -384,24 +384,18 @@ impl Distant {
             let ds = sample_cosine_cone(u_dir, self.sin_a);
             (frame.to_world(ds.w), self.luminance(), ds.w.z, ds.pdf)
         };
-        if let Some(portals) = &self.region.portals {
-            // Illuminance (collimated) or luminance (a disc) across the portal.
-            let (o, pdf_pos, phi) = portals.emission(w, le, pdf_dir, u_pos);
-            return super::EmissionSample {
-                o,
-                d: w,
-                le,
-                cos,
-                pdf_pos,
-                pdf_dir,
-                delta_pos: false,
-                delta_dir: self.collimated(),
-                phi,
-            };
-        }
-        let (s, pdf_pos) = self.region.sample_point(&frame, self.cos_a, u_pos);
+        // With portals the ray starts on one, carrying the illuminance
+        // (collimated) or luminance (a disc) across it; else upstream of
+        // everything on the plane across the beam.
+        let (o, pdf_pos, phi) = match &self.region.portals {
+            Some(portals) => portals.emission(w, le, pdf_dir, u_pos),
+            None => {
+                let (s, pdf_pos) = self.region.sample_point(&frame, self.cos_a, u_pos);
+                (self.region.upstream(s, w), pdf_pos, self.e_n / pdf_pos)
+            }
+        };
         super::EmissionSample {
-            o: self.region.upstream(s, w),
+            o,
             d: w,
             le,
             cos,
@@ -409,7 +403,7 @@ impl Distant {
             pdf_dir,
             delta_pos: false,
             delta_dir: self.collimated(),
-            phi: self.e_n / pdf_pos,
+            phi,
         }
     }
 

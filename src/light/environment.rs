@@ -286,23 +286,20 @@ impl Environment {
     pub fn sample_emission(&self, u_pos: [f64; 2], u_dir: [f64; 2]) -> super::EmissionSample {
         let (wi, pdf_dir, le) = self.sample(u_dir);
         let d = -wi;
-        if let Some(portals) = &self.region.portals {
-            let (o, pdf_pos, phi) = portals.emission(d, le, pdf_dir, u_pos);
-            return super::EmissionSample {
-                o,
-                d,
-                le,
-                cos: 1.0,
-                pdf_pos,
-                pdf_dir,
-                delta_pos: false,
-                delta_dir: false,
-                phi,
-            };
-        }
-        let (s, pdf_pos) = self.region.sample_point(&Frame::from_normal(d), 1.0, u_pos);
+        let (o, pdf_pos, phi) = match &self.region.portals {
+            Some(portals) => portals.emission(d, le, pdf_dir, u_pos),
+            None => {
+                let (s, pdf_pos) = self.region.sample_point(&Frame::from_normal(d), 1.0, u_pos);
+                // A map's density is its luminance over F: the weight is F.
+                let phi = match self.sky {
+                    Some(_) => le / pdf_dir / pdf_pos,
+                    None => self.integral() / pdf_pos,
+                };
+                (self.region.upstream(s, d), pdf_pos, phi)
+            }
+        };
         super::EmissionSample {
-            o: self.region.upstream(s, d),
+            o,
             d,
             le,
             cos: 1.0,
@@ -310,11 +307,7 @@ impl Environment {
             pdf_dir,
             delta_pos: false,
             delta_dir: false,
-            // A map's density is its luminance over F: the weight is F.
-            phi: match self.sky {
-                Some(_) => le / pdf_dir / pdf_pos,
-                None => self.integral() / pdf_pos,
-            },
+            phi,
         }
     }
 }
