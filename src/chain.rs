@@ -8,6 +8,11 @@
 //! sampling the material (weight times `f_r cos / pdf`, the albedo for
 //! Lambertian surfaces). Back sides absorb; rays that leave the scene end.
 //!
+//! A glass pane on the way ([`crate::scene::Scene::next_pane`]) mirrors the
+//! ray or lets it through, picked in proportion to the pane's reflectance
+//! and transmittance at that angle, the weight times their sum; it is not a
+//! collision.
+//!
 //! Termination is unbiased: when the weight falls below `rr_weight * Q_1` the
 //! chain survives with probability `Q / (rr_weight * Q_1)` and, if it does,
 //! its weight is raised to `rr_weight * Q_1`. With `rr_weight = 1` this is the
@@ -130,8 +135,14 @@ pub fn trace_ex<F: FnMut(&Collision)>(
         || through_portal;
     // A ray started on a portal carries light only if nothing blocks it
     // between the light and the portal ([`crate::light::portal`]).
-    if through_portal && q > 0.0 && scene.first_hit_from(ray.o, -ray.d).is_some() {
-        q = 0.0;
+    if through_portal && q > 0.0 {
+        if scene.first_hit_from(ray.o, -ray.d).is_some() {
+            q = 0.0;
+        } else {
+            // Glass on the way in (a pane set in the portal's opening
+            // included) passes its transmittance ([`Scene::pane_transmittance_ray`]).
+            q *= scene.pane_transmittance_ray(ray.o, -ray.d, true);
+        }
     }
     // A point light on a surface stands on its reflecting side
     // ([`Scene::light_surface`]): a ray into the surface meets it at once.
@@ -155,6 +166,27 @@ pub fn trace_ex<F: FnMut(&Collision)>(
         } else {
             scene.intersect(&ray, skip)
         };
+        // A glass pane before the surface: mirrored or passed straight
+        // through with probabilities R : T, the weight times R + T; no
+        // collision (a specular event scores nowhere).
+        if scene.has_panes() {
+            let t_max = next.as_ref().map_or(f64::INFINITY, |h| h.t);
+            if let Some(ph) = scene.next_pane(&ray, t_max) {
+                let Some((d, w)) = scene.pane_scatter(ph.pane, ray.d, rng.next_f64()) else {
+                    break;
+                };
+                let Some(survivor) = roulette(q * w, rr, rng) else {
+                    break;
+                };
+                q = survivor;
+                ray = Ray { o: ph.p, d };
+                // Leaving the pane's plane, the ray meets no flat surface
+                // through its origin (an observer's rule).
+                from_emitter = true;
+                on_surface = None;
+                continue;
+            }
+        }
         let Some(hit) = next else {
             end = ChainEnd::Escaped;
             break;

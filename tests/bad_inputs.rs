@@ -259,6 +259,11 @@ fn scene_cases() -> Vec<Case> {
         scene_rep("phong exponent inf", "type = \"lambertian\", reflectance = 0.5", "type = \"phong\", diffuse = 0.3, specular = 0.2, exponent = inf", Error("field `exponent`")),
         scene_rep("phong specular negative", "type = \"lambertian\", reflectance = 0.5", "type = \"phong\", diffuse = 0.3, specular = -0.2, exponent = 5", Error("field `specular`")),
         // Plane.
+        surface("glass: transmittance above a lossless pane's", "rectangle", "corner = [10, 10, 3]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nmaterial = { type = \"glass\", transmittance = 0.95 }", Error("field `transmittance`: must lie in [0, 0.918")),
+        surface("glass: index below 1", "rectangle", "corner = [10, 10, 3]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nmaterial = { type = \"glass\", transmittance = 0.8, index = 0.5 }", Error("field `index`: must lie in [1, 5]")),
+        surface("glass: transmittance missing", "rectangle", "corner = [10, 10, 3]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nmaterial = { type = \"glass\" }", Error("field `transmittance`: missing field")),
+        surface("glass on a sphere", "sphere", "center = [10, 10, 3]\nradius = 1\nmaterial = { type = \"glass\", transmittance = 0.8 }", Error("only `rectangle` and `disc` surfaces take it")),
+        surface("glass pane out of the way", "rectangle", "corner = [10, 10, 3]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nmaterial = { type = \"glass\", transmittance = 0.8 }", Accept("E_avg")),
         surface("plane: normal zero", "plane", &format!("point = [0, 0, 0]\nnormal = [0, 0, 0]\n{LAMB}"), Error("field `normal`: direction must have a non-zero length")),
         surface("plane: normal with nan", "plane", &format!("point = [0, 0, 0]\nnormal = [nan, 0, 1]\n{LAMB}"), Error("field `normal`")),
         surface("plane: normal 1e-320 (denormal)", "plane", &format!("point = [0, 0, 0]\nnormal = [0, 0, 1e-320]\n{LAMB}"), Error("field `normal`: direction must have a non-zero length")),

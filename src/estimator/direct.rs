@@ -191,7 +191,7 @@ fn light_sample(
         if r <= 0.0 || !scene.visible(x, None, y) {
             return (0.0, p_a, wi, false);
         }
-        let i = dist.intensity_world(lf, -wi);
+        let i = dist.intensity_world(lf, -wi) * scene.pane_transmittance(x, y);
         return (i / area * r / t2, p_a, wi, false);
     }
     let (f, p, wi) = match light {
@@ -210,7 +210,7 @@ fn light_sample(
             if le <= 0.0 || r <= 0.0 || p_l <= 0.0 || !scene.visible(x, None, pt.y) {
                 return (0.0, p_l, wi, true);
             }
-            (le * r, p_l, wi)
+            (le * r * scene.pane_transmittance(x, pt.y), p_l, wi)
         }
         Light::Sphere { c, r: radius, .. } => {
             let to_c = *c - x;
@@ -235,7 +235,8 @@ fn light_sample(
             if !scene.visible(x, None, x + wi * t) {
                 return (0.0, p_l, wi, true);
             }
-            (light.luminance() * r, p_l, wi)
+            let glass = scene.pane_transmittance(x, x + wi * t);
+            (light.luminance() * r * glass, p_l, wi)
         }
         Light::Distant(dl) => {
             // Uniform in the sun's disc; lit where the ray leaves the scene.
@@ -246,7 +247,8 @@ fn light_sample(
             if r <= 0.0 || scene.first_hit_from(x, wi).is_some() {
                 return (0.0, p_l, wi, true);
             }
-            (dl.luminance() * r, p_l, wi)
+            let glass = scene.pane_transmittance_ray(x, wi, false);
+            (dl.luminance() * r * glass, p_l, wi)
         }
         Light::Environment(env) => {
             // A direction drawn from the map, or through a point of the
@@ -266,7 +268,8 @@ fn light_sample(
             if r <= 0.0 || le <= 0.0 || scene.first_hit_from(x, wi).is_some() {
                 return (0.0, p_l, wi, true);
             }
-            (le * r, p_l, wi)
+            let glass = scene.pane_transmittance_ray(x, wi, false);
+            (le * r * glass, p_l, wi)
         }
         _ => (0.0, 0.0, DVec3::Z),
     };
@@ -291,19 +294,25 @@ fn emitters_along(
         && set.prob[k as usize] > 0.0
         && let Light::Area(a) = &scene.lights[k as usize]
     {
-        let le = a.emitted(h.p, -wi);
+        let le = a.emitted(h.p, -wi) * scene.pane_transmittance(x, h.p);
         if le > 0.0 {
             each(le, light_pdf(set, scene, k, x, wi, h.p, h.t));
         }
     }
     for &k in &set.lights {
         let l = &scene.lights[k as usize];
-        if matches!(l, Light::Sphere { .. }) && l.hit(x, wi, t_max).is_some() {
-            each(l.luminance(), light_pdf(set, scene, k, x, wi, x, 0.0));
+        if matches!(l, Light::Sphere { .. })
+            && let Some(t) = l.hit(x, wi, t_max)
+        {
+            let glass = scene.pane_transmittance(x, x + wi * t);
+            each(
+                l.luminance() * glass,
+                light_pdf(set, scene, k, x, wi, x, 0.0),
+            );
         }
         // A ray that leaves the scene meets the lights at infinity.
         if hit.is_none() && l.is_directional() {
-            let le = l.escaped_luminance(wi);
+            let le = l.escaped_luminance(wi) * scene.pane_transmittance_ray(x, wi, false);
             if le > 0.0 {
                 each(le, light_pdf(set, scene, k, x, wi, x, 0.0));
             }
@@ -360,6 +369,28 @@ pub fn sample(
                     _ => f / (p_l + p_b),
                 };
             });
+            // The sources' mirror images in the first glass pane on the
+            // way: only this strategy finds them, so they count alone
+            // (weight 1). Images in a second pane (`R^2`, under 1 % of
+            // the light) are left out.
+            if scene.has_panes() {
+                let t_max = scene
+                    .first_hit_from(rec.p, wi)
+                    .map_or(f64::INFINITY, |h| h.t);
+                let ray = crate::geometry::Ray { o: rec.p, d: wi };
+                if let Some(ph) = scene.next_pane(&ray, t_max) {
+                    let pane = &scene.panes()[ph.pane as usize];
+                    let n = pane.plane().n;
+                    let c = wi.dot(n);
+                    let (refl, _) = pane.glass.reflect_transmit(c);
+                    let wr = (wi - n * (2.0 * c)).normalize();
+                    if refl > 0.0 {
+                        emitters_along(scene, set, ph.p, wr, |le, _| {
+                            total += refl * le * r / p_b;
+                        });
+                    }
+                }
+            }
         }
     }
     total

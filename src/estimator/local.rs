@@ -30,7 +30,10 @@ pub fn run(
     // The near part's backward paths cannot reach a light at infinity: such
     // scenes run the plain local estimate (the `near` check flags receivers
     // that would need the split; the command line refuses `--near-radius`).
-    let wanted = cfg.near.1 > 0 && (cfg.near.0 > 0.0 || cfg.near_auto) && !scene.has_directional();
+    let wanted = cfg.near.1 > 0
+        && (cfg.near.0 > 0.0 || cfg.near_auto)
+        && !scene.has_directional()
+        && !scene.has_panes();
     if wanted && receivers.near_field().0 == 0 {
         let near = if cfg.near.0 > 0.0 {
             receivers.clone().with_near_field(cfg.near.0, cfg.near.1)

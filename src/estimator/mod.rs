@@ -31,6 +31,7 @@
 pub mod backward;
 pub mod direct;
 pub mod local;
+pub mod pane_images;
 
 use crate::chain::Collision;
 use crate::geometry::SideMask;
@@ -344,6 +345,9 @@ pub struct Receivers {
     /// Per surface: its list.
     list_of: Vec<u32>,
     total_len: usize,
+    /// The list of every receiver that takes the scores reflected by glass
+    /// panes (`None` without panes).
+    image_list: Option<u32>,
     direct: Vec<f64>,
     /// The sets of sources whose direct light is sampled ([`direct`]).
     direct_sets: Vec<direct::LightSet>,
@@ -410,18 +414,36 @@ impl Receivers {
                 if !exact[k] || (extended && rec.constant_weight().is_none()) {
                     continue; // sampled, see below
                 }
+                // Mirror images of the light in glass panes (point-like
+                // lights and a collimated sun; `pane_images`).
+                if scene.has_panes() {
+                    let frame = &frames[j];
+                    direct[j] += pane_images::image_direct(
+                        scene,
+                        k,
+                        p,
+                        n,
+                        &|xi, ni, unm| match rec.response {
+                            Response::Illuminance => l.direct_illuminance(xi, ni),
+                            _ => l.direct_weighted(xi, ni, &|wi| rec.weight(frame, unm(wi))),
+                        },
+                    );
+                }
                 if let Light::Distant(dl) = l {
                     // Lit where the ray towards the sun leaves the scene.
                     if scene.first_hit_from(p, -dl.d).is_none() {
-                        direct[j] += match rec.response {
-                            Response::Illuminance => dl.direct_illuminance(n),
-                            _ if dl.collimated() => {
-                                l.direct_weighted(p, n, &|wi| rec.weight(&frames[j], wi))
-                            }
-                            _ => {
-                                dl.direct_illuminance(n) * rec.constant_weight().unwrap_or(f64::NAN)
-                            }
-                        };
+                        let glass = scene.pane_transmittance_ray(p, -dl.d, false);
+                        direct[j] += glass
+                            * match rec.response {
+                                Response::Illuminance => dl.direct_illuminance(n),
+                                _ if dl.collimated() => {
+                                    l.direct_weighted(p, n, &|wi| rec.weight(&frames[j], wi))
+                                }
+                                _ => {
+                                    dl.direct_illuminance(n)
+                                        * rec.constant_weight().unwrap_or(f64::NAN)
+                                }
+                            };
                     }
                     continue;
                 }
@@ -432,15 +454,18 @@ impl Receivers {
                     && !scene.behind_light_surface(k, p)
                     && (scene.planes_only() || !scene.blocked_by_shapes(l.position(), None, p, 0));
                 if seen {
-                    direct[j] += match (rec.response, l) {
-                        (Response::Illuminance, _) => l.direct_illuminance(p, n),
-                        (_, Light::Area(_)) => {
-                            l.direct_illuminance(p, n) * rec.constant_weight().unwrap_or(f64::NAN)
-                        }
-                        (Response::Luminance { .. }, _) => {
-                            l.direct_weighted(p, n, &|wi| rec.weight(&frames[j], wi))
-                        }
-                    };
+                    let glass = scene.pane_transmittance(l.position(), p);
+                    direct[j] += glass
+                        * match (rec.response, l) {
+                            (Response::Illuminance, _) => l.direct_illuminance(p, n),
+                            (_, Light::Area(_)) => {
+                                l.direct_illuminance(p, n)
+                                    * rec.constant_weight().unwrap_or(f64::NAN)
+                            }
+                            (Response::Luminance { .. }, _) => {
+                                l.direct_weighted(p, n, &|wi| rec.weight(&frames[j], wi))
+                            }
+                        };
                 }
             }
         }
@@ -490,6 +515,7 @@ impl Receivers {
                     [pl.n.x, pl.n.y, pl.n.z, pl.c].map(f64::to_bits),
                     1 + both as u8,
                 ),
+                (ShapeRef::Pane(_), _) => (0, [0; 4], 4),
                 (_, None) => (0, [0; 4], 3),
             };
             if let Some(&k) = keys.get(&key) {
@@ -511,7 +537,12 @@ impl Receivers {
                 _ => 0,
             };
             let support = scene.support_plane(s as u32);
+            // A glass pane is never a collision site (chains cross or leave it).
+            let pane = matches!(scene.surfaces[s].shape, ShapeRef::Pane(_));
             let reach = |j: &usize| {
+                if pane {
+                    return false;
+                }
                 if own_bit != 0 {
                     return masks[*j].front & own_bit != 0;
                 }
@@ -554,6 +585,30 @@ impl Receivers {
             offset += list.idx.len();
             lists.push(list);
         }
+        // With glass panes, one more stretch of the accumulators holds
+        // every receiver once: the scores reflected to it by a pane
+        // ([`Self::score_images`]).
+        let image_list = scene.has_panes().then(|| {
+            let list = ReceiverList {
+                offset,
+                idx: (0..receivers.len() as u32).collect(),
+                px: receivers.iter().map(|r| r.p.x).collect(),
+                py: receivers.iter().map(|r| r.p.y).collect(),
+                pz: receivers.iter().map(|r| r.p.z).collect(),
+                nx: receivers.iter().map(|r| r.n.x).collect(),
+                ny: receivers.iter().map(|r| r.n.y).collect(),
+                nz: receivers.iter().map(|r| r.n.z).collect(),
+                w: vec![0.0; receivers.len()],
+                eps2: vec![0.0; receivers.len()],
+                watch2: vec![0.0; receivers.len()],
+                masks: masks.clone(),
+                inside: inside.clone(),
+                ..Default::default()
+            };
+            offset += receivers.len();
+            lists.push(list);
+            lists.len() as u32 - 1
+        });
         let (view_r, enclosed): (Vec<f64>, Vec<bool>) = receivers
             .iter()
             .zip(&frames)
@@ -578,6 +633,7 @@ impl Receivers {
             lists,
             list_of,
             total_len: offset,
+            image_list,
             direct,
             direct_sets,
             direct_set,
@@ -773,16 +829,19 @@ impl Receivers {
         &self,
         scene: &Scene,
         c: &Collision,
-        acc: &mut [f64],
+        acc_all: &mut [f64],
         near: Option<&mut [f64]>,
     ) -> usize {
         let list = &self.lists[self.list_of[c.surface as usize] as usize];
         let len = list.idx.len();
-        if len == 0 {
-            return 0;
-        }
         let material = &scene.surfaces[c.surface as usize].material;
-        let acc = &mut acc[list.offset..list.offset + len];
+        if len == 0 {
+            return match self.image_list {
+                Some(img) => self.score_images(scene, img, material, c, acc_all),
+                None => 0,
+            };
+        }
+        let acc = &mut acc_all[list.offset..list.offset + len];
         let mut none = [];
         let (near, counting) = match near {
             Some(v) => (&mut v[list.offset..list.offset + len], true),
@@ -801,7 +860,9 @@ impl Receivers {
         } else {
             scene.inside_mask(x)
         };
-        let shapes_open = scene.planes_only() || scene.nothing_blocks(x_inside & list.inside_all);
+        // Panes on the way scale scores by their transmittance: per pair.
+        let shapes_open = scene.planes_only()
+            || (!scene.has_panes() && scene.nothing_blocks(x_inside & list.inside_all));
         let nc = list.n_const;
         match material.constant_brdf() {
             Some(f) if open && shapes_open && counting => {
@@ -815,7 +876,69 @@ impl Receivers {
         if nc < len {
             self.score_general(scene, list, x_inside, nc..len, material, c, xm, acc, near);
         }
+        if let Some(img) = self.image_list {
+            return len + self.score_images(scene, img, material, c, acc_all);
+        }
         len
+    }
+
+    /// Scores of collision `c` that reach a receiver by one mirror
+    /// reflection in a glass pane (`pane_images` explains the geometry:
+    /// the receiver `p` is mirrored to `p'`, the segment from the collision
+    /// to `p'` must cross the pane, both legs must be clear). Each is the
+    /// plain score towards `p'` times the pane's reflectance at the angle
+    /// and the transmittance of other panes on the way; it is added to the
+    /// receiver's entry in the image list. Returns the number of pairs
+    /// evaluated. Reflections in two panes (`R^2`) are left out.
+    fn score_images(
+        &self,
+        scene: &Scene,
+        img: u32,
+        material: &Material,
+        c: &Collision,
+        acc: &mut [f64],
+    ) -> usize {
+        let list = &self.lists[img as usize];
+        let acc = &mut acc[list.offset..list.offset + list.idx.len()];
+        let frame = Frame::from_normal(c.n);
+        let wi = frame.to_local(c.wi);
+        let from = Some((c.surface, c.prim));
+        let mut count = 0;
+        for pane in scene.panes() {
+            let pl = pane.plane();
+            let side = pl.side(c.p);
+            if side == 0 {
+                continue;
+            }
+            let mirror = |v: DVec3| v - pl.n * (2.0 * pl.n.dot(v));
+            for (k, a) in acc.iter_mut().enumerate() {
+                let p = DVec3::new(list.px[k], list.py[k], list.pz[k]);
+                if pl.side(p) != side {
+                    continue;
+                }
+                count += 1;
+                let np = DVec3::new(list.nx[k], list.ny[k], list.nz[k]);
+                let p_img = p - pl.n * (2.0 * pl.signed_distance(p));
+                let g = local_kernel(c.p, c.n, p_img, mirror(np));
+                if g == 0.0 {
+                    continue;
+                }
+                let (dx, dp) = (pl.signed_distance(c.p), pl.signed_distance(p_img));
+                let m = pl.project(c.p + (p_img - c.p) * (dx / (dx - dp)));
+                if !pane.contains(m) || !scene.visible(c.p, from, m) || !scene.visible(m, None, p) {
+                    continue;
+                }
+                let wo = (p_img - c.p).normalize();
+                let f = material.eval(wi, frame.to_local(wo));
+                let (r, _) = pane.glass.reflect_transmit(wo.dot(pl.n));
+                let glass = scene.pane_transmittance(c.p, m) * scene.pane_transmittance(m, p);
+                let j = list.idx[k] as usize;
+                // Arriving at p from the mirror image of the outgoing direction.
+                let w = self.all[j].weight(&self.frames[j], -mirror(wo));
+                *a += c.q * f * g * w * r * glass;
+            }
+        }
+        count
     }
 
     /// Per-pair scoring: any BRDF at the collision and at the receiver, with
@@ -860,7 +983,8 @@ impl Receivers {
             } else {
                 self.all[j].weight(&self.frames[j], -wo)
             };
-            acc[k] += c.q * f * g * w;
+            let glass = scene.pane_transmittance(c.p, p);
+            acc[k] += c.q * f * g * w * glass;
             if !near.is_empty() && d2 < list.watch2[k] {
                 near[k] += 1.0;
             }

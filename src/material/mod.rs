@@ -4,6 +4,10 @@
 //! the local frame whose z axis is the front normal; the BRDF `f_r` is in
 //! [1/sr]. Sampling densities are per solid angle [1/sr].
 
+mod glass;
+
+pub use glass::{FLOAT_GLASS_INDEX, Glass};
+
 use crate::math::quadrature::{CompensatedSum, panel};
 use crate::sampling::warp::{
     DirectionSample, Frame, cosine_hemisphere_pdf, sample_cosine_hemisphere, sin_cos_turns,
@@ -44,6 +48,13 @@ pub enum Material {
         /// Phong exponent (dimensionless); larger is sharper.
         n: f64,
     },
+    /// A thin clear pane ([`Glass`]): light passes straight through or is
+    /// mirrored, both specularly, so it has no BRDF value for any pair of
+    /// directions (`eval`, `albedo`, `pdf` are 0 and `sample` returns a zero
+    /// pdf). Panes are not collision sites: the scene keeps them apart from
+    /// the opaque shapes ([`crate::scene::Scene::pane_transmittance`]) and
+    /// chains and paths cross or leave them by [`Glass::reflect_transmit`].
+    Glass(Glass),
 }
 
 /// `cos alpha = wo . r(wi)` with `r(wi) = (-wi.x, -wi.y, wi.z)`, the cosine
@@ -210,6 +221,7 @@ impl Material {
                 };
                 kd * FRAC_1_PI + spec
             }
+            Material::Glass(_) => 0.0,
         }
     }
 
@@ -238,6 +250,7 @@ impl Material {
                 };
                 (kd + spec).min(1.0)
             }
+            Material::Glass(_) => 0.0,
         }
     }
 
@@ -248,6 +261,7 @@ impl Material {
         match *self {
             Material::Lambertian { rho } => Some(rho * FRAC_1_PI),
             Material::Phong { .. } => None,
+            Material::Glass(_) => Some(0.0),
         }
     }
 
@@ -304,6 +318,10 @@ impl Material {
                     pdf: self.pdf(wi, w),
                 }
             }
+            Material::Glass(_) => DirectionSample {
+                w: DVec3::Z,
+                pdf: 0.0,
+            },
         }
     }
 
@@ -328,6 +346,7 @@ impl Material {
                 };
                 pd * cosine_hemisphere_pdf(wo.z) + spec
             }
+            Material::Glass(_) => 0.0,
         }
     }
 }

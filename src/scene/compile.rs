@@ -424,14 +424,16 @@ fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<Surfac
                 )
             })?;
             let sd = sides(&d.sides, FLAT_SIDES, FLAT_VALUES, ctx)?;
-            Ok(SurfaceSpec::Rect(name, r, sd, mat()?))
+            let m = any_material(ctx.required(&d.material, s.span(), "material")?, ctx)?;
+            Ok(SurfaceSpec::Rect(name, r, sd, m))
         }
         "disc" => {
             let c = vec(&d.center, "center")?;
             let n = ctx.unit_vec(ctx.required(&d.normal, s.span(), "normal")?, "normal")?;
             let r = positive(ctx.required(&d.radius, s.span(), "radius")?, "radius", ctx)?;
             let sd = sides(&d.sides, FLAT_SIDES, FLAT_VALUES, ctx)?;
-            Ok(SurfaceSpec::Disc(name, Disc::new(c, n, r), sd, mat()?))
+            let m = any_material(ctx.required(&d.material, s.span(), "material")?, ctx)?;
+            Ok(SurfaceSpec::Disc(name, Disc::new(c, n, r), sd, m))
         }
         "sphere" => {
             let c = vec(&d.center, "center")?;
@@ -545,11 +547,13 @@ fn surface(s: &Spanned<SurfaceDesc>, k: usize, ctx: &SourceCtx) -> Result<Surfac
 
 /// Fields of a `material` table that only some types accept, with the type
 /// that accepts each.
-const MATERIAL_ONLY_FIELDS: [(&str, &str); 4] = [
+const MATERIAL_ONLY_FIELDS: [(&str, &str); 6] = [
     ("reflectance", "lambertian"),
     ("diffuse", "phong"),
     ("specular", "phong"),
     ("exponent", "phong"),
+    ("transmittance", "glass"),
+    ("index", "glass"),
 ];
 
 /// Reject a field given for a material type that does not take it.
@@ -558,7 +562,14 @@ fn material_fields_allowed(
     kind: &str,
     ctx: &SourceCtx,
 ) -> Result<(), SceneError> {
-    let given = [&d.reflectance, &d.diffuse, &d.specular, &d.exponent];
+    let given = [
+        &d.reflectance,
+        &d.diffuse,
+        &d.specular,
+        &d.exponent,
+        &d.transmittance,
+        &d.index,
+    ];
     for (v, (field, owner)) in given.into_iter().zip(MATERIAL_ONLY_FIELDS) {
         let Some(v) = v else { continue };
         if owner != kind {
@@ -572,7 +583,22 @@ fn material_fields_allowed(
     Ok(())
 }
 
+/// A material of an opaque surface: any type but `glass`, which only the
+/// flat shapes a pane can be (rectangles and discs) take.
 fn material(m: &Spanned<MaterialDesc>, ctx: &SourceCtx) -> Result<Material, SceneError> {
+    let mat = any_material(m, ctx)?;
+    if let Material::Glass(_) = mat {
+        return Err(ctx.invalid(
+            m.get_ref().kind.span(),
+            "type",
+            "`glass` is a thin flat pane: only `rectangle` and `disc` surfaces take it",
+        ));
+    }
+    Ok(mat)
+}
+
+/// A material of any type, `glass` included (see [`crate::material::Glass`]).
+fn any_material(m: &Spanned<MaterialDesc>, ctx: &SourceCtx) -> Result<Material, SceneError> {
     let d = m.get_ref();
     let kind = d.kind.get_ref().as_str();
     match kind {
@@ -608,10 +634,34 @@ fn material(m: &Spanned<MaterialDesc>, ctx: &SourceCtx) -> Result<Material, Scen
             }
             Ok(Material::Phong { kd, ks, n })
         }
+        "glass" => {
+            material_fields_allowed(d, kind, ctx)?;
+            let t = ctx.required(&d.transmittance, m.span(), "transmittance")?;
+            let index = d
+                .index
+                .as_ref()
+                .map_or(crate::material::FLOAT_GLASS_INDEX, |v| *v.get_ref());
+            let glass = crate::material::Glass::new(*t.get_ref(), index).map_err(|e| {
+                let (span, field) = if e.starts_with("`index`") {
+                    (d.index.as_ref().map_or(m.span(), Spanned::span), "index")
+                } else {
+                    (t.span(), "transmittance")
+                };
+                ctx.invalid(
+                    span,
+                    field,
+                    e.split_once(' ')
+                        .map_or(e.clone(), |(_, rest)| rest.to_string()),
+                )
+            })?;
+            Ok(Material::Glass(glass))
+        }
         other => Err(ctx.invalid(
             d.kind.span(),
             "type",
-            format!("unknown material type `{other}` (this version knows: lambertian, phong)"),
+            format!(
+                "unknown material type `{other}` (this version knows: lambertian, phong, glass)"
+            ),
         )),
     }
 }

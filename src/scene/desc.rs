@@ -131,11 +131,14 @@ pub struct BoxFacesDesc {
 /// - `"phong"`: `diffuse`, `specular`, `exponent` (the normalised modified
 ///   Phong BRDF of Lafortune and Willems 1994, see
 ///   [`crate::material::Material::Phong`]), e.g.
-///   `{ type = "phong", diffuse = 0.3, specular = 0.2, exponent = 20 }`.
+///   `{ type = "phong", diffuse = 0.3, specular = 0.2, exponent = 20 }`;
+/// - `"glass"`: `transmittance` (at normal incidence) and optionally
+///   `index` (default 1.52): a thin clear pane, rectangles and discs only
+///   ([`crate::material::Glass`]), e.g. `{ type = "glass", transmittance = 0.88 }`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDesc {
-    /// Material kind: `"lambertian"` or `"phong"`.
+    /// Material kind: `"lambertian"`, `"phong"` or `"glass"`.
     #[serde(rename = "type")]
     pub kind: Spanned<String>,
     /// Lambertian reflectance in [0, 1] (dimensionless).
@@ -147,6 +150,10 @@ pub struct MaterialDesc {
     pub specular: Option<Spanned<f64>>,
     /// Phong exponent `n >= 0`, finite (dimensionless).
     pub exponent: Option<Spanned<f64>>,
+    /// Glass: direct transmittance at normal incidence (dimensionless).
+    pub transmittance: Option<Spanned<f64>>,
+    /// Glass: refractive index (dimensionless), default 1.52.
+    pub index: Option<Spanned<f64>>,
 }
 
 /// One `[[light]]` table.

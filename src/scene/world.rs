@@ -20,7 +20,10 @@
 //! [`Sides`] names; the other side is black. Every surface is opaque.
 
 mod nearest;
+mod panes;
 mod shape_tree;
+
+pub use panes::{Pane, PaneHit, PaneShape};
 
 pub use shape_tree::{AUTO_MIN_SHAPES, Accel};
 
@@ -116,6 +119,8 @@ pub enum ShapeRef {
     Mesh(u32),
     /// Spherical-harmonic object `shs[i]`.
     Sh(u32),
+    /// Glass pane `panes[i]` (not an opaque shape: see `world/panes.rs`).
+    Pane(u32),
 }
 
 /// A reflecting surface of the compiled scene.
@@ -170,6 +175,8 @@ pub struct SceneSummary {
     pub meshes: usize,
     /// Number of spherical-harmonic objects.
     pub sh_objects: usize,
+    /// Number of glass panes.
+    pub panes: usize,
     /// Number of point lights.
     pub point_lights: usize,
     /// Number of sphere lights.
@@ -197,6 +204,7 @@ impl std::fmt::Display for SceneSummary {
             (self.boxes, "box(es)"),
             (self.meshes, "mesh(es)"),
             (self.sh_objects, "SH object(s)"),
+            (self.panes, "glass pane(s)"),
         ];
         let shapes: Vec<String> = kinds
             .iter()
@@ -267,6 +275,8 @@ pub struct Scene {
     meshes: Vec<(Mesh, u32)>,
     /// Spherical-harmonic objects.
     shs: Vec<(ShSurface, u32)>,
+    /// Glass panes (never blockers nor collision sites).
+    panes: Vec<Pane>,
     /// The top-level BVH over the finite shapes, when built ([`Accel`]).
     tree: Option<ShapeTree>,
     /// Light sources.
@@ -436,6 +446,7 @@ impl Scene {
             boxes: Vec::new(),
             meshes: Vec::new(),
             shs: Vec::new(),
+            panes: Vec::new(),
             tree: None,
             lights: Vec::new(),
             light_names: Vec::new(),
@@ -504,6 +515,24 @@ impl Scene {
                     );
                     scene.planes.push(p);
                     scene.plane_surface.push(k);
+                }
+                SurfaceSpec::Rect(name, r, _, Material::Glass(glass)) => {
+                    let i = scene.panes.len() as u32;
+                    push(name, Material::Glass(glass), ShapeRef::Pane(i), Sides::Both);
+                    scene.panes.push(Pane {
+                        shape: PaneShape::Rect(r),
+                        glass,
+                        surface: k,
+                    });
+                }
+                SurfaceSpec::Disc(name, d, _, Material::Glass(glass)) => {
+                    let i = scene.panes.len() as u32;
+                    push(name, Material::Glass(glass), ShapeRef::Pane(i), Sides::Both);
+                    scene.panes.push(Pane {
+                        shape: PaneShape::Disc(d),
+                        glass,
+                        surface: k,
+                    });
                 }
                 SurfaceSpec::Rect(name, r, sides, m) => {
                     push(name, m, ShapeRef::Rect(scene.rects.len() as u32), sides);
@@ -575,6 +604,10 @@ impl Scene {
         for (o, _) in &self.shs {
             let r = DVec3::splat(o.bounds().1);
             add(o.center() - r, o.center() + r);
+        }
+        for pane in &self.panes {
+            let (a, b) = pane.bounds();
+            add(a, b);
         }
         lo.x.is_finite().then_some((lo, hi))
     }
@@ -767,6 +800,8 @@ impl Scene {
         let lossless = |m: &Material| match *m {
             Material::Lambertian { rho } => rho >= 1.0,
             Material::Phong { kd, ks, .. } => kd + ks >= 1.0,
+            // A pane that absorbs nothing passes or mirrors all it gets.
+            Material::Glass(g) => g.internal_transmittance() >= 1.0,
         };
         if matches!(l, Light::Area(_)) || !self.surfaces.iter().all(|s| lossless(&s.material)) {
             return false;
@@ -824,6 +859,7 @@ impl Scene {
             boxes: self.boxes.len(),
             meshes: self.meshes.len(),
             sh_objects: self.shs.len(),
+            panes: self.panes.len(),
             point_lights: count(|l| matches!(l, Light::Point { .. })),
             goniometric_lights: count(|l| matches!(l, Light::Gonio { .. })),
             spot_lights: count(|l| matches!(l, Light::Spot(_))),
@@ -850,7 +886,9 @@ impl Scene {
             ShapeRef::Rect(i) => self.rects[i as usize].0.plane,
             ShapeRef::Disc(i) => self.discs[i as usize].0.plane,
             ShapeRef::BoxFace(i, f) => self.boxes[i as usize].0.face_plane(f as usize),
-            ShapeRef::Sphere(_) | ShapeRef::Mesh(_) | ShapeRef::Sh(_) => return None,
+            ShapeRef::Sphere(_) | ShapeRef::Mesh(_) | ShapeRef::Sh(_) | ShapeRef::Pane(_) => {
+                return None;
+            }
         };
         match surf.sides {
             Sides::Front => Some((pl, false)),
@@ -965,6 +1003,11 @@ impl Scene {
                 )
             }
             ShapeRef::Sh(i) => (q, self.shs[i as usize].0.normal(q)),
+            // Panes are met by `next_pane`, never by this search.
+            ShapeRef::Pane(i) => {
+                let pl = self.panes[i as usize].plane();
+                (pl.project(q), pl.n)
+            }
             ShapeRef::Mesh(i) => {
                 let m = &self.meshes[i as usize].0;
                 let ng = m.normal(prim);
