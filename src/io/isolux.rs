@@ -116,10 +116,10 @@ impl IsoluxPlot {
     }
 
     /// The shown area `(x0, x1, y0, y1)` [m]: the grid, the outline and the
-    /// luminaires (no farther than the grid's size beyond it), plus 4 %.
+    /// luminaires (no farther than half the grid's size beyond it), plus 4 %.
     fn view(&self) -> (f64, f64, f64, f64) {
         let (gx0, gx1, gy0, gy1) = self.bounds;
-        let reach = (gx1 - gx0).max(gy1 - gy0);
+        let reach = 0.5 * (gx1 - gx0).max(gy1 - gy0);
         let (mut x0, mut x1, mut y0, mut y1) = self.bounds;
         // Luminaires farther out than that are left out of the view.
         let near = |&&(x, y): &&(f64, f64)| {
@@ -216,6 +216,8 @@ impl IsoluxPlot {
             .disable_mesh()
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
+            .x_label_formatter(&|v| super::image::tick_label(*v))
+            .y_label_formatter(&|v| super::image::tick_label(*v))
             .label_style(("sans-serif", 13))
             .draw()
             .map_err(err)?;
@@ -281,17 +283,13 @@ impl IsoluxPlot {
             if let Some(l) = lines.iter().max_by_key(|l| l.len()) {
                 let at = l[l.len() / 2];
                 let text = super::image::tick_label(level);
-                for (ox, oy) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
-                    chart
-                        .draw_series(std::iter::once(
-                            EmptyElement::at(at)
-                                + Text::new(text.clone(), (ox, oy), label_style.color(&WHITE)),
-                        ))
-                        .map_err(err)?;
-                }
+                // On a white box, readable on any colour.
+                let half = 4 * text.len() as i32 + 3;
                 chart
                     .draw_series(std::iter::once(
-                        EmptyElement::at(at) + Text::new(text, (0, 0), label_style.clone()),
+                        EmptyElement::at(at)
+                            + Rectangle::new([(-half, -8), (half, 8)], WHITE.mix(0.85).filled())
+                            + Text::new(text, (0, 0), label_style.clone()),
                     ))
                     .map_err(err)?;
             }
@@ -334,6 +332,7 @@ impl IsoluxPlot {
             .disable_mesh()
             .disable_x_axis()
             .y_desc("E [lx]")
+            .y_label_formatter(&|v| super::image::tick_label(*v))
             .label_style(("sans-serif", 13))
             .draw()
             .map_err(err)?;
