@@ -288,7 +288,6 @@ fn build(
     desc: Option<&SceneDesc>,
     grids: Vec<GridSection>,
 ) -> Report {
-    let s = scene.summary();
     let luminaires: Vec<Luminaire> = scene
         .lights
         .iter()
@@ -360,17 +359,7 @@ fn build(
         command: std::env::args().collect::<Vec<_>>().join(" "),
         program: format!("lumest {}", env!("CARGO_PKG_VERSION")),
         scene_file: scene_path.display().to_string(),
-        scene_summary: format!(
-            "{} plane(s), {} rectangle(s), {} disc(s), {} sphere(s), {} box(es), {} mesh(es), {} SH object(s); {} light(s)",
-            s.planes,
-            s.rects,
-            s.discs,
-            s.spheres,
-            s.boxes,
-            s.meshes,
-            s.sh_objects,
-            scene.lights.len()
-        ),
+        scene_summary: format!("{}; {} light(s)", scene.summary(), scene.lights.len()),
         scene_notes: scene.notes.clone(),
         luminaires,
         total_flux: sig(total, 5),

@@ -18,6 +18,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+/// A line through points `(x, y)` [m].
+pub type Polyline = Vec<(f64, f64)>;
+
 /// A line of the room's outline in plot coordinates [m].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Outline {
@@ -88,7 +91,7 @@ impl IsoluxPlot {
     }
 
     /// The isolines of every level: `(level, polylines)`.
-    pub fn contours(&self) -> Vec<(f64, Vec<Vec<(f64, f64)>>)> {
+    pub fn contours(&self) -> Vec<(f64, Vec<Polyline>)> {
         self.levels()
             .into_iter()
             .map(|l| (l, isolines(&self.xs, &self.ys, &self.z, l)))
@@ -401,12 +404,10 @@ fn clip(
             }
         }
     }
-    (t0 <= t1).then(|| {
-        (
-            (a.0 + t0 * dx, a.1 + t0 * dy),
-            (a.0 + t1 * dx, a.1 + t1 * dy),
-        )
-    })
+    (t0 <= t1).then_some((
+        (a.0 + t0 * dx, a.1 + t0 * dy),
+        (a.0 + t1 * dx, a.1 + t1 * dy),
+    ))
 }
 
 #[cfg(test)]
