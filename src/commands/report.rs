@@ -184,7 +184,23 @@ pub fn stage(
             ..Default::default()
         };
         match &plot {
-            Ok((p, _)) => {
+            Ok((p, lat)) => {
+                // Non-finite estimates (not left out) would be silent holes: say so.
+                let bad = g
+                    .rows
+                    .iter()
+                    .filter(|&&j| {
+                        !r.tallies.enclosed.get(j).copied().unwrap_or(false)
+                            && !(r.direct[j] + r.tallies.estimated[j].mean()).is_finite()
+                    })
+                    .count();
+                if bad > 0 {
+                    section.notes.push(format!(
+                        "{bad} point(s) have a non-finite estimate: holes in the plot ({} x {} lattice).",
+                        lat.xs.len(),
+                        lat.ys.len()
+                    ));
+                }
                 let svg = p
                     .svg()
                     .map_err(|e| anyhow::anyhow!("isolux plot of `{}`: {e}", g.name))?;
