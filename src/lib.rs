@@ -45,6 +45,7 @@ pub mod light;
 pub mod material;
 pub mod math;
 pub mod reference;
+pub mod report;
 pub mod run;
 pub mod sampling;
 pub mod scene;

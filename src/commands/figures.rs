@@ -152,7 +152,7 @@ pub fn grid_figures(r: &RunResult, groups: &[Group], grids: &[Grid]) -> Vec<Grid
 }
 
 /// `x` to `n` significant digits, fixed notation where that is short.
-fn sig(x: f64, n: i32) -> String {
+pub(crate) fn sig(x: f64, n: i32) -> String {
     if !x.is_finite() {
         return format!("{x}");
     }

@@ -73,6 +73,15 @@ pub struct IlluminanceArgs {
     /// `lumest grid`) with their errors and verdicts to this CSV.
     #[arg(long = "figures-out", conflicts_with = "shard")]
     pub figures_out: Option<String>,
+    /// Write a self-contained HTML report of the run (scene, luminaires,
+    /// grid figures with intervals and verdicts, isolux plots, run
+    /// statistics and flags) to this file.
+    #[arg(long, conflicts_with_all = ["shard", "mpi"])]
+    pub report: Option<String>,
+    /// Write the isolux plot of every grid, `isolux_K_NAME.png` and `.svg`,
+    /// into this (existing) folder.
+    #[arg(long = "isolux-dir", conflicts_with_all = ["shard", "mpi"])]
+    pub isolux_dir: Option<String>,
     #[command(flatten)]
     pub run: RunArgs,
 }
@@ -659,7 +668,7 @@ pub(crate) fn measure_with(
     estimator: EstimatorKind,
     run_args: &RunArgs,
 ) -> anyhow::Result<(Job, RunResult)> {
-    measure_full(scene_path, points, views, estimator, run_args, None)
+    measure_full(scene_path, points, views, estimator, run_args, None, None)
 }
 
 /// [`measure_with`], also writing the grid figures to `figures_out`.
@@ -670,6 +679,7 @@ pub(crate) fn measure_full(
     estimator: EstimatorKind,
     run_args: &RunArgs,
     figures_out: Option<&str>,
+    report: Option<&super::report::ReportOutputs>,
 ) -> anyhow::Result<(Job, RunResult)> {
     let mut cfg = run_args.config()?;
     if estimator == EstimatorKind::Backward {
@@ -763,6 +773,9 @@ pub(crate) fn measure_full(
         figures_out.is_none() || groups.as_ref().is_some_and(|g| !g.0.is_empty()),
         "--figures-out: the points have no `grid` column naming their grids (write them with `lumest grid`)"
     );
+    if let Some(rep) = report {
+        super::report::check_plot_paths(rep, groups.as_ref())?;
+    }
     let grids = if groups.is_some() {
         crate::grid::load(scene_path)?
     } else {
@@ -855,6 +868,19 @@ pub(crate) fn measure_full(
             .with_context(|| format!("writing {out}"))?;
         staged.push((file, out));
     }
+    let report_files = match report {
+        Some(rep) => super::report::stage(
+            rep,
+            scene_path,
+            &scene,
+            &job,
+            &cfg,
+            &result,
+            groups.as_ref(),
+            figures.as_deref(),
+        )?,
+        None => Vec::new(),
+    };
     anyhow::ensure!(
         rows.iter().all(|r| r.1),
         "rows were lost: {}",
@@ -865,6 +891,11 @@ pub(crate) fn measure_full(
     );
     for (file, out) in staged {
         file.commit().with_context(|| format!("writing {out}"))?;
+    }
+    let mut written = Vec::new();
+    for (file, out) in report_files {
+        file.commit().with_context(|| format!("writing {out}"))?;
+        written.push(out);
     }
     for line in summary(&result).lines() {
         eprintln!("lumest: {line}");
@@ -883,6 +914,9 @@ pub(crate) fn measure_full(
                 eprintln!("lumest: {line}");
             }
         }
+    }
+    for out in &written {
+        eprintln!("lumest: wrote {out}");
     }
     Ok((job, result))
 }
@@ -980,7 +1014,23 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
     if let Some(f) = &a.figures_out {
         outputs.push(("--figures-out", Path::new(f)));
     }
+    if let Some(f) = &a.report {
+        outputs.push(("--report", Path::new(f)));
+    }
     check_outputs(&inputs, &outputs)?;
+    if let Some(d) = &a.isolux_dir {
+        anyhow::ensure!(
+            Path::new(d).is_dir(),
+            "--isolux-dir {d}: not an existing folder"
+        );
+    }
+    let report =
+        (a.report.is_some() || a.isolux_dir.is_some()).then(|| super::report::ReportOutputs {
+            report: a.report.clone(),
+            isolux_dir: a.isolux_dir.clone(),
+            inputs: inputs.iter().map(|p| p.to_path_buf()).collect(),
+            outputs: outputs.iter().map(|o| o.1.to_path_buf()).collect(),
+        });
     measure_full(
         &a.scene,
         Some((&a.points, &a.out)),
@@ -988,6 +1038,7 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
         a.estimator,
         &a.run,
         a.figures_out.as_deref(),
+        report.as_ref(),
     )
     .map(|_| ())
 }

@@ -10,6 +10,7 @@ pub mod mpi_run;
 pub mod outputs;
 pub mod photometry;
 pub mod render;
+pub mod report;
 pub mod run_state;
 pub mod shfit;
 pub mod sobolev;

@@ -14,6 +14,8 @@
 //! average illuminance `em` [lx], the uniformity `u0`, and the maintenance
 //! factor applied to the computed illuminance.
 
+pub mod contour;
+pub mod lattice;
 pub mod road;
 pub mod spacing;
 mod surface;

@@ -462,6 +462,25 @@ pub fn stage_csv(
     Ok((staged, n))
 }
 
+/// Write `bytes` to the temporary file of `path` and return it staged
+/// (see [`Staged`]); `-` is written to standard output at once.
+pub fn stage_bytes(path: &str, bytes: &[u8]) -> std::io::Result<Staged> {
+    let target = PathBuf::from(path);
+    if path == "-" {
+        write_atomic(path, bytes)?;
+        return Ok(Staged { tmp: None, target });
+    }
+    let staged = Staged {
+        tmp: Some(temp_path(&target)),
+        target,
+    };
+    let tmp = staged.tmp.clone().expect("just set");
+    let mut f = std::fs::File::create(&tmp)?;
+    f.write_all(bytes)?;
+    f.sync_all()?;
+    Ok(staged)
+}
+
 /// Build CSV text from headers and rows of cells.
 pub fn to_csv(headers: &[String], rows: &[Vec<String>]) -> Vec<u8> {
     let mut w = csv::Writer::from_writer(Vec::new());

@@ -4,6 +4,7 @@ pub mod csvio;
 pub mod envmap;
 pub mod image;
 pub mod interrupt;
+pub mod isolux;
 pub mod photometry;
 pub mod plot;
 pub mod sh_coeffs;
