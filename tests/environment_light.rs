@@ -434,3 +434,54 @@ file = "grey.hdr"
         assert!(z.abs() < bound, "backward, point {j}: z = {z:.2}");
     }
 }
+
+/// The cap map of [`bright_cap_map_against_its_closed_form`] as an OpenEXR
+/// file (32-bit float RGB): read through the same path, its table gives
+/// the closed-form horizontal illuminance; values that RGBE cannot hold
+/// (0.1, coloured pixels) come through at float precision.
+#[test]
+fn openexr_maps_read_like_radiance_ones() {
+    let d = dir("exr");
+    let (w, h) = (16u32, 8u32);
+    let img = image::Rgb32FImage::from_fn(w, h, |_, y| match y {
+        0 | 1 => image::Rgb([8.0, 8.0, 8.0]),
+        2 | 3 => image::Rgb([1.0, 1.0, 1.0]),
+        _ => image::Rgb([0.0, 0.0, 0.0]),
+    });
+    image::DynamicImage::ImageRgb32F(img)
+        .save(d.join("cap.exr"))
+        .unwrap();
+    let s = scene_in(
+        &d,
+        "[[light]]\ntype = \"environment\"\nfile = \"cap.exr\"\nscale = 0.5\n",
+    );
+    let Light::Environment(env) = &s.lights[0] else {
+        panic!("not an environment light");
+    };
+    let c = sphere_cone_integral((PI / 4.0).sin(), 1.0);
+    let exact = 0.5 * (8.0 * c + (PI - c));
+    assert!(
+        (env.horizontal_illuminance() / exact - 1.0).abs() < 1e-12,
+        "{} vs {exact}",
+        env.horizontal_illuminance()
+    );
+    // A coloured and a non-dyadic grey pixel: Y = 0.2126 R + 0.7152 G + 0.0722 B.
+    let img = image::Rgb32FImage::from_fn(2, 1, |x, _| {
+        if x == 0 {
+            image::Rgb([0.1, 0.1, 0.1])
+        } else {
+            image::Rgb([1.0, 2.0, 4.0])
+        }
+    });
+    image::DynamicImage::ImageRgb32F(img)
+        .save(d.join("two.exr"))
+        .unwrap();
+    let m = lumest::io::envmap::read_luminance_map(&d.join("two.exr")).unwrap();
+    assert_eq!((m.width, m.height), (2, 1));
+    assert_eq!(m.y[0], 0.1f32 as f64);
+    assert!((m.y[1] - (0.2126 + 0.7152 * 2.0 + 0.0722 * 4.0)).abs() < 1e-12);
+    // A file that is not an image names itself.
+    std::fs::write(d.join("bad.exr"), b"not an exr").unwrap();
+    let e = lumest::io::envmap::read_luminance_map(&d.join("bad.exr")).unwrap_err();
+    assert!(e.contains("bad.exr"), "{e}");
+}

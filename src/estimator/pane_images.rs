@@ -49,13 +49,7 @@ pub type ClosedForm<'a> = dyn Fn(DVec3, DVec3, &dyn Fn(DVec3) -> DVec3) -> f64 +
 /// `(x', n')` with response `w(wi')` (for the mirrored receiver, `w` is
 /// applied to the mirrored direction); only point-like lights and a
 /// collimated sun have images (0 otherwise).
-pub fn image_direct(
-    scene: &Scene,
-    k: usize,
-    x: DVec3,
-    n: DVec3,
-    closed: &ClosedForm,
-) -> f64 {
+pub fn image_direct(scene: &Scene, k: usize, x: DVec3, n: DVec3, closed: &ClosedForm) -> f64 {
     let l = &scene.lights[k];
     let mut total = 0.0;
     for (i, pane) in scene.panes().iter().enumerate() {

@@ -1,4 +1,4 @@
-//! Environment maps: a Radiance RGBE `.hdr` file (through the `image`
+//! Environment maps: a Radiance RGBE `.hdr` or an OpenEXR `.exr` file (through the `image`
 //! crate) read as per-pixel luminance. Formats only: the light's mapping
 //! and scale are applied in [`crate::light::environment`].
 
@@ -27,7 +27,7 @@ pub fn luminance_of(r: f64, g: f64, b: f64) -> f64 {
     }
 }
 
-/// Read an environment map (`.hdr`; any format the `image` crate was built
+/// Read an environment map (`.hdr`, `.exr`; any format the `image` crate was built
 /// with) as luminance values. Errors name the problem; the caller adds the
 /// file and field.
 pub fn read_luminance_map(path: &Path) -> Result<LuminanceMap, String> {
