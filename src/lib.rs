@@ -31,7 +31,9 @@
 //! `p` point, `n` normal, `u` uniforms, `pdf` density, `q` chain weight [lm],
 //! `phi` flux [lm], `i` intensity [cd], `e` illuminance [lx], `l` luminance.
 // No unsafe code, except the two calls that install the signal handler
-// (`io::interrupt`, which allows it for itself): no signal crate is vendored.
+// (`io::interrupt`, which allows it for itself): no signal crate is vendored;
+// and the call of the AVX2 scoring kernel after the CPU check
+// (`estimator/open_kernel.rs`).
 #![deny(unsafe_code)]
 
 pub mod cases;

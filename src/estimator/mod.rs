@@ -31,7 +31,11 @@
 pub mod backward;
 pub mod direct;
 pub mod local;
+mod open_kernel;
 pub mod pane_images;
+
+use open_kernel::score_open;
+pub use open_kernel::{Kernel, active_kernel, set_kernel};
 
 use crate::chain::Collision;
 use crate::geometry::SideMask;
@@ -999,67 +1003,6 @@ impl Receivers {
             }
         }
     }
-}
-
-/// Score a collision at `x` (front normal `n`, weight times BRDF `qf`) into
-/// the constant-response entries of `list`, no plane in the way, and count
-/// it in `near` where it scores from within the watched radius. Written over
-/// zipped slices so the compiler drops bounds checks and vectorises.
-#[inline]
-fn score_open<const COUNT: bool>(
-    list: &ReceiverList,
-    x: DVec3,
-    n: DVec3,
-    qf: f64,
-    acc: &mut [f64],
-    near: &mut [f64],
-) {
-    // Both loops evaluate the same term, so counted chains round alike; the
-    // uncounted one stays free of the extra stream for vectorisation.
-    if !COUNT {
-        let it = acc
-            .iter_mut()
-            .zip(list.px.iter().zip(&list.py).zip(&list.pz))
-            .zip(list.nx.iter().zip(&list.ny).zip(&list.nz))
-            .zip(list.w.iter().zip(&list.eps2));
-        for (((a, p), nr), (w, e2)) in it {
-            let [far, cx, cp, d2] = open_term(x, n, p, nr, *e2);
-            *a += qf * w * far * cx * cp / (d2 * d2);
-        }
-        return;
-    }
-    let it = acc
-        .iter_mut()
-        .zip(near.iter_mut())
-        .zip(list.px.iter().zip(&list.py).zip(&list.pz))
-        .zip(list.nx.iter().zip(&list.ny).zip(&list.nz))
-        .zip(list.w.iter().zip(list.eps2.iter().zip(&list.watch2)));
-    for ((((a, c), p), nr), (w, (e2, w2))) in it {
-        let [far, cx, cp, d2] = open_term(x, n, p, nr, *e2);
-        *a += qf * w * far * cx * cp / (d2 * d2);
-        *c += if d2 < *w2 && far * cx * cp > 0.0 {
-            1.0
-        } else {
-            0.0
-        };
-    }
-}
-
-/// The geometric factors of an open score, `[far, cos_x d, cos_p d, d^2]`
-/// (unnormalised cosines, clamped at 0; `far` is 0 inside the near-field
-/// ball of squared radius `e2`, where the score is left to the near part):
-/// the score is `qf w far cx cp / d^4`.
-#[inline(always)]
-fn open_term(
-    x: DVec3,
-    n: DVec3,
-    ((px, py), pz): ((&f64, &f64), &f64),
-    ((nx, ny), nz): ((&f64, &f64), &f64),
-    e2: f64,
-) -> [f64; 4] {
-    let [cx, cp, d2] = kernel_parts(x, n, [*px, *py, *pz], [*nx, *ny, *nz]);
-    let far = if d2 >= e2 { 1.0 } else { 0.0 };
-    [far, cx, cp, d2]
 }
 
 /// The near/far radius [m] a receiver at `p` (normal frame `frame`) needs:
