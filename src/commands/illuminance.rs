@@ -8,7 +8,8 @@
 use super::outputs::check_outputs;
 use super::{MAX_VIEWS, RunArgs, check_tally_size, progress_bar, tick};
 use crate::estimator::local::run;
-use crate::estimator::{Receiver, Receivers, ViewTarget, emitted_luminance, view_target};
+use crate::estimator::{Receiver, Receivers, Solid, ViewTarget, emitted_luminance, view_target};
+use crate::io::InputError;
 use crate::io::csvio::{Staged, stage_csv};
 use crate::io::{PointTable, ViewTable, format_fixed, format_number, read_points, read_views};
 use crate::run::{RunConfig, RunResult};
@@ -408,8 +409,25 @@ impl Job {
         // File and line of each receiver, for error messages.
         let mut origin: Vec<(&str, u64)> = Vec::new();
         if let (Some(t), Some(path)) = (&points_t, points) {
-            for (&(p, n), &line) in t.points.iter().zip(&t.lines) {
-                rec.push(Receiver::illuminance(p, n));
+            // The optional `receiver` column: the type of each point
+            // (`planar` when absent or empty).
+            let col = t.headers.iter().position(|h| h == "receiver");
+            for (k, (&(p, n), &line)) in t.points.iter().zip(&t.lines).enumerate() {
+                let name = col.map_or("", |c| t.rows[k][c].as_str());
+                let kind = Solid::parse(name).map_err(|message| InputError::Field {
+                    file: if path == "-" {
+                        "<stdin>".into()
+                    } else {
+                        path.to_string()
+                    },
+                    line,
+                    field: "receiver".into(),
+                    message,
+                })?;
+                rec.push(match kind {
+                    None => Receiver::illuminance(p, n),
+                    Some(kind) => Receiver::solid(p, n, kind),
+                });
                 origin.push((path, line));
             }
         }
