@@ -254,8 +254,21 @@ fn every_type_reads_pi_l_in_the_integrating_sphere() {
         &common::chains_cfg(1 << 14, 7, 2),
         &mut |_| true,
     );
-    for (name, r) in [("local", &local), ("backward", &back)] {
-        let bound = sidak_bound(1e-3, 2 * all.len(), Some(r.tallies.batches()));
+    // The near/far split, its radius taking in part of the wall: the near
+    // part's backward paths start from each receiver's own lobe.
+    let split = rec.clone().with_near_field(0.7 * rad, 128);
+    let near = lumest::estimator::local::run(
+        &scene,
+        &split,
+        &common::chains_cfg(1 << 17, 7, 2),
+        &mut |_| true,
+    );
+    for (name, r) in [
+        ("local", &local),
+        ("backward", &back),
+        ("near/far split", &near),
+    ] {
+        let bound = sidak_bound(1e-3, 3 * all.len(), Some(r.tallies.batches()));
         for (j, rv) in all.iter().enumerate() {
             let w = &r.tallies.estimated[j];
             let (got, se) = (w.mean(), w.std_error());
@@ -361,5 +374,90 @@ fn light_from_below_the_normal_reaches_solid_receivers() {
                 all[j].response
             );
         }
+    }
+}
+
+#[test]
+fn the_sun_reaches_every_type() {
+    // The sun at 40 degrees elevation towards +x, 100 klx normal to the beam.
+    let (el, e_n) = (40f64.to_radians(), 1e5);
+    let base = format!(
+        "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+         material = {{ type = \"lambertian\", reflectance = 0.0 }}\n\n\
+         [[light]]\ntype = \"distant\"\ndirection = [{}, 0, {}]\nilluminance = {e_n}\n",
+        -el.cos(),
+        -el.sin()
+    );
+    let (c, s) = (el.cos(), el.sin());
+    let cases = [
+        (None, DVec3::Z, e_n * s),
+        (Some(Solid::Cylindrical), DVec3::Z, e_n * c / PI),
+        (Some(Solid::Semicylindrical), DVec3::X, e_n * 2.0 * c / PI),
+        (Some(Solid::Semicylindrical), -DVec3::X, 0.0),
+        (Some(Solid::Semicylindrical), DVec3::Y, e_n * c / PI),
+        (Some(Solid::Hemispherical), DVec3::Z, e_n * (1.0 + s) / 4.0),
+        (Some(Solid::Hemispherical), -DVec3::Z, e_n * (1.0 - s) / 4.0),
+        (Some(Solid::Spherical), DVec3::Z, e_n / 4.0),
+    ];
+    let all: Vec<Receiver> = cases
+        .iter()
+        .map(|&(k, n, _)| receiver(DVec3::new(0.3, 0.2, 1.0), n, k))
+        .collect();
+    // A point sun: exact.
+    let point = lumest::scene::parse(&base, std::path::Path::new("sun.toml")).unwrap();
+    let rec = Receivers::from_receivers(&point, &all).unwrap();
+    assert!(!rec.has_sampled_direct());
+    for (j, &(_, _, want)) in cases.iter().enumerate() {
+        let got = rec.direct()[j];
+        assert!((got - want).abs() <= 1e-9 * e_n, "{j}: {got} vs {want}");
+    }
+    // The 0.53 degree disc: sampled for the solid types; the disc changes
+    // these smooth responses by a relative ~1e-5, far below the error bars.
+    let disc = lumest::scene::parse(
+        &format!("{base}angular_diameter = 0.53\n"),
+        std::path::Path::new("sun.toml"),
+    )
+    .unwrap();
+    let rec = Receivers::from_receivers(&disc, &all).unwrap();
+    let r =
+        lumest::estimator::local::run(&disc, &rec, &common::chains_cfg(1 << 16, 9, 2), &mut |_| {
+            true
+        });
+    let bound = sidak_bound(1e-3, all.len(), Some(r.tallies.batches()));
+    // The disc's half-angle: `E_n = L pi sin^2 a`, so the sphere reads
+    // `L 2 pi (1 - cos a) / 4 = (E_n / 4) 2 / (1 + cos a)` and the
+    // hemisphere `(E_n / 4) (2 / (1 + cos a) + n . w_sun)`, exactly; the
+    // cylinders' references above are off by a relative ~a^2 = 2e-5.
+    let a = (0.53f64 / 2.0).to_radians();
+    let disc_factor = 2.0 / (1.0 + a.cos());
+    let sun = DVec3::new(c, 0.0, s);
+    for (j, &(kind, n, want)) in cases.iter().enumerate() {
+        let want = match kind {
+            Some(Solid::Spherical) => want * disc_factor,
+            Some(Solid::Hemispherical) => e_n / 4.0 * (disc_factor + n.dot(sun)),
+            _ => want,
+        };
+        let w = &r.tallies.estimated[j];
+        let (got, se) = (r.direct[j] + w.mean(), w.std_error());
+        if kind.is_none() || want == 0.0 {
+            // The plane's disc is exact; the back of the half cylinder only
+            // gets the disc's rim at its edges (about E_n alpha^2, 1e-6 E_n).
+            assert!((got - want).abs() <= 1e-5 * e_n, "{j}: {got} vs {want}");
+            continue;
+        }
+        assert!(
+            0.02 * want > bound * se,
+            "{j}: error bar {se} too wide for {want}"
+        );
+        if se == 0.0 {
+            // Light sampling of the cone is exact for a constant response.
+            assert!((got / want - 1.0).abs() < 1e-9, "{j}: {got} vs {want}");
+            continue;
+        }
+        let z = (got - want) / se;
+        assert!(
+            z.abs() < bound,
+            "{j} {kind:?}: {got} +- {se} vs {want} (z = {z})"
+        );
     }
 }
