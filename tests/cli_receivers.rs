@@ -25,6 +25,11 @@ fn lumest() -> Command {
 
 /// Run on `points` (CSV text); `Ok(output CSV)` or `Err(stderr)`.
 fn run(points: &str) -> Result<String, String> {
+    run_with_log(points).map(|(out, _)| out)
+}
+
+/// Run on `points`; `Ok((output CSV, stderr))` or `Err(stderr)`.
+fn run_with_log(points: &str) -> Result<(String, String), String> {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("s.toml");
     std::fs::write(&scene, SCENE).unwrap();
@@ -41,7 +46,10 @@ fn run(points: &str) -> Result<String, String> {
         .output()
         .unwrap();
     if out.status.success() {
-        Ok(std::fs::read_to_string(&res).unwrap())
+        Ok((
+            std::fs::read_to_string(&res).unwrap(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        ))
     } else {
         Err(String::from_utf8_lossy(&out.stderr).into_owned())
     }
@@ -102,4 +110,31 @@ fn bad_receivers_name_file_line_and_field() {
     );
     // A planar point on the floor is fine.
     assert!(run("x,y,z,nx,ny,nz,receiver\n1,0,0,0,0,1,planar\n").is_ok());
+}
+
+#[test]
+fn modelling_ratio_of_points_listed_planar_and_cylindrical() {
+    // e = 45 degrees: E_z / E_h = sin e / (pi cos e) = 1 / pi, exact (black floor).
+    let (_, log) = run_with_log(
+        "id,x,y,z,nx,ny,nz,receiver\n\
+         h,2,0,1,0,0,1,planar\n\
+         z,2,0,1,0,0,1,cylindrical\n\
+         other,1,0,1,0,0,1,cylindrical\n",
+    )
+    .unwrap();
+    assert!(
+        log.contains("modelling E_z/E_h") && log.contains("at 1 point(s)"),
+        "{log}"
+    );
+    let want = format!("p.csv:2+3: {:.4} +- 0.0000", 1.0 / PI);
+    assert!(log.contains(&want), "{want} not in {log}");
+    // No average over mixed receiver types.
+    assert!(
+        log.contains("mixed receiver types (cylindrical, planar)")
+            && !log.contains("uniformity U0"),
+        "{log}"
+    );
+    // No pair, no line.
+    let (_, log) = run_with_log("x,y,z,nx,ny,nz,receiver\n2,0,1,0,0,1,cylindrical\n").unwrap();
+    assert!(!log.contains("modelling"), "{log}");
 }
