@@ -42,6 +42,24 @@ fn receiver(p: DVec3, n: DVec3, kind: Option<Solid>) -> Receiver {
     }
 }
 
+/// The response of each type to light from `w` (module docs of
+/// `estimator::solid`), written from the geometry here rather than by
+/// calling it.
+fn response(kind: Option<Solid>, n: DVec3, w: DVec3) -> f64 {
+    match kind {
+        None => n.dot(w).max(0.0),
+        Some(Solid::Cylindrical) => (1.0 - n.dot(w).powi(2)).max(0.0).sqrt() / PI,
+        Some(Solid::Semicylindrical) => {
+            let sin_t = (1.0 - w.z * w.z).max(0.0).sqrt();
+            let h = DVec3::new(w.x, w.y, 0.0);
+            let cos_a = if sin_t > 0.0 { n.dot(h) / sin_t } else { 0.0 };
+            sin_t * (1.0 + cos_a) / PI
+        }
+        Some(Solid::Hemispherical) => (1.0 + n.dot(w)) / 4.0,
+        Some(Solid::Spherical) => 0.25,
+    }
+}
+
 fn black_floor(light: Light) -> Scene {
     Scene::from_parts(
         vec![(
@@ -144,22 +162,6 @@ fn sphere_source_sampled_direct_matches_quadrature() {
     let (c, rad, i) = (DVec3::new(0.0, 0.0, 2.0), 0.3, 100.0);
     let scene = black_floor(Light::Sphere { c, r: rad, i });
     let l = i / (PI * rad * rad);
-    // Response functions written from the geometry (module docs of
-    // `estimator::solid`), not by calling it.
-    let resp = |kind: Option<Solid>, n: DVec3, w: DVec3| -> f64 {
-        match kind {
-            None => n.dot(w).max(0.0),
-            Some(Solid::Cylindrical) => (1.0 - n.dot(w).powi(2)).max(0.0).sqrt() / PI,
-            Some(Solid::Semicylindrical) => {
-                let sin_t = (1.0 - w.z * w.z).max(0.0).sqrt();
-                let h = DVec3::new(w.x, w.y, 0.0);
-                let cos_a = if sin_t > 0.0 { n.dot(h) / sin_t } else { 0.0 };
-                sin_t * (1.0 + cos_a) / PI
-            }
-            Some(Solid::Hemispherical) => (1.0 + n.dot(w)) / 4.0,
-            Some(Solid::Spherical) => 0.25,
-        }
-    };
     let mut all = Vec::new();
     let mut exact = Vec::new();
     for p in [
@@ -174,7 +176,7 @@ fn sphere_source_sampled_direct_matches_quadrature() {
                 _ => DVec3::new(0.2, 0.5, 1.0).normalize(),
             };
             all.push(receiver(p, n, kind));
-            exact.push(cone_quadrature(c, rad, l, p, |w| resp(kind, n, w)));
+            exact.push(cone_quadrature(c, rad, l, p, |w| response(kind, n, w)));
         }
     }
     let rec = Receivers::from_receivers(&scene, &all).unwrap();
@@ -319,20 +321,6 @@ fn light_from_below_the_normal_reaches_solid_receivers() {
         vec![Light::Point { p: s, i }],
     )
     .expect("a valid programmatic scene");
-    let resp = |kind: Option<Solid>, n: DVec3, w: DVec3| -> f64 {
-        match kind {
-            None => n.dot(w).max(0.0),
-            Some(Solid::Cylindrical) => (1.0 - n.dot(w).powi(2)).max(0.0).sqrt() / PI,
-            Some(Solid::Semicylindrical) => {
-                let sin_t = (1.0 - w.z * w.z).max(0.0).sqrt();
-                let h = DVec3::new(w.x, w.y, 0.0);
-                let cos_a = if sin_t > 0.0 { n.dot(h) / sin_t } else { 0.0 };
-                sin_t * (1.0 + cos_a) / PI
-            }
-            Some(Solid::Hemispherical) => (1.0 + n.dot(w)) / 4.0,
-            Some(Solid::Spherical) => 0.25,
-        }
-    };
     let mut all = Vec::new();
     let mut exact = Vec::new();
     for p in [DVec3::new(0.7, 0.2, 0.8), DVec3::new(-1.5, 1.0, 1.4)] {
@@ -345,7 +333,7 @@ fn light_from_below_the_normal_reaches_solid_receivers() {
                 _ => DVec3::Z,
             };
             all.push(receiver(p, n, kind));
-            exact.push(floor_quadrature(p, s, i, rho, |w| resp(kind, n, w)));
+            exact.push(floor_quadrature(p, s, i, rho, |w| response(kind, n, w)));
         }
     }
     let rec = Receivers::from_receivers(&scene, &all).unwrap();
@@ -458,6 +446,75 @@ fn the_sun_reaches_every_type() {
         assert!(
             z.abs() < bound,
             "{j} {kind:?}: {got} +- {se} vs {want} (z = {z})"
+        );
+    }
+}
+
+#[test]
+fn panel_sampled_direct_matches_quadrature() {
+    // A 0.6 m x 1.2 m panel of 1000 cd/m^2 at z = 2.5 m emitting down, over a black floor.
+    let src = "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+               material = { type = \"lambertian\", reflectance = 0.0 }\n\n\
+               [[light]]\ntype = \"rectangle\"\ncorner = [-0.3, 0.6, 2.5]\nedge1 = [0.6, 0.0, 0.0]\n\
+               edge2 = [0.0, -1.2, 0.0]\nluminance = 1000.0\n";
+    let scene = lumest::scene::parse(src, std::path::Path::new("panel.toml")).unwrap();
+    let l = 1000.0;
+    // int L r(w) cos_y / d^2 dA over the panel (cos_y = w_z: it faces down).
+    let quad = |p: DVec3, kind: Option<Solid>, n: DVec3| {
+        let (na, nb) = (300, 600);
+        let mut sum = 0.0;
+        for ia in 0..na {
+            for ib in 0..nb {
+                let y = DVec3::new(
+                    -0.3 + 0.6 * (ia as f64 + 0.5) / na as f64,
+                    0.6 - 1.2 * (ib as f64 + 0.5) / nb as f64,
+                    2.5,
+                );
+                let v = y - p;
+                let d2 = v.length_squared();
+                let w = v / d2.sqrt();
+                sum += l * response(kind, n, w) * w.z / d2;
+            }
+        }
+        sum * 0.72 / (na * nb) as f64
+    };
+    let mut all = Vec::new();
+    let mut exact = Vec::new();
+    for p in [DVec3::new(0.2, 0.1, 1.2), DVec3::new(1.8, -0.9, 1.6)] {
+        for kind in KINDS {
+            let n = match kind {
+                Some(Solid::Semicylindrical) => DVec3::new(-0.8, 0.6, 0.0),
+                _ => DVec3::Z,
+            };
+            all.push(receiver(p, n, kind));
+            exact.push(quad(p, kind, n));
+        }
+    }
+    let rec = Receivers::from_receivers(&scene, &all).unwrap();
+    let r = lumest::estimator::local::run(
+        &scene,
+        &rec,
+        &common::chains_cfg(1 << 20, 13, 2),
+        &mut |_| true,
+    );
+    let bound = sidak_bound(1e-3, all.len(), Some(r.tallies.batches()));
+    for (j, &e) in exact.iter().enumerate() {
+        let w = &r.tallies.estimated[j];
+        let (got, se) = (r.direct[j] + w.mean(), w.std_error());
+        if rec.direct_set(j).is_none() {
+            // The planar points: Lambert's exact contour integral.
+            assert!((got / e - 1.0).abs() < 1e-5, "point {j}: {got} vs {e}");
+            continue;
+        }
+        assert!(
+            0.02 * e > bound * se,
+            "point {j}: error bar {se} too wide for {e}"
+        );
+        let z = (got - e) / se;
+        assert!(
+            z.abs() < bound,
+            "point {j} {:?}: {got} +- {se} vs {e} (z = {z})",
+            all[j].response
         );
     }
 }
