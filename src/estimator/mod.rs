@@ -21,7 +21,10 @@
 //! with `wi' = -wo_n` the direction from `r'` back to `x_n`: a local estimate
 //! at `r'` weighted by the sub-point's BRDF towards the observer. Both kinds
 //! are *receivers*: a point, a normal and a response (`1` for illuminance,
-//! `f'(wi', wo')` [1/sr] for luminance). Every collision scores into every
+//! `f'(wi', wo')` [1/sr] for luminance). A third kind, the solid receivers
+//! of [`solid`] (cylindrical, semi-cylindrical, hemispherical and scalar
+//! illuminance), replaces `cos(theta_p)` by its response `r(-wo_n)` over the
+//! whole sphere: `E_ind = E[ sum_n Q_n f_r cos(theta_n) r / d_n^2 V ]`. Every collision scores into every
 //! receiver at once. The first order (light straight from the sources) is
 //! computed exactly and separately ([`Receivers::direct`]) where a closed
 //! form exists, and sampled per batch elsewhere ([`direct`]); point sources
