@@ -13,13 +13,14 @@ mod common;
 use common::chi2_pvalue;
 use lumest::sampling::Philox4x32;
 use lumest::sampling::warp::{
-    cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf,
+    cardioid_sphere_pdf, cosine_hemisphere_pdf, sample_cardioid_sphere, sample_cosine_hemisphere,
+    sample_uniform_sphere, uniform_sphere_pdf,
 };
 
 /// Family-wise significance level of all chi-square tests in this file.
 const ALPHA_FAMILY: f64 = 0.01;
 /// Number of chi-square tests in this file (for the Šidák correction).
-const NUM_TESTS: i32 = 4;
+const NUM_TESTS: i32 = 5;
 /// Samples per test.
 const N_SAMPLES: usize = 1_000_000;
 /// Seed shared by all tests; each test uses its own stream.
@@ -150,6 +151,36 @@ fn chi2_uniform_sphere() {
             "moment {k}: {m} vs {mean}"
         );
     }
+}
+
+#[test]
+fn chi2_cardioid_sphere() {
+    let (nt, np) = (10, 20);
+    let probs = cell_probabilities(|w| cardioid_sphere_pdf(w.z), PI, nt, np);
+    // Closed form: the distribution of cos θ is ((1 + c) / 2)^2.
+    for it in 0..nt {
+        let (a, b) = (it as f64 * PI / nt as f64, (it + 1) as f64 * PI / nt as f64);
+        let cdf = |c: f64| (0.5 * (1.0 + c)).powi(2);
+        let exact = (cdf(a.cos()) - cdf(b.cos())) / np as f64;
+        assert!((probs[it * np] - exact).abs() < 1e-10);
+    }
+    let mut rng = Philox4x32::new(SEED, 5);
+    let mut mz = 0.0;
+    let ws = (0..N_SAMPLES).map(|_| {
+        let ds = sample_cardioid_sphere(rng.next_2d());
+        assert!((ds.pdf - cardioid_sphere_pdf(ds.w.z)).abs() < 1e-15);
+        mz += ds.w.z;
+        ds.w
+    });
+    let h = histogram(ws, PI, nt, np);
+    assert_passes("cardioid sphere", &h, &probs);
+    // E[z] = 1/3, Var z = E[z^2] - 1/9 = 1/3 - 1/9 = 2/9; 5 sigma.
+    let n = N_SAMPLES as f64;
+    assert!(
+        (mz / n - 1.0 / 3.0).abs() < 5.0 * (2.0 / 9.0 / n).sqrt(),
+        "{}",
+        mz / n
+    );
 }
 
 #[test]

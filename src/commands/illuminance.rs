@@ -8,7 +8,8 @@
 use super::outputs::check_outputs;
 use super::{MAX_VIEWS, RunArgs, check_tally_size, progress_bar, tick};
 use crate::estimator::local::run;
-use crate::estimator::{Receiver, Receivers, ViewTarget, emitted_luminance, view_target};
+use crate::estimator::{Receiver, Receivers, Solid, ViewTarget, emitted_luminance, view_target};
+use crate::io::InputError;
 use crate::io::csvio::{Staged, stage_csv};
 use crate::io::{PointTable, ViewTable, format_fixed, format_number, read_points, read_views};
 use crate::run::{RunConfig, RunResult};
@@ -381,6 +382,60 @@ pub fn summary(r: &RunResult) -> String {
     text
 }
 
+/// The summary lines of the modelling ratio `E_z / E_h` at the pairs of
+/// points (see [`super::modelling`]): each pair with its rows, up to 10;
+/// beyond, the smallest and the largest ratio.
+fn modelling_lines(
+    r: &RunResult,
+    pairs: &[super::modelling::Pair],
+    t: &PointTable,
+    input: &str,
+) -> Vec<String> {
+    if pairs.is_empty() {
+        return Vec::new();
+    }
+    let at = |p: &super::modelling::Pair| format!("{input}:{}+{}", t.lines[p.h], t.lines[p.z]);
+    let values: Vec<(String, Option<(f64, f64)>)> = pairs
+        .iter()
+        .map(|p| {
+            (
+                at(p),
+                super::modelling::ratio(&r.tallies.batch_means, &r.direct, *p),
+            )
+        })
+        .collect();
+    let show = |v: &Option<(f64, f64)>| match v {
+        Some((m, se)) => format!("{m:.4} +- {se:.4}"),
+        None => "undefined (E_h = 0 or fewer than 2 batches)".to_string(),
+    };
+    let mut out = vec![format!(
+        "modelling E_z/E_h (EN 12464-1: 0.30-0.60 for good modelling) at {} point(s) listed planar up and cylindrical (rows file:line_h+line_z; standard errors with the covariance of E_z and E_h):",
+        pairs.len()
+    )];
+    if values.len() <= 10 {
+        out.extend(values.iter().map(|(w, v)| format!("  {w}: {}", show(v))));
+    } else {
+        let defined: Vec<&(String, Option<(f64, f64)>)> =
+            values.iter().filter(|v| v.1.is_some()).collect();
+        let by = |a: &&(String, Option<(f64, f64)>), b: &&(String, Option<(f64, f64)>)| {
+            a.1.map_or(0.0, |x| x.0)
+                .total_cmp(&b.1.map_or(0.0, |x| x.0))
+        };
+        if let (Some(lo), Some(hi)) = (
+            defined.iter().copied().min_by(by),
+            defined.iter().copied().max_by(by),
+        ) {
+            out.push(format!("  smallest {}: {}", lo.0, show(&lo.1)));
+            out.push(format!("  largest {}: {}", hi.0, show(&hi.1)));
+        }
+        let undefined = values.len() - defined.len();
+        if undefined > 0 {
+            out.push(format!("  {undefined} undefined (E_h = 0)"));
+        }
+    }
+    out
+}
+
 /// Points and views of one run, compiled into receivers.
 pub struct Job {
     /// Illuminance points, if any.
@@ -417,8 +472,25 @@ impl Job {
         // File and line of each receiver, for error messages.
         let mut origin: Vec<(&str, u64)> = Vec::new();
         if let (Some(t), Some(path)) = (&points_t, points) {
-            for (&(p, n), &line) in t.points.iter().zip(&t.lines) {
-                rec.push(Receiver::illuminance(p, n));
+            // The optional `receiver` column: the type of each point
+            // (`planar` when absent or empty).
+            let col = t.headers.iter().position(|h| h == "receiver");
+            for (k, (&(p, n), &line)) in t.points.iter().zip(&t.lines).enumerate() {
+                let name = col.map_or("", |c| t.rows[k][c].as_str());
+                let kind = Solid::parse(name).map_err(|message| InputError::Field {
+                    file: if path == "-" {
+                        "<stdin>".into()
+                    } else {
+                        path.to_string()
+                    },
+                    line,
+                    field: "receiver".into(),
+                    message,
+                })?;
+                rec.push(match kind {
+                    None => Receiver::illuminance(p, n),
+                    Some(kind) => Receiver::solid(p, n, kind),
+                });
                 origin.push((path, line));
             }
         }
@@ -781,8 +853,12 @@ pub(crate) fn measure_full(
     } else {
         Vec::new()
     };
-    if groups.is_some() {
-        cfg.keep_batch_means = job.points.as_ref().map_or(0, |t| t.rows.len());
+    // Points listed as planar and cylindrical at one position get the
+    // modelling ratio, whose error needs the batch means too.
+    let n_points = job.points.as_ref().map_or(0, |t| t.rows.len());
+    let modelling_pairs = super::modelling::pairs(job.receivers.receivers(), n_points);
+    if groups.is_some() || !modelling_pairs.is_empty() {
+        cfg.keep_batch_means = n_points;
     }
     eprintln!(
         "lumest: scene {}: {}",
@@ -903,10 +979,25 @@ pub(crate) fn measure_full(
     for (line, _) in &rows {
         eprintln!("lumest: {line}");
     }
-    if let Some(t) = &job.points
+    // An average over different receiver types means nothing.
+    let kinds: std::collections::BTreeSet<&str> = job.receivers.receivers()[..n_points]
+        .iter()
+        .map(|r| r.solid_kind().map_or("planar", |k| k.name()))
+        .collect();
+    if kinds.len() > 1 {
+        eprintln!(
+            "lumest: points: no E_avg, E_min, U0 over mixed receiver types ({}): list one type per file, or use grids",
+            kinds.into_iter().collect::<Vec<_>>().join(", ")
+        );
+    } else if let Some(t) = &job.points
         && let Some(line) = grid_summary(&result, t.rows.len())
     {
         eprintln!("lumest: {line}");
+    }
+    if let (Some(t), Some((input, _))) = (&job.points, points) {
+        for line in modelling_lines(&result, &modelling_pairs, t, input) {
+            eprintln!("lumest: {line}");
+        }
     }
     if let (Some(f), Some((_, equal))) = (&figures, &groups) {
         for g in f {

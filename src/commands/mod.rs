@@ -6,6 +6,7 @@ pub mod figures;
 pub mod grid;
 pub mod illuminance;
 pub mod merge;
+pub mod modelling;
 pub mod mpi_run;
 pub mod outputs;
 pub mod photometry;

@@ -5,7 +5,8 @@
 //! For each receiver a batch traces `bs` paths. A path leaves the receiver
 //! in a direction sampled from its response: cosine-weighted about the normal
 //! for illuminance (`E = pi E[L_i]`), the sub-point's BRDF for luminance
-//! (weight `f' cos / pdf`). At each surface vertex `k = 1, 2, ...` it adds
+//! (weight `f' cos / pdf`), a solid receiver's own lobe over the whole
+//! sphere (weight `r / pdf`, [`crate::estimator::Solid`]). At each surface vertex `k = 1, 2, ...` it adds
 //! next-event estimation from every point light, `beta f_k(wi_l, wo) I cos / d^2 V`,
 //! which is light reflected `k` times before it reaches the receiver (the
 //! same order buckets as the local estimate), then continues by sampling the
@@ -372,6 +373,15 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                 };
             }
             (s.w, material.eval(s.w, wo) * s.w.z / s.pdf, s.pdf)
+        }
+        // A solid receiver: its own lobe over the whole sphere, weight r / pdf.
+        Response::Solid(kind) => {
+            let s = kind.sample(rng.next_2d());
+            (
+                s.w,
+                kind.response(rec.n, frame.to_world(s.w)) / s.pdf,
+                s.pdf,
+            )
         }
     };
     let beta0 = beta;

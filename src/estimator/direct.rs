@@ -19,7 +19,9 @@
 //!   the cone it subtends); per solid angle
 //!   `p_L(wi) = P_k p_A(y) d^2 / |cos_y|` (`P_k / Omega_cone` for a sphere);
 //! - **BRDF sampling**: `wi` from the receiver's own density `p_B`
-//!   (`cos / pi` for illuminance, the material's sampler for luminance),
+//!   (`cos / pi` for illuminance, the material's sampler for luminance,
+//!   [`super::Solid::sample`] over the whole sphere for a solid receiver,
+//!   whose response `r(wi)` then stands for `w(wi) max(0, n . wi)`),
 //!   traced to the first surface: an emitter's front adds its luminance, a
 //!   sphere light (which does not block) adds its own where the ray enters it
 //!   before that surface; a ray that leaves the scene adds the luminance
@@ -356,6 +358,11 @@ pub fn sample(
             }
             Response::Luminance { material, wo } => {
                 let s = material.sample(wo, rng.next_2d());
+                (frame.to_world(s.w), s.pdf)
+            }
+            // A solid receiver: its own lobe over the whole sphere.
+            Response::Solid(kind) => {
+                let s = kind.sample(rng.next_2d());
                 (frame.to_world(s.w), s.pdf)
             }
         };

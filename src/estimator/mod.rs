@@ -21,7 +21,10 @@
 //! with `wi' = -wo_n` the direction from `r'` back to `x_n`: a local estimate
 //! at `r'` weighted by the sub-point's BRDF towards the observer. Both kinds
 //! are *receivers*: a point, a normal and a response (`1` for illuminance,
-//! `f'(wi', wo')` [1/sr] for luminance). Every collision scores into every
+//! `f'(wi', wo')` [1/sr] for luminance). A third kind, the solid receivers
+//! of [`solid`] (cylindrical, semi-cylindrical, hemispherical and scalar
+//! illuminance), replaces `cos(theta_p)` by its response `r(-wo_n)` over the
+//! whole sphere: `E_ind = E[ sum_n Q_n f_r cos(theta_n) r / d_n^2 V ]`. Every collision scores into every
 //! receiver at once. The first order (light straight from the sources) is
 //! computed exactly and separately ([`Receivers::direct`]) where a closed
 //! form exists, and sampled per batch elsewhere ([`direct`]); point sources
@@ -33,6 +36,7 @@ pub mod direct;
 pub mod local;
 mod open_kernel;
 pub mod pane_images;
+pub mod solid;
 
 use open_kernel::score_open;
 pub use open_kernel::{Kernel, active_kernel, set_kernel};
@@ -44,6 +48,7 @@ use crate::material::Material;
 use crate::sampling::warp::Frame;
 use crate::scene::{Scene, ShapeRef};
 use glam::DVec3;
+pub use solid::{RECEIVER_TYPES, Solid};
 
 /// The geometric kernel `cos(theta_x) cos(theta_p) / d^2` [1/m^2] between a
 /// surface point `x` with front normal `n_x` and a receiver `p` with normal
@@ -86,6 +91,10 @@ pub enum Response {
     /// surface's `material` and the unit direction `wo` to the observer in the
     /// local frame of the receiver's normal.
     Luminance { material: Material, wo: DVec3 },
+    /// Illuminance [lx] of a small solid ([`Solid`]: cylindrical,
+    /// semi-cylindrical, hemispherical, spherical), whose response to light
+    /// from `wi` replaces the plane's cosine and covers the whole sphere.
+    Solid(Solid),
 }
 
 /// A receiver: a point [m], its unit normal and its response.
@@ -109,13 +118,50 @@ impl Receiver {
         }
     }
 
+    /// A solid receiver of type `kind` at `p` with unit normal `n` (its
+    /// axis, facing direction or pole, see [`Solid`]).
+    pub fn solid(p: DVec3, n: DVec3, kind: Solid) -> Self {
+        Self {
+            p,
+            n,
+            response: Response::Solid(kind),
+        }
+    }
+
     /// Response to light arriving from unit world direction `wi` (towards
-    /// the source): 1 for illuminance, `f'(wi, wo)` [1/sr] for luminance.
+    /// the source): 1 for illuminance, `f'(wi, wo)` [1/sr] for luminance,
+    /// both multiplied by the plane's `max(0, n . wi)` in the kernel; for a
+    /// solid receiver its whole response ([`Solid::response`]), which
+    /// replaces that cosine.
     #[inline]
     pub fn weight(&self, frame: &Frame, wi: DVec3) -> f64 {
         match self.response {
             Response::Illuminance => 1.0,
             Response::Luminance { material, wo } => material.eval(frame.to_local(wi), wo),
+            Response::Solid(kind) => kind.response(self.n, wi),
+        }
+    }
+
+    /// The solid type, if the receiver is one.
+    pub fn solid_kind(&self) -> Option<Solid> {
+        match self.response {
+            Response::Solid(kind) => Some(kind),
+            _ => None,
+        }
+    }
+
+    /// A direction of the receiver's own sampling (cosine about the normal,
+    /// the sub-point's BRDF, or a solid's, [`Solid::sample`]) in the local
+    /// frame of its normal, with its density [1/sr] (0: no direction).
+    #[inline]
+    pub fn sample_own(&self, u: [f64; 2]) -> crate::sampling::warp::DirectionSample {
+        match self.response {
+            Response::Illuminance => crate::sampling::warp::sample_cosine_hemisphere(u),
+            Response::Luminance { material, wo } => {
+                let s = material.sample(wo, u);
+                crate::sampling::warp::DirectionSample { w: s.w, pdf: s.pdf }
+            }
+            Response::Solid(kind) => kind.sample(u),
         }
     }
 
@@ -123,9 +169,13 @@ impl Receiver {
     /// the source; `frame` is that of its normal): `(w(wi) max(0, n . wi),
     /// p_B(wi))`, the response times the cosine (the integrand of
     /// `E = int L cos dw`, or of the luminance) and the density [1/sr] of
-    /// the receiver's own sampling (cosine, or the BRDF's) there.
+    /// the receiver's own sampling (cosine, or the BRDF's) there; for a
+    /// solid receiver its response, over the whole sphere.
     #[inline]
     pub fn transfer(&self, frame: &Frame, wi: DVec3) -> (f64, f64) {
+        if let Response::Solid(kind) = self.response {
+            return (kind.response(self.n, wi), kind.pdf(self.n, wi));
+        }
         let wl = frame.to_local(wi);
         if wl.z <= 0.0 {
             return (0.0, 0.0);
@@ -135,14 +185,18 @@ impl Receiver {
             Response::Luminance { material, wo } => {
                 (material.eval(wl, wo) * wl.z, material.pdf(wo, wl))
             }
+            Response::Solid(_) => unreachable!("returned above"),
         }
     }
 
-    /// The response when it does not depend on the direction of arrival.
+    /// The response when it does not depend on the direction of arrival
+    /// (times the plane's cosine); `None` for a solid receiver, whose
+    /// response replaces the cosine.
     fn constant_weight(&self) -> Option<f64> {
         match self.response {
             Response::Illuminance => Some(1.0),
             Response::Luminance { material, .. } => material.constant_brdf(),
+            Response::Solid(_) => None,
         }
     }
 }
@@ -384,12 +438,41 @@ impl Receivers {
         let exact: Vec<bool> = (0..scene.lights.len())
             .map(|k| exact_direct(scene, k))
             .collect();
+        // Sources other than points and a collimated sun (which are exact
+        // for any response).
+        let non_point = |k: &usize| {
+            let l = &scene.lights[*k];
+            !l.is_point_like() && !matches!(l, Light::Distant(dl) if dl.collimated())
+        };
         for (j, rec) in receivers.iter().enumerate() {
             let (p, n) = (rec.p, rec.n);
             if !(p.is_finite() && n.is_finite() && (n.length() - 1.0).abs() < 1e-9) {
                 return Err(ReceiverError {
                     index: j,
                     message: "position and unit normal must be finite".into(),
+                });
+            }
+            if rec.solid_kind() == Some(Solid::Semicylindrical) && n.z.abs() > 1e-9 {
+                return Err(ReceiverError {
+                    index: j,
+                    message: format!(
+                        "a semicylindrical receiver has a vertical axis: its normal columns give the horizontal direction it faces (nz = 0), not ({}, {}, {})",
+                        n.x, n.y, n.z
+                    ),
+                });
+            }
+            if let Some(kind) = rec.solid_kind()
+                && scene.on_surface(p)
+            {
+                // Half of a small solid centred on a surface would lie
+                // inside it; the plane's rule (a point on a surface faces
+                // its normal's side) has no counterpart for a solid.
+                return Err(ReceiverError {
+                    index: j,
+                    message: format!(
+                        "a {} receiver lies on a surface, so half of it would be inside: place it off the surface (EN 12464-1 asks cylindrical illuminance 1.2 m above the floor for seated and 1.6 m for standing people)",
+                        kind.name()
+                    ),
                 });
             }
             if p.abs().max_element() > crate::scene::MAX_COORD {
@@ -415,7 +498,10 @@ impl Receivers {
                 }
                 let extended = matches!(l, Light::Area(_))
                     || matches!(l, Light::Distant(dl) if !dl.collimated());
-                if !exact[k] || (extended && rec.constant_weight().is_none()) {
+                // A solid receiver has closed forms for points and the
+                // collimated sun only; the rest is sampled with its response.
+                let solid_sampled = rec.solid_kind().is_some() && non_point(&k);
+                if !exact[k] || (extended && rec.constant_weight().is_none()) || solid_sampled {
                     continue; // sampled, see below
                 }
                 // Mirror images of the light in glass panes (point-like
@@ -429,6 +515,19 @@ impl Receivers {
                         n,
                         &|xi, ni, unm| match rec.response {
                             Response::Illuminance => l.direct_illuminance(xi, ni),
+                            // Mirroring both the receiver and the direction
+                            // keeps the response: r(n', w') = r(n, w).
+                            Response::Solid(kind) => match l {
+                                Light::Distant(dl) => {
+                                    dl.direct_illuminance(-dl.d) * kind.response(ni, -dl.d)
+                                }
+                                _ => {
+                                    let v = l.position() - xi;
+                                    let d2 = v.length_squared();
+                                    let wi = v / d2.sqrt();
+                                    l.intensity(-wi) * kind.response(ni, wi) / d2
+                                }
+                            },
                             _ => l.direct_weighted(xi, ni, &|wi| rec.weight(frame, unm(wi))),
                         },
                     );
@@ -440,6 +539,10 @@ impl Receivers {
                         direct[j] += glass
                             * match rec.response {
                                 Response::Illuminance => dl.direct_illuminance(n),
+                                // E_n times the response to the sun's direction.
+                                Response::Solid(kind) => {
+                                    dl.direct_illuminance(-dl.d) * kind.response(n, -dl.d)
+                                }
                                 _ if dl.collimated() => {
                                     l.direct_weighted(p, n, &|wi| rec.weight(&frames[j], wi))
                                 }
@@ -462,6 +565,13 @@ impl Receivers {
                     direct[j] += glass
                         * match (rec.response, l) {
                             (Response::Illuminance, _) => l.direct_illuminance(p, n),
+                            // A point-like source: I(-wi) r(wi) / d^2.
+                            (Response::Solid(kind), _) => {
+                                let v = l.position() - p;
+                                let d2 = v.length_squared();
+                                let wi = v / d2.sqrt();
+                                l.intensity(-wi) * kind.response(n, wi) / d2
+                            }
                             (_, Light::Area(_)) => {
                                 l.direct_illuminance(p, n)
                                     * rec.constant_weight().unwrap_or(f64::NAN)
@@ -474,12 +584,8 @@ impl Receivers {
             }
         }
         // Sources sampled per batch: those without an exact form anywhere,
-        // and every non-point source at a receiver whose response varies.
-        // (A collimated sun is exact for any response.)
-        let non_point = |k: &usize| {
-            let l = &scene.lights[*k];
-            !l.is_point_like() && !matches!(l, Light::Distant(dl) if dl.collimated())
-        };
+        // and every non-point source at a receiver whose response varies
+        // (`non_point`, above).
         let sets_of = [
             (0..scene.lights.len())
                 .filter(|&k| !exact[k])
@@ -617,14 +723,15 @@ impl Receivers {
             .iter()
             .zip(&frames)
             .map(|(rec, frame)| match rec.response {
-                Response::Illuminance => view_probe(scene, rec.p, frame),
+                Response::Illuminance => view_probe(scene, rec.p, frame, false),
+                Response::Solid(_) => view_probe(scene, rec.p, frame, true),
                 Response::Luminance { .. } => (0.0, false),
             })
             .unzip();
         let need_r = receivers
             .iter()
             .zip(&frames)
-            .map(|(rec, frame)| near_need(scene, rec.p, frame))
+            .map(|(rec, frame)| near_need(scene, rec.p, frame, rec.solid_kind().is_some()))
             .collect();
         let mut r = Self {
             near_paths: 0,
@@ -923,7 +1030,16 @@ impl Receivers {
                 count += 1;
                 let np = DVec3::new(list.nx[k], list.ny[k], list.nz[k]);
                 let p_img = p - pl.n * (2.0 * pl.signed_distance(p));
-                let g = local_kernel(c.p, c.n, p_img, mirror(np));
+                let j = list.idx[k] as usize;
+                // A solid receiver: `cos_x / d^2`, its response in `w`.
+                let g = if self.all[j].solid_kind().is_some() {
+                    let n_img = mirror(np);
+                    let [cx, _, d2] =
+                        kernel_parts(c.p, c.n, [p_img.x, p_img.y, p_img.z], n_img.to_array());
+                    if cx > 0.0 { cx / (d2 * d2.sqrt()) } else { 0.0 }
+                } else {
+                    local_kernel(c.p, c.n, p_img, mirror(np))
+                };
                 if g == 0.0 {
                     continue;
                 }
@@ -936,7 +1052,6 @@ impl Receivers {
                 let f = material.eval(wi, frame.to_local(wo));
                 let (r, _) = pane.glass.reflect_transmit(wo.dot(pl.n));
                 let glass = scene.pane_transmittance(c.p, m) * scene.pane_transmittance(m, p);
-                let j = list.idx[k] as usize;
                 // Arriving at p from the mirror image of the outgoing direction.
                 let w = self.all[j].weight(&self.frames[j], -mirror(wo));
                 *a += c.q * f * g * w * r * glass;
@@ -970,7 +1085,16 @@ impl Receivers {
             }
             let p = DVec3::new(list.px[k], list.py[k], list.pz[k]);
             let np = DVec3::new(list.nx[k], list.ny[k], list.nz[k]);
-            let g = local_kernel(c.p, c.n, p, np);
+            let j = list.idx[k] as usize;
+            // A solid receiver: `cos_x / d^2`, its response (in `w` below)
+            // standing for the plane's cosine.
+            let solid = k >= list.n_const && self.all[j].solid_kind().is_some();
+            let g = if solid {
+                let [cx, _, d2] = kernel_parts(c.p, c.n, [p.x, p.y, p.z], [np.x, np.y, np.z]);
+                if cx > 0.0 { cx / (d2 * d2.sqrt()) } else { 0.0 }
+            } else {
+                local_kernel(c.p, c.n, p, np)
+            };
             let d2 = (p - c.p).length_squared();
             if g == 0.0
                 || d2 < list.eps2[k]
@@ -981,7 +1105,6 @@ impl Receivers {
             }
             let wo = (p - c.p).normalize();
             let f = material.eval(wi, frame.to_local(wo));
-            let j = list.idx[k] as usize;
             let w = if k < list.n_const {
                 list.w[k]
             } else {
@@ -1008,10 +1131,11 @@ impl Receivers {
 /// The near/far radius [m] a receiver at `p` (normal frame `frame`) needs:
 /// a tenth of the distance to the nearest light, `R = 0.1 min_l |p - x_l|`,
 /// where one of 64 probe rays over the receiver's hemisphere (a Fibonacci
-/// spiral, cosine-distributed) meets a surface closer than `R`; 0 elsewhere
+/// spiral, cosine-distributed; over the whole sphere for a solid receiver,
+/// `sphere`) meets a surface closer than `R`; 0 elsewhere
 /// (and in a scene without lights). Closer than that, the local
 /// estimate's `1/d^2` kernel dominates its variance (infinite in a corner).
-pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame) -> f64 {
+pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame, sphere: bool) -> f64 {
     const PROBES: usize = 64;
     let r = 0.1
         * scene
@@ -1024,7 +1148,7 @@ pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame) -> f64 {
         return 0.0;
     }
     let near = (0..PROBES).any(|k| {
-        let d = probe_direction(k, PROBES, frame);
+        let d = probe_direction(k, PROBES, frame, sphere);
         scene.first_hit_from(p, d).is_some_and(|h| h.t < r)
     });
     if near { r } else { 0.0 }
@@ -1039,19 +1163,20 @@ pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame) -> f64 {
 /// (`a^2 / (a^2 + h^2)`). The local estimate of the light from there rests
 /// on the collisions that land there, which [`Receivers::score`] counts.
 pub fn view_radius(scene: &Scene, p: DVec3, frame: &Frame) -> f64 {
-    view_probe(scene, p, frame).0
+    view_probe(scene, p, frame, false).0
 }
 
 /// The probe of [`view_radius`], which also tells whether the point is
 /// *enclosed*: more than half of its 16 probe rays meet the back (black)
 /// side of a surface, as from inside a solid, behind a wall or outside a
-/// closed room. Returns `(radius, enclosed)`.
-pub fn view_probe(scene: &Scene, p: DVec3, frame: &Frame) -> (f64, bool) {
+/// closed room. Returns `(radius, enclosed)`. With `sphere` (a solid
+/// receiver, which sees every direction) the probes cover the whole sphere.
+pub fn view_probe(scene: &Scene, p: DVec3, frame: &Frame, sphere: bool) -> (f64, bool) {
     const PROBES: usize = 16;
     let mut back = 0;
     let mut t: Vec<f64> = (0..PROBES)
         .map(|k| {
-            let d = probe_direction(k, PROBES, frame);
+            let d = probe_direction(k, PROBES, frame, sphere);
             let h = scene.first_hit_from(p, d);
             if h.as_ref().is_some_and(|h| d.dot(h.n) >= 0.0) {
                 back += 1;
@@ -1070,11 +1195,18 @@ pub fn view_probe(scene: &Scene, p: DVec3, frame: &Frame) -> (f64, bool) {
 }
 
 /// Probe direction `k` of `count` over the hemisphere of `frame`'s normal:
-/// a Fibonacci spiral, cosine-distributed (`sin^2 theta` uniform in (0, 1)).
-fn probe_direction(k: usize, count: usize, frame: &Frame) -> DVec3 {
+/// a Fibonacci spiral, cosine-distributed (`sin^2 theta` uniform in (0, 1));
+/// with `sphere`, uniform over the whole sphere (`cos theta` uniform in
+/// (-1, 1)).
+fn probe_direction(k: usize, count: usize, frame: &Frame, sphere: bool) -> DVec3 {
     let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    let s2 = (k as f64 + 0.5) / count as f64;
-    let (st, ct) = (s2.sqrt(), (1.0 - s2).sqrt());
+    let (st, ct) = if sphere {
+        let ct = 1.0 - 2.0 * (k as f64 + 0.5) / count as f64;
+        ((1.0 - ct * ct).max(0.0).sqrt(), ct)
+    } else {
+        let s2 = (k as f64 + 0.5) / count as f64;
+        (s2.sqrt(), (1.0 - s2).sqrt())
+    };
     let (sp, cp) = (golden * k as f64).sin_cos();
     frame.to_world(DVec3::new(st * cp, st * sp, ct))
 }

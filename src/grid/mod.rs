@@ -31,13 +31,7 @@ use toml::Spanned;
 pub use surface::Patch;
 
 /// Receiver type names a grid may give (the `receiver` column).
-pub const RECEIVERS: [&str; 5] = [
-    "planar",
-    "cylindrical",
-    "semicylindrical",
-    "hemispherical",
-    "spherical",
-];
+pub const RECEIVERS: [&str; 5] = crate::estimator::RECEIVER_TYPES;
 
 /// Most points one grid may have.
 pub const MAX_GRID_POINTS: usize = 1_000_000;

@@ -195,6 +195,40 @@ pub fn invert_cosine_hemisphere(w: DVec3) -> [f64; 2] {
     [u0, phi_to_u(w.y, w.x)]
 }
 
+/// Direction on the whole unit sphere with density proportional to
+/// `1 + cos θ` about the local z axis (a cardioid lobe, the response of a
+/// hemispherical receiver); pdf `(1 + cos θ) / (4 pi)` [1/sr].
+///
+/// `cos θ` has the density `(1 + c) / 2` on [-1, 1], whose distribution
+/// function `((1 + c) / 2)^2` inverts to `c = 2 sqrt(u0) - 1`; `φ = 2 π u1`.
+#[inline]
+pub fn sample_cardioid_sphere(u: [f64; 2]) -> DirectionSample {
+    let h = u[0].sqrt();
+    let z = 2.0 * h - 1.0;
+    // sin θ = sqrt((1 - z)(1 + z)) = 2 sqrt(h (1 - h)), free of cancellation.
+    let r = 2.0 * (h * (1.0 - h)).max(0.0).sqrt();
+    let (sin_phi, cos_phi) = sin_cos_turns(u[1]);
+    DirectionSample {
+        w: DVec3::new(r * cos_phi, r * sin_phi, z),
+        pdf: cardioid_sphere_pdf(z),
+    }
+}
+
+/// Density of [`sample_cardioid_sphere`]: `(1 + cos θ) / (4 pi)` [1/sr],
+/// `cos_theta` the local z coordinate of the direction.
+#[inline]
+pub fn cardioid_sphere_pdf(cos_theta: f64) -> f64 {
+    (1.0 + cos_theta.clamp(-1.0, 1.0)) * 0.25 * FRAC_1_PI
+}
+
+/// Inverse of [`sample_cardioid_sphere`]: `u0 = ((1 + z) / 2)^2`,
+/// `u1 = atan2(y, x) / (2 π)` in [0, 1); clamped to [0, 1).
+#[inline]
+pub fn invert_cardioid_sphere(w: DVec3) -> [f64; 2] {
+    let h = 0.5 * (1.0 + w.z.clamp(-1.0, 1.0));
+    [(h * h).clamp(0.0, ONE_MINUS_EPSILON), phi_to_u(w.y, w.x)]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -243,6 +277,20 @@ mod tests {
             );
         }
         assert!((uniform_sphere_pdf() * 4.0 * PI - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn cardioid_sphere_roundtrip_and_record() {
+        for u in grid(64) {
+            let ds = sample_cardioid_sphere(u);
+            assert!((ds.w.length() - 1.0).abs() < 1e-14, "{u:?}");
+            assert!((ds.pdf - (1.0 + ds.w.z) / (4.0 * PI)).abs() < 1e-15);
+            let v = invert_cardioid_sphere(ds.w);
+            assert!(
+                (v[0] - u[0]).abs() < 1e-9 && (v[1] - u[1]).abs() < 1e-12,
+                "{u:?} -> {v:?}"
+            );
+        }
     }
 
     #[test]

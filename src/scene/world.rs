@@ -728,6 +728,12 @@ impl Scene {
         None
     }
 
+    /// Whether point `p` lies on a surface (within the shapes' on-surface
+    /// tolerance; see [`Self::light_surface`] for the tolerance's use).
+    pub fn on_surface(&self, p: DVec3) -> bool {
+        self.surface_at(p).is_some()
+    }
+
     /// The surface point-like light `k` lies on, if any, and the unit
     /// normal of the side the light belongs to. **Rule**: a light exactly on
     /// a surface belongs to its reflecting side (the geometric normal's side
