@@ -273,3 +273,41 @@ fn bad_grid_keys() {
     let e = grids("[[grid]]\nsurface = \"room.z_min\"\n").unwrap_err();
     assert!(e.contains("missing field `name`"), "{e}");
 }
+
+/// A semicylindrical grid's points face its horizontal `facing` direction
+/// (the normal columns), which the illuminance command requires; other
+/// grids refuse the key.
+#[test]
+fn semicylindrical_grids_face_their_direction() {
+    let g = one(
+        "[[grid]]\nname = \"s\"\nsurface = \"room.z_min\"\noffset = 1.5\n\
+         receiver = \"semicylindrical\"\nfacing = [0, -2, 0]\n",
+    );
+    assert!(!g.points.is_empty());
+    assert!(
+        g.points
+            .iter()
+            .all(|p| p.n == -DVec3::Y && (p.p.z - 1.5).abs() < 1e-12)
+    );
+    let bad = [
+        (
+            "receiver = \"semicylindrical\"\n",
+            "field `facing`: missing field",
+        ),
+        (
+            "receiver = \"semicylindrical\"\nfacing = [0, 1, 1]\n",
+            "field `facing`: must be a horizontal direction",
+        ),
+        (
+            "facing = [1, 0, 0]\n",
+            "field `facing`: only `receiver = \"semicylindrical\"`",
+        ),
+    ];
+    for (extra, want) in bad {
+        let e = grids(&format!(
+            "[[grid]]\nname = \"s\"\nsurface = \"room.z_min\"\n{extra}"
+        ))
+        .unwrap_err();
+        assert!(e.contains(want), "{extra}: {e}");
+    }
+}

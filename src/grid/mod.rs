@@ -238,6 +238,47 @@ fn compile(scene: &SceneDesc, g: &GridDesc, ctx: &SourceCtx) -> Result<Grid, Sce
             ),
         ));
     }
+    // A semicylindrical point faces a horizontal direction (its normal
+    // columns), not the grid's normal.
+    match (&g.facing, receiver.as_str()) {
+        (Some(f), "semicylindrical") => {
+            let d = DVec3::from_array(*f.get_ref());
+            let h = DVec3::new(d.x, d.y, 0.0);
+            if !(d.is_finite() && h.length() > 0.0 && d.z.abs() <= 1e-9 * d.length()) {
+                return Err(invalid(
+                    ctx,
+                    f.span(),
+                    "facing",
+                    format!(
+                        "must be a horizontal direction (z = 0, not zero), got [{}, {}, {}]",
+                        crate::io::format_number(d.x),
+                        crate::io::format_number(d.y),
+                        crate::io::format_number(d.z)
+                    ),
+                ));
+            }
+            for pt in &mut grid.points {
+                pt.n = h.normalize();
+            }
+        }
+        (None, "semicylindrical") => {
+            return Err(invalid(
+                ctx,
+                g.name.span(),
+                "facing",
+                "missing field (a semicylindrical grid's points face a horizontal direction, e.g. `facing = [1, 0, 0]`)",
+            ));
+        }
+        (Some(f), _) => {
+            return Err(invalid(
+                ctx,
+                f.span(),
+                "facing",
+                "only `receiver = \"semicylindrical\"` grids take it",
+            ));
+        }
+        (None, _) => {}
+    }
     grid.name = name;
     grid.receiver = receiver;
     grid.em = em;

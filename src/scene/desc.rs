@@ -294,6 +294,9 @@ pub struct GridDesc {
     pub lanes: Option<Spanned<i64>>,
     /// Receiver type of the points; default `"planar"`.
     pub receiver: Option<Spanned<String>>,
+    /// Horizontal facing direction of `semicylindrical` points (required
+    /// for them, refused otherwise); written to the normal columns.
+    pub facing: Option<Spanned<[f64; 3]>>,
     /// Required maintained average illuminance [lx].
     pub em: Option<Spanned<f64>>,
     /// Required uniformity `U0 = E_min / E_avg` (dimensionless).
