@@ -51,6 +51,12 @@ pub struct BenchArgs {
     /// per run, default 5 s, each run sized to it by two short probes).
     #[arg(long)]
     pub shapes: Option<String>,
+    /// The scoring kernel against this machine's bound instead: scores/s
+    /// of the portable and AVX2 kernels at each `--points` count, the
+    /// compute bound (the kernel with its data in L1) and the memory bound
+    /// (streaming the points' arrays), one thread each.
+    #[arg(long)]
+    pub bound: bool,
 }
 
 /// `lumest bench --shapes N,...`: what scene size costs. For each count,
@@ -357,6 +363,17 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
     );
     if a.compare {
         return compare(a, &counts, &times);
+    }
+    if a.bound {
+        let cores = if a.threads == 0 {
+            std::thread::available_parallelism().map_or(1, usize::from)
+        } else {
+            a.threads
+        };
+        for &n in &counts {
+            super::bench_bound::bound(n, cores)?;
+        }
+        return Ok(());
     }
     if a.luminaires {
         return luminaires(a);

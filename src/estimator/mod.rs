@@ -39,7 +39,7 @@ pub mod pane_images;
 pub mod solid;
 
 use open_kernel::score_open;
-pub use open_kernel::{Kernel, active_kernel, set_kernel};
+pub use open_kernel::{Kernel, active_kernel, arith_touch, set_kernel, stream_touch};
 
 use crate::chain::Collision;
 use crate::geometry::SideMask;

@@ -131,6 +131,74 @@ fn score_open_body<const COUNT: bool>(
     }
 }
 
+/// The open kernel's memory traffic without its arithmetic: adds the sum of
+/// eight arrays into `acc` (nine streams read, one written, as a score),
+/// with the kernel's dispatch. For the memory bound of `lumest bench
+/// --bound`.
+pub fn stream_touch(arrays: [&[f64]; 8], acc: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if active_kernel() == Kernel::Avx2 {
+        // SAFETY: the CPU has AVX2 and FMA (checked by `active_kernel`).
+        unsafe { stream_touch_avx2(arrays, acc) };
+        return;
+    }
+    stream_touch_body(arrays, acc);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn stream_touch_avx2(arrays: [&[f64]; 8], acc: &mut [f64]) {
+    stream_touch_body(arrays, acc);
+}
+
+#[inline(always)]
+fn stream_touch_body([a, b, c, d, e, f, g, h]: [&[f64]; 8], acc: &mut [f64]) {
+    let it = acc
+        .iter_mut()
+        .zip(a.iter().zip(b).zip(c.iter().zip(d)))
+        .zip(e.iter().zip(f).zip(g.iter().zip(h)));
+    for ((s, ((a, b), (c, d))), ((e, f), (g, h))) in it {
+        *s += ((a + b) + (c + d)) + ((e + f) + (g + h));
+    }
+}
+
+/// Peak arithmetic of the kernel's instruction set: `x <- x a + b`, 16
+/// times per element of `x` (a separate multiply and add: the kernel uses
+/// no fused ones), 32 floating-point operations per element, elements
+/// independent so the units stay full. For the compute bound of `lumest
+/// bench --bound`.
+pub fn arith_touch(x: &mut [f64], a: f64, b: f64) {
+    #[cfg(target_arch = "x86_64")]
+    if active_kernel() == Kernel::Avx2 {
+        // SAFETY: the CPU has AVX2 and FMA (checked by `active_kernel`).
+        unsafe { arith_touch_avx2(x, a, b) };
+        return;
+    }
+    arith_touch_body(x, a, b);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn arith_touch_avx2(x: &mut [f64], a: f64, b: f64) {
+    arith_touch_body(x, a, b);
+}
+
+#[inline(always)]
+fn arith_touch_body(x: &mut [f64], a: f64, b: f64) {
+    // Twelve independent 4-lane vectors per step (with the two constants,
+    // 14 of the 16 registers: no spills), enough to hide the multiply and
+    // add latencies (3 + 3 cycles) behind four units.
+    for c in x.chunks_exact_mut(48) {
+        let mut v: [f64; 48] = c.try_into().expect("48 values");
+        for _ in 0..16 {
+            for y in v.iter_mut() {
+                *y = *y * a + b;
+            }
+        }
+        c.copy_from_slice(&v);
+    }
+}
+
 /// The geometric factors of an open score, `[far, cos_x d, cos_p d, d^2]`
 /// (unnormalised cosines, clamped at 0; `far` is 0 inside the near-field
 /// ball of squared radius `e2`, where the score is left to the near part):
