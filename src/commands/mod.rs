@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod figures;
+pub mod glare;
 pub mod grid;
 pub mod illuminance;
 pub mod merge;
