@@ -171,3 +171,105 @@ fn lights_without_a_luminous_area_are_refused_by_name() {
 fn lumest() -> Command {
     Command::cargo_bin("lumest").unwrap()
 }
+
+/// The standard room of the tabular method (CIE 117 / CIE 190): 8 m x 8 m
+/// (4H x 4H, H = 2 m above the eye at 1.2 m), 16 x 16 luminaires at the
+/// standard spacing 0.25 H, reflectances 0.7 / 0.5 / 0.2, the observer at
+/// the middle of a wall looking across the room. The luminaire: a cosine
+/// (Lambertian) downlight of 100 cd on the nadir with a 0.3 m x 0.3 m opening.
+fn standard_room(dir: &std::path::Path) -> std::path::PathBuf {
+    let mut v: Vec<String> = (0..=90).map(|g| g.to_string()).collect();
+    v.push("180".into());
+    let mut c: Vec<String> = (0..=90)
+        .map(|g| format!("{:.17e}", 100.0 * f64::from(g).to_radians().cos()))
+        .collect();
+    c[90] = "0".into();
+    c.push("0".into());
+    std::fs::write(
+        dir.join("cos.ies"),
+        format!(
+            "IESNA:LM-63-2002\n[TEST] cosine\nTILT=NONE\n1 -1 1 {} 1 1 2 0.3 0.3 0\n1 1 0\n{}\n0\n{}\n",
+            v.len(),
+            v.join(" "),
+            c.join(" ")
+        ),
+    )
+    .unwrap();
+    let mut s = String::from(
+        "[[surface]]\ntype = \"box\"\nname = \"room\"\nmin = [0, 0, 0]\nmax = [8, 8, 3.2]\n\
+         normals = \"inward\"\nmaterial = { type = \"lambertian\", reflectance = 0.5 }\n\
+         faces = { z_min = { type = \"lambertian\", reflectance = 0.2 }, \
+         z_max = { type = \"lambertian\", reflectance = 0.7 } }\n",
+    );
+    for i in 0..16 {
+        for j in 0..16 {
+            s += &format!(
+                "\n[[light]]\ntype = \"ies\"\nfile = \"cos.ies\"\nposition = [{}, {}, 3.2]\n",
+                (f64::from(i) + 0.5) * 0.5,
+                (f64::from(j) + 0.5) * 0.5
+            );
+        }
+    }
+    let path = dir.join("room.toml");
+    std::fs::write(&path, s).unwrap();
+    path
+}
+
+#[test]
+fn standard_room_against_the_tabular_method() {
+    use lumest::glare::tabular::StandardRoom;
+    let dir = tempfile::tempdir().unwrap();
+    let scene = standard_room(dir.path());
+    let obs = dir.path().join("obs.csv");
+    std::fs::write(&obs, "name,x,y,z,dx,dy,dz\nwall,0.001,4,1.2,1,0,0\n").unwrap();
+    let out = dir.path().join("g.csv");
+    lumest()
+        .args(["glare", "--quiet", "--chains", "100000", "--scene"])
+        .arg(&scene)
+        .arg("--observers")
+        .arg(&obs)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let num = |name: &str| -> f64 { row[column(&header, name)].parse().unwrap() };
+    let room = StandardRoom {
+        x: 8.0,
+        y: 8.0,
+        eye: 1.2,
+        h: 2.0,
+        spacing: 0.5,
+        rho: [0.7, 0.5, 0.2],
+    };
+    let tab = room.rating(&|mu: f64| 100.0 * mu, 0.3, 200);
+    // The luminaire terms: the same geometry, lumest's through the IES
+    // table (cos interpolated linearly in 1-degree steps) and the scene.
+    assert!((num("glare_sum") / tab.sum - 1.0).abs() < 1e-3);
+    assert_eq!(row[column(&header, "luminaires")], "256");
+    // The background: the eye's indirect illuminance against the walls'
+    // average, the tables' approximation (measured: 216.0 +- 0.5 lx against
+    // 221.5 lx, UGR 17.01 against 16.92). A bound of 0.25 UGR units is
+    // about 7 % in the background.
+    assert!(
+        (num("UGR") - tab.ugr).abs() < 0.25,
+        "UGR {} against the tabular {}",
+        num("UGR"),
+        tab.ugr
+    );
+    assert!((num("E_ind") / tab.e_wall_ind - 1.0).abs() < 0.07);
+    eprintln!(
+        "tabular: sum {} E_W {} UGR {}; lumest glare: sum {} E_ind {} +- {} UGR {} +- {}",
+        tab.sum,
+        tab.e_wall_ind,
+        tab.ugr,
+        num("glare_sum"),
+        num("E_ind"),
+        num("E_ind_stderr"),
+        num("UGR"),
+        num("UGR_stderr")
+    );
+}
