@@ -34,6 +34,11 @@ pub struct GlareArgs {
     /// Also write each luminaire's share per observer (L, omega, p) to this CSV.
     #[arg(long = "terms-out")]
     pub terms_out: Option<String>,
+    /// A UGR limit (EN 12464-1: 19 for offices): adds a `UGR_verdict`
+    /// column, `met` when the 95 % interval lies wholly at or below it,
+    /// `not met` when wholly above, else `undecided`.
+    #[arg(long = "ugr-limit", allow_negative_numbers = true)]
+    pub ugr_limit: Option<f64>,
     #[command(flatten)]
     pub run: RunArgs,
 }
@@ -163,6 +168,18 @@ pub fn glare_cells(g: &ObserverGlare) -> Vec<String> {
     ]
 }
 
+/// The verdict on `UGR <= limit` from the rating's 95 % interval (an
+/// undefined rating, or a flagged one, is `undecided`: a flagged result is
+/// not a passed one).
+pub fn ugr_verdict(g: &ObserverGlare, limit: f64) -> &'static str {
+    match g.ugr.ci95 {
+        _ if g.flag != "ok" => "undecided",
+        Some((lo, _)) if lo > limit => "not met",
+        Some((_, Some(hi))) if hi <= limit => "met",
+        _ => "undecided",
+    }
+}
+
 /// Run `lumest glare`.
 pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
     let referenced = scene::referenced_files(&a.scene);
@@ -173,6 +190,9 @@ pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
         outputs.push(("--terms-out", Path::new(t)));
     }
     check_outputs(&inputs, &outputs)?;
+    if let Some(l) = a.ugr_limit {
+        anyhow::ensure!(l.is_finite(), "--ugr-limit must be a finite number");
+    }
     anyhow::ensure!(
         a.run.checkpoint.is_none() && a.run.resume.is_none() && !a.run.daylight_factor,
         "lumest glare takes no --checkpoint, --resume or --daylight-factor"
@@ -234,10 +254,16 @@ pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
         anyhow::bail!("{name}: column `{h}` has the name of a result column; rename it");
     }
     headers.extend(GLARE_COLUMNS.map(String::from));
+    if a.ugr_limit.is_some() {
+        headers.push("UGR_verdict".to_string());
+    }
     let rows = table.rows.iter().zip(&glare).map(|(row, g)| {
         let mut c = row.clone();
         c.resize(table.headers.len(), String::new());
         c.extend(glare_cells(g));
+        if let Some(l) = a.ugr_limit {
+            c.push(ugr_verdict(g, l).to_string());
+        }
         c
     });
     let mut staged = vec![(
@@ -285,8 +311,11 @@ pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
             ),
             _ => "UGR undefined".to_string(),
         };
+        let verdict = a.ugr_limit.map_or(String::new(), |l| {
+            format!("; UGR <= {l}: {}", ugr_verdict(g, l))
+        });
         eprintln!(
-            "lumest: observer {who}: {rating}; Lb {:.4e} cd/m^2 (E_ind {:.4e} +- {:.2e} lx), {} luminaire(s) in view; {}",
+            "lumest: observer {who}: {rating}; Lb {:.4e} cd/m^2 (E_ind {:.4e} +- {:.2e} lx), {} luminaire(s) in view; {}{verdict}",
             g.ugr.lb,
             g.e_ind.0,
             g.e_ind.1,
@@ -296,4 +325,44 @@ pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
     }
     eprintln!("lumest: wrote {}", a.out);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn glare_of(e: f64, se: f64, flag: &str) -> ObserverGlare {
+        ObserverGlare {
+            ugr: Ugr::from_parts(1e5, e, se, 2.0),
+            e_ind: (e, se),
+            e_direct: 0.0,
+            terms: Vec::new(),
+            flag: flag.to_string(),
+        }
+    }
+
+    /// Met only when the whole interval is at or below the limit, not met
+    /// when wholly above; flagged or unbounded ratings stay undecided.
+    #[test]
+    fn verdicts() {
+        // UGR = 8 log10(0.25 pi 1e5 / 100) = 23.58, interval about +-0.07.
+        let g = glare_of(100.0, 1.0, "ok");
+        let (lo, hi) = g.ugr.ci95.unwrap();
+        assert_eq!(ugr_verdict(&g, hi.unwrap()), "met");
+        assert_eq!(ugr_verdict(&g, hi.unwrap() - 1e-9), "undecided");
+        assert_eq!(ugr_verdict(&g, lo - 1e-9), "not met");
+        assert_eq!(ugr_verdict(&g, 19.0), "not met");
+        assert_eq!(
+            ugr_verdict(&glare_of(100.0, 1.0, "small_source"), 30.0),
+            "undecided"
+        );
+        assert_eq!(
+            ugr_verdict(&glare_of(1.0, 1.0, "unbounded"), 30.0),
+            "undecided"
+        );
+        assert_eq!(
+            ugr_verdict(&glare_of(0.0, 0.0, "no_background"), 30.0),
+            "undecided"
+        );
+    }
 }
