@@ -73,6 +73,13 @@ pub struct IlluminanceArgs {
     /// `lumest grid`) with their errors and verdicts to this CSV.
     #[arg(long = "figures-out", conflicts_with = "shard")]
     pub figures_out: Option<String>,
+    /// Plan the run for a grid figure's precision: `GRID:FIGURE:H` (FIGURE
+    /// one of E_avg, E_min, E_max, U0, Ud) asks that its 95 % interval be
+    /// at most +-H wide (lx, or 1 for U0 and Ud), by the two-stage pilot
+    /// rule of --rel-error; repeatable (all targets at once). Needs points
+    /// with a `grid` column.
+    #[arg(long = "figure-target", conflicts_with_all = ["shard", "mpi"])]
+    pub figure_target: Vec<String>,
     #[command(flatten)]
     pub run: RunArgs,
 }
@@ -328,7 +335,33 @@ pub fn summary(r: &RunResult) -> String {
             }
         );
     }
-    if let Some(p) = &r.pilot {
+    if let Some(p) = r.pilot.as_ref().filter(|p| p.custom) {
+        text += &format!(
+            "\n--figure-target: a pilot of {} batches of {} chains ({:.3} s, own streams) gave a \
+             largest ratio of interval half-width to target of {:.3e} per batch of {}, so {} fresh \
+             batches were planned{}",
+            p.batches,
+            p.batch_size,
+            p.wall,
+            p.rel_error,
+            r.batch_size,
+            format_number(p.planned as f64),
+            if r.reason == crate::run::StopReason::Time {
+                format!(
+                    "; stopped by {} before the plan was done (about {:.3e} s needed)",
+                    p.default_cap.map_or_else(
+                        || "--time".to_string(),
+                        |c| format!("the default time limit of {c:.0} s (no --time was given)")
+                    ),
+                    p.estimated_time
+                )
+            } else if r.reason == crate::run::StopReason::Chains {
+                " (capped by --chains)".to_string()
+            } else {
+                String::new()
+            }
+        );
+    } else if let Some(p) = &r.pilot {
         let target = p.target;
         // An RMS target (`--rms-error`) is judged by the RMS, a max target by the max.
         let (flag, what, max) = if p.rms {
@@ -648,7 +681,7 @@ pub(crate) fn measure_with(
     estimator: EstimatorKind,
     run_args: &RunArgs,
 ) -> anyhow::Result<(Job, RunResult)> {
-    measure_full(scene_path, points, views, estimator, run_args, None)
+    measure_full(scene_path, points, views, estimator, run_args, None, &[])
 }
 
 /// [`measure_with`], also writing the grid figures to `figures_out`.
@@ -659,6 +692,7 @@ pub(crate) fn measure_full(
     estimator: EstimatorKind,
     run_args: &RunArgs,
     figures_out: Option<&str>,
+    targets: &[super::figure_target::FigureTarget],
 ) -> anyhow::Result<(Job, RunResult)> {
     let mut cfg = run_args.config()?;
     if estimator == EstimatorKind::Backward {
@@ -749,6 +783,42 @@ pub(crate) fn measure_full(
     };
     if groups.is_some() {
         cfg.keep_batch_means = job.points.as_ref().map_or(0, |t| t.rows.len());
+    }
+    if !targets.is_empty() {
+        let Some((g, _)) = &groups else {
+            anyhow::bail!(
+                "--figure-target: the points have no `grid` column naming their grids (write them with `lumest grid`)"
+            );
+        };
+        for t in targets {
+            anyhow::ensure!(
+                g.iter().any(|x| x.name == t.grid),
+                "--figure-target: no grid `{}` among the points (grids: {})",
+                t.grid,
+                g.iter()
+                    .map(|x| format!("`{}`", x.name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        anyhow::ensure!(
+            run_args.rel_error.is_none() && run_args.rms_error.is_none(),
+            "--figure-target replaces --rel-error and --rms-error: give one rule"
+        );
+        anyhow::ensure!(
+            run_args.checkpoint.is_none() && run_args.resume.is_none(),
+            "--figure-target plans its run from a pilot: no --checkpoint or --resume"
+        );
+        // The plan sets the chains; --chains, if given, caps them.
+        if run_args.chains.is_none() {
+            cfg.stop.chains = None;
+        }
+        cfg.stop.rel_error = Some(1.0);
+        cfg.stop.rms = false;
+        let (g, gr, t) = (g.clone(), grids.clone(), targets.to_vec());
+        cfg.pilot_measure = Some(crate::run::PilotMeasure(std::sync::Arc::new(
+            move |r: &RunResult| super::figure_target::measure(r, &g, &gr, &t),
+        )));
     }
     eprintln!(
         "lumest: scene {}: {}",
@@ -862,6 +932,9 @@ pub(crate) fn measure_full(
                 eprintln!("lumest: {line}");
             }
         }
+        for line in super::figure_target::summary_lines(f, targets) {
+            eprintln!("lumest: {line}");
+        }
     }
     Ok((job, result))
 }
@@ -960,6 +1033,11 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
         outputs.push(("--figures-out", Path::new(f)));
     }
     check_outputs(&inputs, &outputs)?;
+    let targets = a
+        .figure_target
+        .iter()
+        .map(|t| super::figure_target::FigureTarget::parse(t))
+        .collect::<anyhow::Result<Vec<_>>>()?;
     measure_full(
         &a.scene,
         Some((&a.points, &a.out)),
@@ -967,6 +1045,7 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
         a.estimator,
         &a.run,
         a.figures_out.as_deref(),
+        &targets,
     )
     .map(|_| ())
 }

@@ -2,6 +2,7 @@
 //! arguments and maps errors to exit codes).
 
 pub mod bench;
+pub mod figure_target;
 pub mod figures;
 pub mod glare;
 pub mod grid;
@@ -244,6 +245,7 @@ impl RunArgs {
             shard: None,
             resume: None,
             keep_batch_means: 0,
+            pilot_measure: None,
         })
     }
 }
