@@ -97,7 +97,7 @@ fn a_u0_target_is_planned_and_met() {
     assert!(h <= target, "half-width {h} > target {target}: {err}");
     assert!(err.contains("target met"), "{err}");
     // (h_min / target)^2 = 2.56 times the minimum's batches, or more (the margin q).
-    assert!(b >= 80 && b < 8 * 32, "{b} batches: {err}");
+    assert!((80..8 * 32).contains(&b), "{b} batches: {err}");
     // The same bytes as a --chains run of the planned size.
     let bs: u64 = err
         .split("per batch of ")

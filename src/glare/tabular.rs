@@ -142,8 +142,9 @@ impl StandardRoom {
         for p in 0..3 {
             for k in p + 1..3 {
                 let q = m[k][p] / m[p][p];
-                for j in p..4 {
-                    m[k][j] -= q * m[p][j];
+                let pivot = m[p];
+                for (x, y) in m[k].iter_mut().zip(pivot).skip(p) {
+                    *x -= q * y;
                 }
             }
         }
