@@ -41,6 +41,7 @@ pub mod chain;
 pub mod commands;
 pub mod estimator;
 pub mod geometry;
+pub mod glare;
 pub mod grid;
 pub mod io;
 pub mod light;

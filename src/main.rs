@@ -2,7 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use lumest::commands::{
-    bench, grid, illuminance, merge, photometry, render, shfit, sobolev, validate,
+    bench, glare, grid, illuminance, merge, photometry, render, shfit, sobolev, validate,
 };
 use std::process::ExitCode;
 
@@ -38,6 +38,8 @@ enum Command {
     Merge(merge::MergeArgs),
     /// Points of the scene's calculation surfaces (`[[grid]]`) as a points CSV.
     Grid(grid::GridArgs),
+    /// Unified Glare Rating (CIE 117) at observers (eye and line of sight).
+    Glare(glare::GlareArgs),
 }
 
 fn main() -> ExitCode {
@@ -53,6 +55,7 @@ fn main() -> ExitCode {
         Command::Photometry(a) => photometry::photometry(a),
         Command::Merge(a) => merge::merge(a),
         Command::Grid(a) => grid::grid(a),
+        Command::Glare(a) => glare::glare(a),
     };
     match res {
         Ok(()) => ExitCode::SUCCESS,

@@ -36,7 +36,10 @@
 //! batch_size` with the same seed. The price is the pilot (four batches of
 //! the run proper, where they hold at least 2048 chains) and the margin `q`; the target is met in about
 //! 90 % of runs where one receiver dominates, and more often with many
-//! receivers (the largest of many noisy `R_p` is biased up). A missed target
+//! receivers (the largest of many noisy `R_p` is biased up). A caller may
+//! have the pilot measure something else that falls like a standard error
+//! ([`RunConfig::pilot_measure`]: a grid figure's interval half-width over
+//! its target, with target 1, for `--figure-target`). A missed target
 //! is never hidden: the result carries the achieved error and the plan
 //! ([`Pilot`]), and the commands say so. Measured by `tests/rel_error_rule.rs`.
 //!
@@ -122,6 +125,25 @@ pub struct RunConfig {
     /// [`Tallies::batch_means`] (for grid figures: 8 bytes per receiver
     /// and batch); 0: none.
     pub keep_batch_means: usize,
+    /// What the `rel_error` rule's pilot measures, in place of the largest
+    /// (or RMS) relative error; `None`: that error.
+    pub pilot_measure: Option<PilotMeasure>,
+}
+
+/// A caller's measure of a pilot run's precision for the two-stage
+/// `rel_error` rule (module docs), for targets that are not a receiver's
+/// relative error: for example the half-width of a grid figure's 95 %
+/// interval over its target (`--figure-target`, then `stop.rel_error = 1`).
+/// It must fall like `1 / sqrt(chains)`, as a standard error does, for the
+/// plan to hold; a non-finite value makes no plan (the run stops at its
+/// time cap or chain count).
+#[derive(Clone)]
+pub struct PilotMeasure(pub std::sync::Arc<dyn Fn(&RunResult) -> f64 + Send + Sync>);
+
+impl std::fmt::Debug for PilotMeasure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("PilotMeasure(..)")
+    }
 }
 
 /// The command line's defaults: 100,000 chains, stratified, the near/far
@@ -145,6 +167,7 @@ impl Default for RunConfig {
             shard: None,
             resume: None,
             keep_batch_means: 0,
+            pilot_measure: None,
         }
     }
 }
@@ -392,6 +415,8 @@ pub struct Pilot {
     pub rel_error: f64,
     /// The target is on the RMS relative error (`--rms-error`).
     pub rms: bool,
+    /// The pilot measured a caller's quantity ([`RunConfig::pilot_measure`]).
+    pub custom: bool,
     /// Batches planned for the run proper.
     pub planned: u64,
     /// Wall time the planned batches need at the pilot's pace [s]
@@ -521,10 +546,10 @@ pub fn drive(
     if pilot.reason == StopReason::Observer {
         return pilot;
     }
-    let r_p = if stop.rms {
-        pilot.tallies.rms_rel_error(&pilot.direct)
-    } else {
-        pilot.tallies.max_rel_error(&pilot.direct)
+    let r_p = match &cfg.pilot_measure {
+        Some(m) => (m.0)(&pilot),
+        None if stop.rms => pilot.tallies.rms_rel_error(&pilot.direct),
+        None => pilot.tallies.max_rel_error(&pilot.direct),
     };
     // R^2 falls like 1 / chains: rescale the pilot's error to batches of `bs`.
     let r_p = r_p * (pilot_bs as f64 / bs as f64).sqrt();
@@ -554,6 +579,7 @@ pub fn drive(
         wall: pilot.wall,
         rel_error: r_p,
         rms: stop.rms,
+        custom: cfg.pilot_measure.is_some(),
         planned,
         estimated_time,
         default_cap,

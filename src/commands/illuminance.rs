@@ -83,6 +83,13 @@ pub struct IlluminanceArgs {
     /// into this (existing) folder.
     #[arg(long = "isolux-dir", conflicts_with_all = ["shard", "mpi"])]
     pub isolux_dir: Option<String>,
+    /// Plan the run for a grid figure's precision: `GRID:FIGURE:H` (FIGURE
+    /// one of E_avg, E_min, E_max, U0, Ud) asks that its 95 % interval be
+    /// at most +-H wide (lx, or 1 for U0 and Ud), by the two-stage pilot
+    /// rule of --rel-error; repeatable (all targets at once). Needs points
+    /// with a `grid` column.
+    #[arg(long = "figure-target", conflicts_with_all = ["shard", "mpi"])]
+    pub figure_target: Vec<String>,
     #[command(flatten)]
     pub run: RunArgs,
 }
@@ -338,7 +345,33 @@ pub fn summary(r: &RunResult) -> String {
             }
         );
     }
-    if let Some(p) = &r.pilot {
+    if let Some(p) = r.pilot.as_ref().filter(|p| p.custom) {
+        text += &format!(
+            "\n--figure-target: a pilot of {} batches of {} chains ({:.3} s, own streams) gave a \
+             largest ratio of interval half-width to target of {:.3e} per batch of {}, so {} fresh \
+             batches were planned{}",
+            p.batches,
+            p.batch_size,
+            p.wall,
+            p.rel_error,
+            r.batch_size,
+            format_number(p.planned as f64),
+            if r.reason == crate::run::StopReason::Time {
+                format!(
+                    "; stopped by {} before the plan was done (about {:.3e} s needed)",
+                    p.default_cap.map_or_else(
+                        || "--time".to_string(),
+                        |c| format!("the default time limit of {c:.0} s (no --time was given)")
+                    ),
+                    p.estimated_time
+                )
+            } else if r.reason == crate::run::StopReason::Chains {
+                " (capped by --chains)".to_string()
+            } else {
+                String::new()
+            }
+        );
+    } else if let Some(p) = &r.pilot {
         let target = p.target;
         // An RMS target (`--rms-error`) is judged by the RMS, a max target by the max.
         let (flag, what, max) = if p.rms {
@@ -740,7 +773,16 @@ pub(crate) fn measure_with(
     estimator: EstimatorKind,
     run_args: &RunArgs,
 ) -> anyhow::Result<(Job, RunResult)> {
-    measure_full(scene_path, points, views, estimator, run_args, None, None)
+    measure_full(
+        scene_path,
+        points,
+        views,
+        estimator,
+        run_args,
+        None,
+        None,
+        &[],
+    )
 }
 
 /// [`measure_with`], also writing the grid figures to `figures_out`.
@@ -752,6 +794,7 @@ pub(crate) fn measure_full(
     run_args: &RunArgs,
     figures_out: Option<&str>,
     report: Option<&super::report::ReportOutputs>,
+    targets: &[super::figure_target::FigureTarget],
 ) -> anyhow::Result<(Job, RunResult)> {
     let mut cfg = run_args.config()?;
     if estimator == EstimatorKind::Backward {
@@ -859,6 +902,42 @@ pub(crate) fn measure_full(
     let modelling_pairs = super::modelling::pairs(job.receivers.receivers(), n_points);
     if groups.is_some() || !modelling_pairs.is_empty() {
         cfg.keep_batch_means = n_points;
+    }
+    if !targets.is_empty() {
+        let Some((g, _)) = &groups else {
+            anyhow::bail!(
+                "--figure-target: the points have no `grid` column naming their grids (write them with `lumest grid`)"
+            );
+        };
+        for t in targets {
+            anyhow::ensure!(
+                g.iter().any(|x| x.name == t.grid),
+                "--figure-target: no grid `{}` among the points (grids: {})",
+                t.grid,
+                g.iter()
+                    .map(|x| format!("`{}`", x.name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        anyhow::ensure!(
+            run_args.rel_error.is_none() && run_args.rms_error.is_none(),
+            "--figure-target replaces --rel-error and --rms-error: give one rule"
+        );
+        anyhow::ensure!(
+            run_args.checkpoint.is_none() && run_args.resume.is_none(),
+            "--figure-target plans its run from a pilot: no --checkpoint or --resume"
+        );
+        // The plan sets the chains; --chains, if given, caps them.
+        if run_args.chains.is_none() {
+            cfg.stop.chains = None;
+        }
+        cfg.stop.rel_error = Some(1.0);
+        cfg.stop.rms = false;
+        let (g, gr, t) = (g.clone(), grids.clone(), targets.to_vec());
+        cfg.pilot_measure = Some(crate::run::PilotMeasure(std::sync::Arc::new(
+            move |r: &RunResult| super::figure_target::measure(r, &g, &gr, &t),
+        )));
     }
     eprintln!(
         "lumest: scene {}: {}",
@@ -1005,6 +1084,9 @@ pub(crate) fn measure_full(
                 eprintln!("lumest: {line}");
             }
         }
+        for line in super::figure_target::summary_lines(f, targets) {
+            eprintln!("lumest: {line}");
+        }
     }
     for out in &written {
         eprintln!("lumest: wrote {out}");
@@ -1122,6 +1204,11 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
             inputs: inputs.iter().map(|p| p.to_path_buf()).collect(),
             outputs: outputs.iter().map(|o| o.1.to_path_buf()).collect(),
         });
+    let targets = a
+        .figure_target
+        .iter()
+        .map(|t| super::figure_target::FigureTarget::parse(t))
+        .collect::<anyhow::Result<Vec<_>>>()?;
     measure_full(
         &a.scene,
         Some((&a.points, &a.out)),
@@ -1130,6 +1217,7 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
         &a.run,
         a.figures_out.as_deref(),
         report.as_ref(),
+        &targets,
     )
     .map(|_| ())
 }

@@ -3,7 +3,9 @@
 
 pub mod bench;
 pub mod bench_bound;
+pub mod figure_target;
 pub mod figures;
+pub mod glare;
 pub mod grid;
 pub mod illuminance;
 pub mod merge;
@@ -246,6 +248,7 @@ impl RunArgs {
             shard: None,
             resume: None,
             keep_batch_means: 0,
+            pilot_measure: None,
         })
     }
 }

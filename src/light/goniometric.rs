@@ -63,6 +63,9 @@ pub struct Goniometric {
     /// Type C: the vertical and horizontal angles located from a
     /// direction's components without `acos`/`atan2` ([`AngleGrid`]).
     grids: Option<(AngleGrid, Option<AngleGrid>)>,
+    /// The file's luminous opening [m] (all zero: the file gives none), for
+    /// glare ([`crate::glare`]): luminance and solid angle need its area.
+    opening: crate::io::photometry::Opening,
 }
 
 /// A direction drawn from [`Goniometric::sample`].
@@ -95,6 +98,7 @@ impl Goniometric {
             power: 0.0,
             rotational: false,
             grids: None,
+            opening: p.opening,
         };
         g.rotational = p.kind == PhotometricType::C
             && !g.h.is_empty()
@@ -244,6 +248,12 @@ impl Goniometric {
         }
         let inv = d2.sqrt().recip();
         self.intensity(frame.to_local(w * inv)) * c * (inv * inv * inv)
+    }
+
+    /// The file's luminous opening [m] (width, length, height of the
+    /// luminous sides; all zero when the file gives none).
+    pub fn file_opening(&self) -> crate::io::photometry::Opening {
+        self.opening
     }
 
     /// Intensity [cd] towards unit world direction `w` of a luminaire whose

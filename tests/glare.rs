@@ -1,0 +1,275 @@
+//! `lumest glare`: the Unified Glare Rating against a case computed by hand.
+//!
+//! An isotropic luminaire (100 cd in every direction, a 0.3 m x 0.3 m
+//! luminous opening facing down) at the centre of an integrating sphere of
+//! radius 2 m (reflectance 0.5). In a sphere, light reflected off the wall
+//! illuminates the wall uniformly, and an isotropic source at the centre
+//! lights it uniformly too, so every reflected order has a uniform wall
+//! luminance: the indirect illuminance at any inside point, on any plane,
+//! is `pi L_wall = rho / (1 - rho) * I / R^2 = 25 lx` exactly. The glare sum
+//! `L^2 omega / p^2` of the one luminaire is worked out here from the
+//! geometry and Guth's formula, written again; the rating follows.
+
+use assert_cmd::Command;
+use std::f64::consts::PI;
+
+const IES: &str = "IESNA:LM-63-2002\n[TEST] lumest glare\nTILT=NONE\n\
+1 -1 1 3 1 1 2 0.3 0.3 0\n1 1 0\n0 90 180\n0\n100 100 100\n";
+
+const SCENE: &str = r#"[[surface]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 2
+sides = "inside"
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[light]]
+type = "ies"
+name = "lum"
+file = "lum.ies"
+position = [0, 0, 0]
+"#;
+
+/// Guth's position index by its published formula (tau, sigma in degrees).
+fn guth(tau: f64, sigma: f64) -> f64 {
+    let a = 35.2 - 0.31889 * tau - 1.22 * (-2.0 * tau / 9.0).exp();
+    let b = 21.0 + 0.26667 * tau - 0.002963 * tau * tau;
+    (a * 1e-3 * sigma + b * 1e-5 * sigma * sigma).exp()
+}
+
+/// The glare sum of the luminaire at the origin seen from an eye at `e`
+/// looking along +x: `R = -e_x`, `T = e_y` (the luminaire lies to the
+/// right, -y, when e_y > 0), `H = -e_z`; the eye below sees the bottom
+/// opening at `cos gamma = H / d`.
+fn by_hand(e: [f64; 3]) -> f64 {
+    let (r, t, h) = (-e[0], e[1], -e[2]);
+    let d = (r * r + t * t + h * h).sqrt();
+    let a_p = 0.09 * h / d;
+    let l = 100.0 / a_p;
+    let omega = a_p / (d * d);
+    let tau = t.abs().atan2(h).to_degrees();
+    let sigma = (t * t + h * h).sqrt().atan2(r).to_degrees();
+    let p = guth(tau, sigma);
+    l * l * omega / (p * p)
+}
+
+fn column(header: &[&str], name: &str) -> usize {
+    header.iter().position(|h| *h == name).unwrap()
+}
+
+#[test]
+fn single_luminaire_in_a_sphere_matches_the_hand_computation() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("lum.ies"), IES).unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let obs = dir.path().join("obs.csv");
+    let eyes = [[-1.0, 0.0, -0.5], [-1.0, 0.6, -0.4], [-1.5, -0.3, -0.9]];
+    let mut csv = "name,x,y,z,dx,dy,dz\n".to_string();
+    for (k, e) in eyes.iter().enumerate() {
+        csv += &format!("o{k},{},{},{},1,0,0\n", e[0], e[1], e[2]);
+    }
+    // Looking away from the luminaire: none in view, no rating.
+    csv += "away,-1,0,-0.5,-1,0,0\n";
+    std::fs::write(&obs, csv).unwrap();
+    let out = dir.path().join("g.csv");
+    lumest()
+        .args(["glare", "--quiet", "--chains", "200000", "--scene"])
+        .arg(&scene)
+        .arg("--observers")
+        .arg(&obs)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let num = |row: &Vec<&str>, name: &str| -> f64 { row[column(&header, name)].parse().unwrap() };
+    // Sidak over the 3 observers, two-sided 1 % in all.
+    let zb = lumest::tally::sidak_bound(0.01, 3, None);
+    let e_exact = 25.0;
+    for (row, e) in rows.iter().zip(&eyes) {
+        // The luminaire term is exact.
+        let s = by_hand(*e);
+        let got = num(row, "glare_sum");
+        assert!((got / s - 1.0).abs() < 1e-9, "glare sum {got} vs {s}");
+        // The background: the Monte Carlo estimate against 25 lx.
+        let (ei, se) = (num(row, "E_ind"), num(row, "E_ind_stderr"));
+        assert!((ei - e_exact).abs() <= zb * se, "E_ind {ei} +- {se}");
+        assert!(zb * se < 0.02 * e_exact, "too imprecise to see 2 %: {se}");
+        let ugr_ref = 8.0 * (0.25 * PI * s / e_exact).log10();
+        let (u, use_) = (num(row, "UGR"), num(row, "UGR_stderr"));
+        assert!(
+            (u - ugr_ref).abs() <= zb * use_,
+            "UGR {u} +- {use_} vs {ugr_ref}"
+        );
+        assert!(zb * use_ < 0.02 * ugr_ref, "UGR too imprecise: {use_}");
+        assert!(
+            (use_ - 8.0 / std::f64::consts::LN_10 * se / ei).abs() < 1e-9 * use_,
+            "delta-method error"
+        );
+        let (lo, hi) = (num(row, "UGR_ci95_low"), num(row, "UGR_ci95_high"));
+        assert!(lo < u && u < hi);
+        assert!((num(row, "Lb") - ei / PI).abs() < 1e-12 * ei);
+        assert_eq!(row[column(&header, "luminaires")], "1");
+    }
+    let away = &rows[3];
+    assert_eq!(away[column(&header, "UGR")], "");
+    assert_eq!(away[column(&header, "luminaires")], "0");
+    assert!(away[column(&header, "UGR_flag")].contains("no_luminaire"));
+}
+
+#[test]
+fn lights_without_a_luminous_area_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(
+        &scene,
+        "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+         material = { type = \"lambertian\", reflectance = 0.5 }\n\
+         [[light]]\ntype = \"point\"\nname = \"bulb\"\nposition = [0, 0, 2]\nintensity = 10\n",
+    )
+    .unwrap();
+    let obs = dir.path().join("obs.csv");
+    std::fs::write(&obs, "x,y,z,dx,dy,dz\n-1,0,1.2,1,0,0\n").unwrap();
+    let err = lumest()
+        .args(["glare", "--quiet", "--scene"])
+        .arg(&scene)
+        .arg("--observers")
+        .arg(&obs)
+        .arg("--out")
+        .arg(dir.path().join("g.csv"))
+        .assert()
+        .failure();
+    let msg = String::from_utf8_lossy(&err.get_output().stderr).to_string();
+    assert!(
+        msg.contains("bulb") && msg.contains("luminous area"),
+        "{msg}"
+    );
+    // A vertical line of sight: refused with file and line.
+    std::fs::write(dir.path().join("lum.ies"), IES).unwrap();
+    std::fs::write(&scene, SCENE).unwrap();
+    std::fs::write(&obs, "x,y,z,dx,dy,dz\n-1,0,-0.5,0,0,1\n").unwrap();
+    let err = lumest()
+        .args(["glare", "--quiet", "--scene"])
+        .arg(&scene)
+        .arg("--observers")
+        .arg(&obs)
+        .arg("--out")
+        .arg(dir.path().join("g.csv"))
+        .assert()
+        .failure();
+    let msg = String::from_utf8_lossy(&err.get_output().stderr).to_string();
+    assert!(
+        msg.contains("obs.csv:2") && msg.contains("vertical"),
+        "{msg}"
+    );
+}
+
+fn lumest() -> Command {
+    Command::cargo_bin("lumest").unwrap()
+}
+
+/// The standard room of the tabular method (CIE 117 / CIE 190): 8 m x 8 m
+/// (4H x 4H, H = 2 m above the eye at 1.2 m), 16 x 16 luminaires at the
+/// standard spacing 0.25 H, reflectances 0.7 / 0.5 / 0.2, the observer at
+/// the middle of a wall looking across the room. The luminaire: a cosine
+/// (Lambertian) downlight of 100 cd on the nadir with a 0.3 m x 0.3 m opening.
+fn standard_room(dir: &std::path::Path) -> std::path::PathBuf {
+    let mut v: Vec<String> = (0..=90).map(|g| g.to_string()).collect();
+    v.push("180".into());
+    let mut c: Vec<String> = (0..=90)
+        .map(|g| format!("{:.17e}", 100.0 * f64::from(g).to_radians().cos()))
+        .collect();
+    c[90] = "0".into();
+    c.push("0".into());
+    std::fs::write(
+        dir.join("cos.ies"),
+        format!(
+            "IESNA:LM-63-2002\n[TEST] cosine\nTILT=NONE\n1 -1 1 {} 1 1 2 0.3 0.3 0\n1 1 0\n{}\n0\n{}\n",
+            v.len(),
+            v.join(" "),
+            c.join(" ")
+        ),
+    )
+    .unwrap();
+    let mut s = String::from(
+        "[[surface]]\ntype = \"box\"\nname = \"room\"\nmin = [0, 0, 0]\nmax = [8, 8, 3.2]\n\
+         normals = \"inward\"\nmaterial = { type = \"lambertian\", reflectance = 0.5 }\n\
+         faces = { z_min = { type = \"lambertian\", reflectance = 0.2 }, \
+         z_max = { type = \"lambertian\", reflectance = 0.7 } }\n",
+    );
+    for i in 0..16 {
+        for j in 0..16 {
+            s += &format!(
+                "\n[[light]]\ntype = \"ies\"\nfile = \"cos.ies\"\nposition = [{}, {}, 3.2]\n",
+                (f64::from(i) + 0.5) * 0.5,
+                (f64::from(j) + 0.5) * 0.5
+            );
+        }
+    }
+    let path = dir.join("room.toml");
+    std::fs::write(&path, s).unwrap();
+    path
+}
+
+#[test]
+fn standard_room_against_the_tabular_method() {
+    use lumest::glare::tabular::StandardRoom;
+    let dir = tempfile::tempdir().unwrap();
+    let scene = standard_room(dir.path());
+    let obs = dir.path().join("obs.csv");
+    std::fs::write(&obs, "name,x,y,z,dx,dy,dz\nwall,0.001,4,1.2,1,0,0\n").unwrap();
+    let out = dir.path().join("g.csv");
+    lumest()
+        .args(["glare", "--quiet", "--chains", "100000", "--scene"])
+        .arg(&scene)
+        .arg("--observers")
+        .arg(&obs)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let num = |name: &str| -> f64 { row[column(&header, name)].parse().unwrap() };
+    let room = StandardRoom {
+        x: 8.0,
+        y: 8.0,
+        eye: 1.2,
+        h: 2.0,
+        spacing: 0.5,
+        rho: [0.7, 0.5, 0.2],
+    };
+    let tab = room.rating(&|mu: f64| 100.0 * mu, 0.3, 200);
+    // The luminaire terms: the same geometry, lumest's through the IES
+    // table (cos interpolated linearly in 1-degree steps) and the scene.
+    assert!((num("glare_sum") / tab.sum - 1.0).abs() < 1e-3);
+    assert_eq!(row[column(&header, "luminaires")], "256");
+    // The background: the eye's indirect illuminance against the walls'
+    // average, the tables' approximation (measured: 216.0 +- 0.5 lx against
+    // 221.5 lx, UGR 17.01 against 16.92). A bound of 0.25 UGR units is
+    // about 7 % in the background.
+    assert!(
+        (num("UGR") - tab.ugr).abs() < 0.25,
+        "UGR {} against the tabular {}",
+        num("UGR"),
+        tab.ugr
+    );
+    assert!((num("E_ind") / tab.e_wall_ind - 1.0).abs() < 0.07);
+    eprintln!(
+        "tabular: sum {} E_W {} UGR {}; lumest glare: sum {} E_ind {} +- {} UGR {} +- {}",
+        tab.sum,
+        tab.e_wall_ind,
+        tab.ugr,
+        num("glare_sum"),
+        num("E_ind"),
+        num("E_ind_stderr"),
+        num("UGR"),
+        num("UGR_stderr")
+    );
+}
