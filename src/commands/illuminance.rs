@@ -665,6 +665,7 @@ pub(crate) fn measure_full(
         run_args.check_local_only("backward")?;
     }
     let mut scene = scene::load(scene_path)?;
+    scene.set_direct_lights(run_args.direct_lights, run_args.ris_candidates);
     if scene.has_directional() {
         anyhow::ensure!(
             cfg.near.0 <= 0.0,
@@ -755,6 +756,7 @@ pub(crate) fn measure_full(
         scene_path.display(),
         scene.summary()
     );
+    eprintln!("lumest: {}", scene.direct_lights_note());
     for note in &scene.notes {
         eprintln!("lumest: {note}");
     }

@@ -373,8 +373,14 @@ impl Receivers {
         let inside: Vec<u64> = receivers.iter().map(|r| scene.inside_mask(r.p)).collect();
         let frames: Vec<Frame> = receivers.iter().map(|r| Frame::from_normal(r.n)).collect();
         let mut direct = vec![0.0; receivers.len()];
+        // With the light array (many sources) only a collimated sun stays
+        // exact: every other source is sampled, one RIS pick per sample.
+        let ris = scene.light_array().map(|a| a.candidates());
         let exact: Vec<bool> = (0..scene.lights.len())
-            .map(|k| exact_direct(scene, k))
+            .map(|k| match ris {
+                Some(_) => matches!(&scene.lights[k], Light::Distant(dl) if dl.collimated()),
+                None => exact_direct(scene, k),
+            })
             .collect();
         for (j, rec) in receivers.iter().enumerate() {
             let (p, n) = (rec.p, rec.n);
@@ -451,15 +457,23 @@ impl Receivers {
             let l = &scene.lights[*k];
             !l.is_point_like() && !matches!(l, Light::Distant(dl) if dl.collimated())
         };
+        let sampled: Vec<usize> = (0..scene.lights.len()).filter(|&k| !exact[k]).collect();
         let sets_of = [
-            (0..scene.lights.len())
-                .filter(|&k| !exact[k])
-                .collect::<Vec<_>>(),
-            (0..scene.lights.len()).filter(non_point).collect(),
+            sampled.clone(),
+            match ris {
+                Some(_) => sampled,
+                None => (0..scene.lights.len()).filter(non_point).collect(),
+            },
         ];
         let direct_sets: Vec<direct::LightSet> = sets_of
             .iter()
-            .map(|ks| direct::LightSet::new(scene, ks.iter().map(|&k| k as u32).collect()))
+            .map(|ks| {
+                let ks = ks.iter().map(|&k| k as u32).collect();
+                match ris {
+                    Some(m) => direct::LightSet::with_ris(scene, ks, m),
+                    None => direct::LightSet::new(scene, ks),
+                }
+            })
             .collect();
         let direct_set = receivers
             .iter()

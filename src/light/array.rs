@@ -241,8 +241,8 @@ pub fn target(light: &Light, x: DVec3, n: DVec3) -> f64 {
         } => {
             let rho = o.half_x.hypot(o.half_y);
             let d2 = (*p - x).length_squared();
-            let floor = 1e-3 * light.power() / (4.0 * PI) * cos_bound(x, n, *p, rho)
-                / d2.max(rho * rho);
+            let floor =
+                1e-3 * light.power() / (4.0 * PI) * cos_bound(x, n, *p, rho) / d2.max(rho * rho);
             let c = n.dot(*p - x);
             let point = if c > 0.0 && d2 > 0.0 {
                 light.intensity((x - *p) / d2.sqrt()) * c / (d2 * d2.sqrt())
@@ -315,9 +315,9 @@ mod tests {
             let (mut s, mut s2) = (0.0, 0.0);
             let n_s = 200_000;
             for _ in 0..n_s {
-                let v = arr.pick_with(&lights, x, n, &mut rng, bias).map_or(0.0, |p| {
-                    lights[p.k as usize].direct_illuminance(x, n) * p.w
-                });
+                let v = arr
+                    .pick_with(&lights, x, n, &mut rng, bias)
+                    .map_or(0.0, |p| lights[p.k as usize].direct_illuminance(x, n) * p.w);
                 s += v;
                 s2 += v * v;
             }
