@@ -2,6 +2,7 @@
 //! arguments and maps errors to exit codes).
 
 pub mod bench;
+pub mod bench_many_lights;
 pub mod figures;
 pub mod grid;
 pub mod illuminance;

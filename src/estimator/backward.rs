@@ -565,7 +565,7 @@ fn join_pool<F: FnMut(u32, f64)>(
 /// cone of a sphere light. With `guide`, also the density `p_B(h)` [1/m^2]
 /// of the light-guided strategy at `h` (see [`trace`]; 0 without).
 ///
-/// With the scene's light array ([`Scene::light_array`], many sources) the
+/// With the scene's light array ([`Scene::vertex_light_array`], many sources) the
 /// sum is replaced by one source kept by RIS and weighted by its unbiased
 /// contribution weight ([`crate::light::array`]): one shadow test instead
 /// of one per source. Strategy B's density `p_B` is still summed over all
@@ -590,7 +590,7 @@ fn next_event(
         from: Some((h.surface, h.prim)),
     };
     let (mut nee, mut p_b) = (0.0, 0.0);
-    match scene.light_array() {
+    match scene.vertex_light_array() {
         None => {
             for k in 0..scene.lights.len() {
                 nee += v.nee(k, rng);

@@ -38,6 +38,13 @@
 //! 95.7 % (mean z -0.02, `lumest validate luminaires`). Every estimate is unbiased, so the
 //! batch means of `D` enter the tallies with the chains' scores and their
 //! variance is in the error bar.
+//!
+//! With many sources ([`crate::light::array`], `--direct-lights ris`) the
+//! set holds every source, point-likes included (a delta: the closed form
+//! times one shadow test, never found by BRDF sampling), and the light
+//! sample's source is kept by RIS instead of picked by power: its estimate
+//! is multiplied by `W P_k` (`P_k` the power pick's probability, which the
+//! MIS weights keep as a stand-in for the intractable RIS marginal).
 
 use super::{Receiver, Response};
 use crate::light::Light;
@@ -73,6 +80,10 @@ pub struct LightSet {
     /// The light array when the set is picked by RIS
     /// ([`crate::light::array`]); `None`: by power alone.
     array: Option<LightArray>,
+    /// The set's sphere lights and lights at infinity, which a BRDF-sampled
+    /// ray meets without a surface (see [`emitters_along`]): so that the
+    /// ray's cost does not grow with the number of point sources.
+    along: Vec<u32>,
 }
 
 impl LightSet {
@@ -93,11 +104,20 @@ impl LightSet {
             .map(|&k| scene.lights[k as usize].power())
             .collect();
         let pick = crate::sampling::alias::AliasTable::new(&powers);
+        let along = lights
+            .iter()
+            .copied()
+            .filter(|&k| {
+                let l = &scene.lights[k as usize];
+                matches!(l, Light::Sphere { .. }) || l.is_directional()
+            })
+            .collect();
         Self {
             lights,
             pick,
             prob,
             array: None,
+            along,
         }
     }
 
@@ -355,7 +375,7 @@ fn emitters_along(
             each(le, light_pdf(set, scene, k, x, wi, h.p, h.t));
         }
     }
-    for &k in &set.lights {
+    for &k in &set.along {
         let l = &scene.lights[k as usize];
         if matches!(l, Light::Sphere { .. }) && l.hit(x, wi, t_max).is_some() {
             each(l.luminance(), light_pdf(set, scene, k, x, wi, x, 0.0));

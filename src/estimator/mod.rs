@@ -685,11 +685,16 @@ impl Receivers {
     /// own stream of `seed`, so the result does not depend on threads.
     pub fn sampled_direct(&self, scene: &Scene, seed: u64, b: u64, bs: u64, out: &mut [f64]) {
         const DIRECT_KEY: u64 = 0x6469_7265_6374; // "direct"
-        let samples = direct_samples(bs);
         let n = self.all.len() as u64;
         for (j, rec) in self.all.iter().enumerate() {
             let Some(set) = self.direct_set(j) else {
                 continue;
+            };
+            // A RIS set carries the direct light of every source: more
+            // samples (see `RIS_DIRECT_SAMPLES`).
+            let samples = match set.uses_ris() {
+                true => crate::light::array::RIS_DIRECT_SAMPLES * direct_samples(bs),
+                false => direct_samples(bs),
             };
             let mut sum = 0.0;
             for s in 0..samples {

@@ -685,35 +685,52 @@ impl Scene {
         self
     }
 
-    /// The light array over all sources when direct light is picked by RIS
-    /// (the mode asks for it, or `Auto` with many sources); `None` for
-    /// exact summation.
+    /// The light array over all sources when the direct light at receivers
+    /// is sampled by RIS (the mode asks for it, or `Auto` with many
+    /// sources); `None` for exact summation.
     pub fn light_array(&self) -> Option<&crate::light::array::LightArray> {
-        self.light_array.as_deref()
+        self.light_array
+            .as_deref()
+            .filter(|_| self.direct_lights.ris_at_receivers(self.lights.len()))
+    }
+
+    /// The light array when next-event estimation at backward-path
+    /// vertices keeps one source by RIS; `None`: summed over all sources.
+    pub fn vertex_light_array(&self) -> Option<&crate::light::array::LightArray> {
+        self.light_array
+            .as_deref()
+            .filter(|_| self.direct_lights.ris_at_vertices(self.lights.len()))
     }
 
     /// One line on how direct light is summed, for the run summary.
     pub fn direct_lights_note(&self) -> String {
-        use crate::light::array::{DirectLights, RIS_AUTO_MIN_LIGHTS};
+        use crate::light::array::{DirectLights, RIS_AUTO_RECEIVERS, RIS_AUTO_VERTICES};
         let n = self.lights.len();
         let why = match self.direct_lights {
-            DirectLights::Auto => format!("auto: RIS from {RIS_AUTO_MIN_LIGHTS} sources"),
+            DirectLights::Auto => format!(
+                "auto: RIS from {RIS_AUTO_RECEIVERS} sources at receivers, from {RIS_AUTO_VERTICES} at path vertices"
+            ),
             DirectLights::Exact => "forced by --direct-lights exact".into(),
             DirectLights::Ris => "forced by --direct-lights ris".into(),
         };
-        match self.light_array() {
-            Some(a) => format!(
-                "direct light: light array with RIS ({} candidates drawn by power, one shadow test per sample) over {n} source(s) ({why})",
-                a.candidates()
-            ),
-            None => format!(
-                "direct light: exact sum over {n} source(s), one shadow test per source and receiver ({why})"
-            ),
-        }
+        let m = self.light_array.as_ref().map_or(0, |a| a.candidates());
+        let at_receivers = match self.light_array() {
+            Some(_) => format!("sampled by RIS ({m} candidates drawn by power, one shadow test per sample)"),
+            None => "exact sum (closed forms at set-up, one shadow test per source and receiver)".into(),
+        };
+        let at_vertices = match self.vertex_light_array() {
+            Some(_) => "one source by RIS",
+            None => "summed over all sources",
+        };
+        format!(
+            "direct light from {n} source(s): at receivers {at_receivers}; next-event estimation at backward-path vertices {at_vertices} ({why})"
+        )
     }
 
     fn refresh_light_array(&mut self) {
-        self.light_array = if self.direct_lights.uses_ris(self.lights.len()) {
+        let n = self.lights.len();
+        let any = self.direct_lights.ris_at_receivers(n) || self.direct_lights.ris_at_vertices(n);
+        self.light_array = if any {
             crate::light::array::LightArray::new(
                 &self.lights,
                 (0..self.lights.len() as u32).collect(),
