@@ -119,7 +119,9 @@ fn backward_nee(a: &BenchArgs, counts: &[f64], pts: &[(DVec3, DVec3)]) -> anyhow
         for mode in [DirectLights::Exact, DirectLights::Ris] {
             // Exact set-up at the points in both runs: only the vertices differ.
             let scene = base.clone().with_direct_lights(mode, a.ris_candidates);
-            let exact = base.clone().with_direct_lights(DirectLights::Exact, a.ris_candidates);
+            let exact = base
+                .clone()
+                .with_direct_lights(DirectLights::Exact, a.ris_candidates);
             let rec = Receivers::new(&exact, &pts).map_err(|e| anyhow::anyhow!("{e}"))?;
             let cfg = RunConfig::timed(a.seed, a.threads, t);
             let r = crate::backward::run(&scene, &rec, &cfg, &mut |_| true);

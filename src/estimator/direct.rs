@@ -245,7 +245,7 @@ fn light_sample(
                 && !scene.behind_light_surface(k as usize, x)
                 && (scene.planes_only() || !scene.blocked_by_shapes(y, None, x, 0))
         };
-        if !(e > 0.0) || !seen() {
+        if e.is_nan() || e <= 0.0 || !seen() {
             return (0.0, p_k, DVec3::Z, false);
         }
         let wi = (y - x).normalize();

@@ -708,22 +708,26 @@ impl Scene {
         let n = self.lights.len();
         let why = match self.direct_lights {
             DirectLights::Auto => format!(
-                "auto: RIS from {RIS_AUTO_RECEIVERS} sources at receivers, from {RIS_AUTO_VERTICES} at path vertices"
+                "auto: RIS at the points from {RIS_AUTO_RECEIVERS} sources on, at path vertices from {RIS_AUTO_VERTICES} on"
             ),
             DirectLights::Exact => "forced by --direct-lights exact".into(),
             DirectLights::Ris => "forced by --direct-lights ris".into(),
         };
         let m = self.light_array.as_ref().map_or(0, |a| a.candidates());
         let at_receivers = match self.light_array() {
-            Some(_) => format!("sampled by RIS ({m} candidates drawn by power, one shadow test per sample)"),
-            None => "exact sum (closed forms at set-up, one shadow test per source and receiver)".into(),
+            Some(_) => format!(
+                "sampled by RIS ({m} candidates drawn by power, one shadow test per sample)"
+            ),
+            None => {
+                "exact sum (closed forms at set-up, one shadow test per source and receiver)".into()
+            }
         };
         let at_vertices = match self.vertex_light_array() {
             Some(_) => "one source by RIS",
             None => "summed over all sources",
         };
         format!(
-            "direct light from {n} source(s): at receivers {at_receivers}; next-event estimation at backward-path vertices {at_vertices} ({why})"
+            "direct light from {n} source(s): at the points {at_receivers}; next-event estimation at backward-path vertices {at_vertices} ({why})"
         )
     }
 
