@@ -57,6 +57,20 @@ pub struct BenchArgs {
     /// (streaming the points' arrays), one thread each.
     #[arg(long)]
     pub bound: bool,
+    /// Many-lights costs instead: a hall with this many goniometric
+    /// luminaires (default 1000; a list such as `10,100,1000` for the
+    /// crossover) and 10,000 points, run to 1 % RMS relative error with the
+    /// exact sum of the direct light and with the light array (RIS); see
+    /// `commands::bench_many_lights`. `--time`: the cap of each run
+    /// (default 600 s).
+    #[arg(long = "many-lights", num_args = 0..=1, default_missing_value = "1000")]
+    pub many_lights: Option<String>,
+    /// With `--many-lights`: run only `exact` or only `ris` (default: both).
+    #[arg(long = "direct-lights")]
+    pub direct_lights: Option<String>,
+    /// Candidates per RIS pick for `--many-lights`.
+    #[arg(long = "ris-candidates", default_value_t = crate::light::array::RIS_CANDIDATES)]
+    pub ris_candidates: usize,
 }
 
 /// `lumest bench --shapes N,...`: what scene size costs. For each count,
@@ -334,6 +348,9 @@ pub fn compare(a: &BenchArgs, counts: &[usize], times: &[f64]) -> anyhow::Result
 pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
     if let Some(list) = &a.shapes {
         return shapes(a, list);
+    }
+    if let Some(list) = &a.many_lights {
+        return super::bench_many_lights::many_lights(a, list);
     }
     let counts: Vec<usize> = parse_list(&a.points)
         .map_err(|e| anyhow::anyhow!("--points: {e}"))?

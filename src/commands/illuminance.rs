@@ -801,6 +801,12 @@ pub(crate) fn measure_full(
         run_args.check_local_only("backward")?;
     }
     let mut scene = scene::load(scene_path)?;
+    scene.set_direct_lights(run_args.direct_lights, run_args.ris_candidates);
+    anyhow::ensure!(
+        !(scene.has_panes() && run_args.direct_lights == crate::light::array::DirectLights::Ris),
+        "{}: --direct-lights ris is not supported with glass panes (the sampled sources would miss the panes' transmittance and mirror images); the exact sum runs there",
+        scene_path.display()
+    );
     if scene.has_directional() {
         anyhow::ensure!(
             cfg.near.0 <= 0.0,
@@ -944,6 +950,7 @@ pub(crate) fn measure_full(
         scene_path.display(),
         scene.summary()
     );
+    eprintln!("lumest: {}", scene.direct_lights_note());
     for note in &scene.notes {
         eprintln!("lumest: {note}");
     }

@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod bench_bound;
+pub mod bench_many_lights;
 pub mod figure_target;
 pub mod figures;
 pub mod glare;
@@ -104,6 +105,19 @@ pub struct RunArgs {
     /// and its multiple importance sampling.
     #[arg(long = "no-guide")]
     pub no_guide: bool,
+    /// How the direct light is summed over the sources, at the points and
+    /// at backward-path vertices: `exact` (every source at every point:
+    /// closed forms computed once, one shadow test per source and point),
+    /// `ris` (the light array: each sample keeps one source of
+    /// `--ris-candidates` drawn by power, by resampled importance sampling;
+    /// unbiased, one shadow test per sample) or `auto` (exact below the
+    /// threshold in README "Many lights", RIS above). The run summary says
+    /// which.
+    #[arg(long = "direct-lights", default_value = "auto", value_parser = parse_direct_lights)]
+    pub direct_lights: crate::light::array::DirectLights,
+    /// Candidates per RIS pick (1 to 64).
+    #[arg(long = "ris-candidates", default_value_t = crate::light::array::RIS_CANDIDATES, value_parser = parse_ris_candidates)]
+    pub ris_candidates: usize,
     /// Draw emitted directions independently instead of stratifying them
     /// over each batch. Local estimator only.
     #[arg(long = "no-stratify")]
@@ -313,5 +327,22 @@ pub(crate) fn tick(pb: &indicatif::ProgressBar, cfg: &RunConfig, p: &crate::run:
         ));
     } else {
         pb.set_message(format!("{} chains", p.chains));
+    }
+}
+
+/// Parse `--direct-lights`.
+fn parse_direct_lights(s: &str) -> Result<crate::light::array::DirectLights, String> {
+    crate::light::array::DirectLights::parse(s)
+        .ok_or_else(|| format!("expected `auto`, `exact` or `ris`, got `{s}`"))
+}
+
+/// Parse `--ris-candidates`.
+fn parse_ris_candidates(s: &str) -> Result<usize, String> {
+    let max = crate::light::array::RIS_MAX_CANDIDATES;
+    match s.parse::<usize>() {
+        Ok(m) if (1..=max).contains(&m) => Ok(m),
+        _ => Err(format!(
+            "expected a whole number from 1 to {max}, got `{s}`"
+        )),
     }
 }

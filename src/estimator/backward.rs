@@ -574,6 +574,13 @@ fn join_pool<F: FnMut(u32, f64)>(
 /// weight), exact for a point light, one direction drawn uniformly in the
 /// cone of a sphere light. With `guide`, also the density `p_B(h)` [1/m^2]
 /// of the light-guided strategy at `h` (see [`trace`]; 0 without).
+///
+/// With the scene's light array ([`Scene::vertex_light_array`], many sources) the
+/// sum is replaced by one source kept by RIS and weighted by its unbiased
+/// contribution weight ([`crate::light::array`]): one shadow test instead
+/// of one per source. Strategy B's density `p_B` is still summed over all
+/// sources (one centre-visibility test each: side masks in a scene of
+/// planes); it is only needed with light-guided connections.
 fn next_event(
     scene: &Scene,
     h: &Hit,
@@ -583,18 +590,101 @@ fn next_event(
     guide: bool,
     rng: &mut Philox4x32,
 ) -> (f64, f64) {
-    let hm = scene.side_mask(h.p);
-    let from = Some((h.surface, h.prim));
-    let total = scene.total_power();
+    let v = VertexLight {
+        scene,
+        h,
+        m,
+        f_frame,
+        wo,
+        hm: scene.side_mask(h.p),
+        from: Some((h.surface, h.prim)),
+    };
     let (mut nee, mut p_b) = (0.0, 0.0);
-    for (k, l) in scene.lights.iter().enumerate() {
-        // Whether the light's centre sees `h`: the photons of strategy B
-        // leave from there, and a point source is lit through it.
-        let center_seen = || {
-            scene.side_mask(l.position()).sees(hm)
-                && !scene.behind_light_surface(k, h.p)
-                && (scene.planes_only() || !scene.blocked_by_shapes(h.p, from, l.position(), 0))
-        };
+    match scene.vertex_light_array() {
+        None => {
+            for k in 0..scene.lights.len() {
+                nee += v.nee(k, rng);
+                if guide {
+                    p_b += v.guide_density(k);
+                }
+            }
+        }
+        Some(array) => {
+            // One source kept by RIS (target: its unoccluded illuminance
+            // at the vertex), `N = W N_k` (see `crate::light::array`).
+            // Strategy B's density stays the exact sum over the sources.
+            if let Some(pick) = array.pick(&scene.lights, h.p, h.n, rng) {
+                nee = pick.w * v.nee(pick.k as usize, rng);
+            }
+            if guide {
+                for k in 0..scene.lights.len() {
+                    p_b += v.guide_density(k);
+                }
+            }
+        }
+    }
+    (nee, p_b)
+}
+
+/// A surface vertex lit by next-event estimation (see [`next_event`]).
+struct VertexLight<'a> {
+    scene: &'a Scene,
+    h: &'a Hit,
+    m: &'a Material,
+    f_frame: &'a Frame,
+    wo: DVec3,
+    /// The vertex's side mask.
+    hm: crate::geometry::SideMask,
+    from: Option<(u32, u32)>,
+}
+
+impl VertexLight<'_> {
+    /// Whether light `k`'s centre sees the vertex: the photons of strategy
+    /// B leave from there, and a point source is lit through it.
+    fn center_seen(&self, k: usize) -> bool {
+        let (scene, l) = (self.scene, &self.scene.lights[k]);
+        scene.side_mask(l.position()).sees(self.hm)
+            && !scene.behind_light_surface(k, self.h.p)
+            && (scene.planes_only()
+                || !scene.blocked_by_shapes(self.h.p, self.from, l.position(), 0))
+    }
+
+    /// Strategy B's density [1/m^2] at the vertex due to light `k` (see
+    /// [`trace`]): 0 for sources it draws no photons from.
+    fn guide_density(&self, k: usize) -> f64 {
+        let (scene, h, l) = (self.scene, self.h, &self.scene.lights[k]);
+        if l.emits_from_opening() || matches!(l, Light::Area(_)) || l.is_directional() {
+            return 0.0;
+        }
+        let to_c = l.position() - h.p;
+        let dist2 = to_c.length_squared();
+        let dist = dist2.sqrt();
+        let cos_l = h.n.dot(to_c) / dist;
+        if !(cos_l > 0.0 && self.center_seen(k)) {
+            return 0.0;
+        }
+        let total = scene.total_power();
+        match l {
+            // The photon's direction density towards `h`, per solid angle.
+            Light::Gonio { .. } | Light::Spot(_) => {
+                l.power() / total * l.photon_pdf(-to_c / dist) * cos_l / dist2
+            }
+            _ => l.power() / total * cos_l / (4.0 * PI * dist2),
+        }
+    }
+
+    /// Next-event estimate from light `k` alone (per unit path weight).
+    fn nee(&self, k: usize, rng: &mut Philox4x32) -> f64 {
+        let VertexLight {
+            scene,
+            h,
+            m,
+            f_frame,
+            wo,
+            from,
+            ..
+        } = *self;
+        let l = &scene.lights[k];
         if let Light::Gonio { frame, dist, .. } = l
             && let Some((y, _)) = l.opening_point(rng.next_2d())
         {
@@ -603,15 +693,15 @@ fn next_event(
             let v = y - h.p;
             let t2 = v.length_squared();
             if t2 <= 0.0 {
-                continue;
+                return 0.0;
             }
             let wi = v / t2.sqrt();
             let cos_x = h.n.dot(wi);
             if cos_x > 0.0 && scene.visible(h.p, from, y) {
                 let i = dist.intensity_world(frame, -wi);
-                nee += m.eval(f_frame.to_local(wi), wo) * i * cos_x / t2;
+                return m.eval(f_frame.to_local(wi), wo) * i * cos_x / t2;
             }
-            continue;
+            return 0.0;
         }
         if let Light::Area(a) = l {
             // One point drawn on the emitter (area sampling).
@@ -619,15 +709,15 @@ fn next_event(
             let v = pt.y - h.p;
             let t2 = v.length_squared();
             if t2 <= 0.0 || pt.pdf_a <= 0.0 {
-                continue;
+                return 0.0;
             }
             let wi = v / t2.sqrt();
             let (cos_x, cos_y) = (h.n.dot(wi), a.normal().dot(wi).abs());
             let le = a.emitted(pt.y, -wi);
             if cos_x > 0.0 && le > 0.0 && scene.visible(h.p, from, pt.y) {
-                nee += m.eval(f_frame.to_local(wi), wo) * le * cos_x * cos_y / (t2 * pt.pdf_a);
+                return m.eval(f_frame.to_local(wi), wo) * le * cos_x * cos_y / (t2 * pt.pdf_a);
             }
-            continue;
+            return 0.0;
         }
         if let Light::Environment(env) = l {
             // Next-event estimation from the map (see the sun's below).
@@ -639,9 +729,9 @@ fn next_event(
                     .intersect(&crate::geometry::Ray { o: h.p, d: wi }, from)
                     .is_none()
             {
-                nee += m.eval(f_frame.to_local(wi), wo) * le * cos_n / pdf;
+                return m.eval(f_frame.to_local(wi), wo) * le * cos_n / pdf;
             }
-            continue;
+            return 0.0;
         }
         if let Light::Distant(dl) = l {
             // Next-event estimation from the sun, alone: a path ray that
@@ -663,36 +753,26 @@ fn next_event(
                     .intersect(&crate::geometry::Ray { o: h.p, d: wi }, from)
                     .is_none()
             {
-                nee += m.eval(f_frame.to_local(wi), wo) * scale * cos_n;
+                return m.eval(f_frame.to_local(wi), wo) * scale * cos_n;
             }
-            continue;
+            return 0.0;
         }
         let to_c = l.position() - h.p;
-        let dist2 = to_c.length_squared();
-        let dist = dist2.sqrt();
-        let cos_l = h.n.dot(to_c) / dist;
-        if guide && cos_l > 0.0 && center_seen() {
-            p_b += match l {
-                // The photon's direction density towards `h`, per solid angle.
-                Light::Gonio { .. } | Light::Spot(_) => {
-                    l.power() / total * l.photon_pdf(-to_c / dist) * cos_l / dist2
-                }
-                _ => l.power() / total * cos_l / (4.0 * PI * dist2),
-            };
-        }
+        let dist = to_c.length();
         match *l {
             Light::Point { .. } | Light::Gonio { .. } | Light::Spot(_) => {
-                if !center_seen() {
-                    continue;
+                if !self.center_seen(k) {
+                    return 0.0;
                 }
                 let e = l.direct_illuminance(h.p, h.n);
                 if e > 0.0 {
-                    nee += m.eval(f_frame.to_local(to_c / dist), wo) * e;
+                    return m.eval(f_frame.to_local(to_c / dist), wo) * e;
                 }
+                0.0
             }
             Light::Sphere { r, .. } => {
                 if dist <= r {
-                    continue;
+                    return 0.0;
                 }
                 let cos_a = (1.0 - (r / dist).powi(2)).max(0.0).sqrt();
                 let u = rng.next_2d();
@@ -705,22 +785,22 @@ fn next_event(
                 // so its centre decides; elsewhere the sampled direction's
                 // own segment to the sphere (partial occlusion).
                 let seen = if scene.planes_only() {
-                    center_seen()
+                    self.center_seen(k)
                 } else {
                     l.hit(h.p, wi, f64::INFINITY)
                         .is_some_and(|t| scene.visible(h.p, from, h.p + wi * t))
                 };
                 if cos_n > 0.0 && seen {
                     let solid_angle = 2.0 * PI * (1.0 - cos_a);
-                    nee += m.eval(f_frame.to_local(wi), wo) * l.luminance() * cos_n * solid_angle;
+                    return m.eval(f_frame.to_local(wi), wo) * l.luminance() * cos_n * solid_angle;
                 }
+                0.0
             }
             Light::Area(_) | Light::Distant(_) | Light::Environment(_) => {
                 unreachable!("handled above")
             }
         }
     }
-    (nee, p_b)
 }
 
 /// Strategy B of the light-guided connection from vertex `x` (on surface and

@@ -40,9 +40,17 @@
 //! 95.7 % (mean z -0.02, `lumest validate luminaires`). Every estimate is unbiased, so the
 //! batch means of `D` enter the tallies with the chains' scores and their
 //! variance is in the error bar.
+//!
+//! With many sources ([`crate::light::array`], `--direct-lights ris`) the
+//! set holds every source, point-likes included (a delta: the closed form
+//! times one shadow test, never found by BRDF sampling), and the light
+//! sample's source is kept by RIS instead of picked by power: its estimate
+//! is multiplied by `W P_k` (`P_k` the power pick's probability, which the
+//! MIS weights keep as a stand-in for the intractable RIS marginal).
 
 use super::{Receiver, Response};
 use crate::light::Light;
+use crate::light::array::LightArray;
 use crate::sampling::Philox4x32;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sin_cos_turns};
 use crate::scene::Scene;
@@ -71,6 +79,13 @@ pub struct LightSet {
     pick: Option<crate::sampling::alias::AliasTable>,
     /// Pick probability per scene light (0 outside the set).
     prob: Vec<f64>,
+    /// The light array when the set is picked by RIS
+    /// ([`crate::light::array`]); `None`: by power alone.
+    array: Option<LightArray>,
+    /// The set's sphere lights and lights at infinity, which a BRDF-sampled
+    /// ray meets without a surface (see [`emitters_along`]): so that the
+    /// ray's cost does not grow with the number of point sources.
+    along: Vec<u32>,
 }
 
 impl LightSet {
@@ -91,7 +106,34 @@ impl LightSet {
             .map(|&k| scene.lights[k as usize].power())
             .collect();
         let pick = crate::sampling::alias::AliasTable::new(&powers);
-        Self { lights, pick, prob }
+        let along = lights
+            .iter()
+            .copied()
+            .filter(|&k| {
+                let l = &scene.lights[k as usize];
+                matches!(l, Light::Sphere { .. }) || l.is_directional()
+            })
+            .collect();
+        Self {
+            lights,
+            pick,
+            prob,
+            array: None,
+            along,
+        }
+    }
+
+    /// The set of `lights`, each sample's source kept by RIS over
+    /// `candidates` power-drawn candidates ([`LightArray`]).
+    pub fn with_ris(scene: &Scene, lights: Vec<u32>, candidates: usize) -> Self {
+        let mut set = Self::new(scene, lights);
+        set.array = LightArray::new(&scene.lights, set.lights.clone(), candidates);
+        set
+    }
+
+    /// Whether the set's source is picked by RIS.
+    pub fn uses_ris(&self) -> bool {
+        self.array.is_some()
     }
 
     /// Whether the set holds no source that emits.
@@ -106,6 +148,26 @@ impl LightSet {
 
     fn pick(&self, u: f64) -> u32 {
         self.lights[self.pick.as_ref().map_or(0, |t| t.sample(u))]
+    }
+
+    /// The source of one light sample at `x` (unit normal `n`) and the
+    /// factor `s` its estimate `f / (P_k p)` is multiplied by: 1 when
+    /// picked by power (`P_k`), `W P_k` when kept by RIS (so that the
+    /// estimate is `W f / p`, see [`crate::light::array`]); `None`: no
+    /// sample (estimate 0).
+    fn pick_for(
+        &self,
+        scene: &Scene,
+        x: DVec3,
+        n: DVec3,
+        rng: &mut Philox4x32,
+    ) -> Option<(u32, f64)> {
+        match &self.array {
+            None => Some((self.pick(rng.next_f64()), 1.0)),
+            Some(a) => a
+                .pick(&scene.lights, x, n, rng)
+                .map(|p| (p.k, p.w * self.prob[p.k as usize])),
+        }
     }
 }
 
@@ -166,14 +228,31 @@ fn light_pdf(set: &LightSet, scene: &Scene, k: u32, x: DVec3, wi: DVec3, y: DVec
 fn light_sample(
     scene: &Scene,
     set: &LightSet,
+    k: u32,
     rec: &Receiver,
     frame: &Frame,
     rng: &mut Philox4x32,
 ) -> (f64, f64, DVec3, bool) {
-    let k = set.pick(rng.next_f64());
     let u = rng.next_2d();
     let x = rec.p;
     let light = &scene.lights[k as usize];
+    if light.is_point_like() {
+        // In a RIS set: the closed form and one shadow test (as the exact
+        // sum's, see `Receivers::from_receivers`); a delta, never hittable.
+        let p_k = set.prob[k as usize];
+        let e = light.direct_illuminance(x, rec.n);
+        let y = light.position();
+        let seen = || {
+            scene.side_mask(y).sees(scene.side_mask(x))
+                && !scene.behind_light_surface(k as usize, x)
+                && (scene.planes_only() || !scene.blocked_by_shapes(y, None, x, 0))
+        };
+        if e.is_nan() || e <= 0.0 || !seen() {
+            return (0.0, p_k, DVec3::Z, false);
+        }
+        let wi = (y - x).normalize();
+        return (e * rec.weight(frame, wi), p_k, wi, false);
+    }
     if let (
         Light::Gonio {
             frame: lf, dist, ..
@@ -301,7 +380,7 @@ fn emitters_along(
             each(le, light_pdf(set, scene, k, x, wi, h.p, h.t));
         }
     }
-    for &k in &set.lights {
+    for &k in &set.along {
         let l = &scene.lights[k as usize];
         if matches!(l, Light::Sphere { .. })
             && let Some(t) = l.hit(x, wi, t_max)
@@ -337,17 +416,23 @@ pub fn sample(
         return 0.0;
     }
     let mut total = 0.0;
-    if strategy != Strategy::Brdf {
-        let (f, p_l, wi, hittable) = light_sample(scene, set, rec, frame, rng);
+    if strategy != Strategy::Brdf
+        && let Some((k, scale)) = set.pick_for(scene, rec.p, rec.n, rng)
+    {
+        // With RIS the MIS weights keep the power pick's density `p_l`
+        // as a stand-in (they need only sum to 1, see
+        // `crate::light::array`); `scale` turns `1 / P_k` into `W`.
+        let (f, p_l, wi, hittable) = light_sample(scene, set, k, rec, frame, rng);
         if f > 0.0 && p_l > 0.0 && !hittable {
-            total += f / p_l;
+            total += f / p_l * scale;
         } else if f > 0.0 && p_l > 0.0 {
             let p_b = response(rec, frame, wi).1;
-            total += match strategy {
-                Strategy::Light => f / p_l,
-                Strategy::Power => f * p_l / (p_l * p_l + p_b * p_b),
-                _ => f / (p_l + p_b),
-            };
+            total += scale
+                * match strategy {
+                    Strategy::Light => f / p_l,
+                    Strategy::Power => f * p_l / (p_l * p_l + p_b * p_b),
+                    _ => f / (p_l + p_b),
+                };
         }
     }
     if strategy != Strategy::Light {

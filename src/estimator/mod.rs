@@ -435,8 +435,14 @@ impl Receivers {
         let inside: Vec<u64> = receivers.iter().map(|r| scene.inside_mask(r.p)).collect();
         let frames: Vec<Frame> = receivers.iter().map(|r| Frame::from_normal(r.n)).collect();
         let mut direct = vec![0.0; receivers.len()];
+        // With the light array (many sources) only a collimated sun stays
+        // exact: every other source is sampled, one RIS pick per sample.
+        let ris = scene.light_array().map(|a| a.candidates());
         let exact: Vec<bool> = (0..scene.lights.len())
-            .map(|k| exact_direct(scene, k))
+            .map(|k| match ris {
+                Some(_) => matches!(&scene.lights[k], Light::Distant(dl) if dl.collimated()),
+                None => exact_direct(scene, k),
+            })
             .collect();
         // Sources other than points and a collimated sun (which are exact
         // for any response).
@@ -586,15 +592,23 @@ impl Receivers {
         // Sources sampled per batch: those without an exact form anywhere,
         // and every non-point source at a receiver whose response varies
         // (`non_point`, above).
+        let sampled: Vec<usize> = (0..scene.lights.len()).filter(|&k| !exact[k]).collect();
         let sets_of = [
-            (0..scene.lights.len())
-                .filter(|&k| !exact[k])
-                .collect::<Vec<_>>(),
-            (0..scene.lights.len()).filter(non_point).collect(),
+            sampled.clone(),
+            match ris {
+                Some(_) => sampled,
+                None => (0..scene.lights.len()).filter(non_point).collect(),
+            },
         ];
         let direct_sets: Vec<direct::LightSet> = sets_of
             .iter()
-            .map(|ks| direct::LightSet::new(scene, ks.iter().map(|&k| k as u32).collect()))
+            .map(|ks| {
+                let ks = ks.iter().map(|&k| k as u32).collect();
+                match ris {
+                    Some(m) => direct::LightSet::with_ris(scene, ks, m),
+                    None => direct::LightSet::new(scene, ks),
+                }
+            })
             .collect();
         let direct_set = receivers
             .iter()
@@ -838,11 +852,16 @@ impl Receivers {
     /// own stream of `seed`, so the result does not depend on threads.
     pub fn sampled_direct(&self, scene: &Scene, seed: u64, b: u64, bs: u64, out: &mut [f64]) {
         const DIRECT_KEY: u64 = 0x6469_7265_6374; // "direct"
-        let samples = direct_samples(bs);
         let n = self.all.len() as u64;
         for (j, rec) in self.all.iter().enumerate() {
             let Some(set) = self.direct_set(j) else {
                 continue;
+            };
+            // A RIS set carries the direct light of every source: more
+            // samples (see `RIS_DIRECT_SAMPLES`).
+            let samples = match set.uses_ris() {
+                true => crate::light::array::RIS_DIRECT_SAMPLES * direct_samples(bs),
+                false => direct_samples(bs),
             };
             let mut sum = 0.0;
             for s in 0..samples {

@@ -15,6 +15,7 @@
 
 pub mod angle_grid;
 pub mod area;
+pub mod array;
 pub mod distant;
 pub mod environment;
 pub mod goniometric;

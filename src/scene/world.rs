@@ -295,6 +295,13 @@ pub struct Scene {
     /// Per light: the surface a point-like light lies on, if any, and the
     /// unit normal of the side it belongs to (see [`Scene::light_surface`]).
     light_surface: Vec<Option<(u32, DVec3)>>,
+    /// How direct light is summed over the sources ([`Self::set_direct_lights`]).
+    direct_lights: crate::light::array::DirectLights,
+    /// The light array over all sources (RIS candidates per pick set), when
+    /// the scene uses it ([`Self::light_array`]).
+    light_array: Option<std::sync::Arc<crate::light::array::LightArray>>,
+    /// RIS candidates per pick.
+    ris_candidates: usize,
 }
 
 /// Why [`Scene::build`] refused its input.
@@ -454,6 +461,9 @@ impl Scene {
             light_pick: None,
             total_power: 0.0,
             light_surface: Vec::new(),
+            direct_lights: crate::light::array::DirectLights::Auto,
+            light_array: None,
+            ris_candidates: crate::light::array::RIS_CANDIDATES,
         };
         // An area source's emitting surface joins the scene's shapes.
         let mut lights = lights;
@@ -680,6 +690,95 @@ impl Scene {
         self.lights = lights;
         self.light_pick = light_pick;
         self.total_power = total_power;
+        self.refresh_light_array();
+    }
+
+    /// Sum direct light by `mode` with `candidates` RIS candidates per pick
+    /// (see [`crate::light::array`]); the default is
+    /// [`DirectLights::Auto`](crate::light::array::DirectLights::Auto) with
+    /// [`RIS_CANDIDATES`](crate::light::array::RIS_CANDIDATES). Set it before
+    /// compiling receivers.
+    pub fn set_direct_lights(
+        &mut self,
+        mode: crate::light::array::DirectLights,
+        candidates: usize,
+    ) {
+        self.direct_lights = mode;
+        self.ris_candidates = candidates;
+        self.refresh_light_array();
+    }
+
+    /// The scene with [`Self::set_direct_lights`] applied.
+    pub fn with_direct_lights(
+        mut self,
+        mode: crate::light::array::DirectLights,
+        candidates: usize,
+    ) -> Self {
+        self.set_direct_lights(mode, candidates);
+        self
+    }
+
+    /// The light array over all sources when the direct light at receivers
+    /// is sampled by RIS (the mode asks for it, or `Auto` with many
+    /// sources); `None` for exact summation.
+    /// Glass panes keep the exact sum: the sampled point-like sources would
+    /// miss their pane transmittance and mirror images.
+    pub fn light_array(&self) -> Option<&crate::light::array::LightArray> {
+        self.light_array.as_deref().filter(|_| {
+            self.direct_lights.ris_at_receivers(self.lights.len()) && self.panes.is_empty()
+        })
+    }
+
+    /// The light array when next-event estimation at backward-path
+    /// vertices keeps one source by RIS; `None`: summed over all sources.
+    pub fn vertex_light_array(&self) -> Option<&crate::light::array::LightArray> {
+        self.light_array
+            .as_deref()
+            .filter(|_| self.direct_lights.ris_at_vertices(self.lights.len()))
+    }
+
+    /// One line on how direct light is summed, for the run summary.
+    pub fn direct_lights_note(&self) -> String {
+        use crate::light::array::{DirectLights, RIS_AUTO_RECEIVERS, RIS_AUTO_VERTICES};
+        let n = self.lights.len();
+        let why = match self.direct_lights {
+            DirectLights::Auto => format!(
+                "auto: RIS at the points from {RIS_AUTO_RECEIVERS} sources on, at path vertices from {RIS_AUTO_VERTICES} on"
+            ),
+            DirectLights::Exact => "forced by --direct-lights exact".into(),
+            DirectLights::Ris => "forced by --direct-lights ris".into(),
+        };
+        let m = self.light_array.as_ref().map_or(0, |a| a.candidates());
+        let at_receivers = match self.light_array() {
+            Some(_) => format!(
+                "sampled by RIS ({m} candidates drawn by power, one shadow test per sample)"
+            ),
+            None => {
+                "exact sum (closed forms at set-up, one shadow test per source and receiver)".into()
+            }
+        };
+        let at_vertices = match self.vertex_light_array() {
+            Some(_) => "one source by RIS",
+            None => "summed over all sources",
+        };
+        format!(
+            "direct light from {n} source(s): at the points {at_receivers}; next-event estimation at backward-path vertices {at_vertices} ({why})"
+        )
+    }
+
+    fn refresh_light_array(&mut self) {
+        let n = self.lights.len();
+        let any = self.direct_lights.ris_at_receivers(n) || self.direct_lights.ris_at_vertices(n);
+        self.light_array = if any {
+            crate::light::array::LightArray::new(
+                &self.lights,
+                (0..self.lights.len() as u32).collect(),
+                self.ris_candidates,
+            )
+            .map(std::sync::Arc::new)
+        } else {
+            None
+        };
     }
 
     /// The infinite planes (in side-mask bit order).
