@@ -25,7 +25,7 @@ done
 [ -n "$BROWSER" ] || { echo "no headless browser found (apt-get install -y chromium)" >&2; exit 1; }
 "$LUMEST" grid --scene data/office.toml --out "$OUT/office_grids.csv"
 "$LUMEST" illuminance --scene data/office.toml --points "$OUT/office_grids.csv" \
-    --out "$OUT/E.csv" --figures-out "$OUT/figures.csv" --rel-error 5e-3 \
+    --out "$OUT/E.csv" --figures-out "$OUT/figures.csv" --time 40 \
     --report "$OUT/report.html" --isolux-dir "$OUT"
 [ -s "$OUT/report.html" ] || { echo "no report written" >&2; exit 1; }
 rm -f "$OUT/report.png"

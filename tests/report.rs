@@ -168,7 +168,7 @@ fn office_report_matches_its_figures() {
     let dir = tempfile::tempdir().unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/office.toml");
     let (doc, figures, _) = run(dir.path(), &scene, &["--chains", "16384", "--seed", "7"]);
-    assert_eq!(figures.len(), 10, "two grids, five figures each");
+    assert_eq!(figures.len(), 40, "eight grids, five figures each");
     check_grids(&doc, &figures, dir.path());
     // Luminaires: five downlights and the pendant dimmed to 3000 lm in the scene file.
     let rows: Vec<Vec<String>> = doc
@@ -199,7 +199,7 @@ fn office_report_matches_its_figures() {
         .collect();
     assert_eq!(run["seed"], "7");
     assert_eq!(run["chains"], "16384");
-    assert_eq!(run["receivers"], "104");
+    assert_eq!(run["receivers"], "566");
     // Flags: either all pass or a table of counts.
     assert!(doc.select(&sel("#flags-ok")).count() + doc.select(&sel("#flags-table")).count() == 1);
 }
