@@ -8,6 +8,7 @@ pub mod illuminance;
 pub mod merge;
 pub mod mpi_run;
 pub mod outputs;
+pub mod peak_rss;
 pub mod photometry;
 pub mod render;
 pub mod report;
