@@ -545,12 +545,77 @@ fn a_single_chain_still_gives_finite_error_bars() {
     );
 }
 
+/// `lumest bench` runs the named cases (issue 15 item 6: the 100 x 100
+/// Sobolev grid and the office) after the point counts, each row with
+/// chains/s, scores/s, FOM and the peak resident memory, consistent with
+/// its own columns; the grid also against its exact answers.
+#[test]
+fn bench_runs_the_grid_and_the_office() {
+    let o = lumest()
+        .args([
+            "bench",
+            "--points",
+            "1",
+            "--time",
+            "0.1",
+            "--case-time",
+            "0.3",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(o.stdout).unwrap();
+    let mut lines = out.lines().skip_while(|l| !l.starts_with("named cases"));
+    lines.next().expect("the named cases' table");
+    let header: Vec<&str> = lines.next().unwrap().split_whitespace().collect();
+    let mut seen = Vec::new();
+    for line in lines.filter(|l| l.starts_with("   grid") || l.starts_with(" office")) {
+        let cells: Vec<&str> = line.split_whitespace().collect();
+        let col = |name: &str| -> f64 {
+            cells[header.iter().position(|h| *h == name).unwrap()]
+                .parse()
+                .unwrap()
+        };
+        let (t, chains) = (col("time_s"), col("chains"));
+        assert!(t > 0.0 && chains >= 32.0 * 256.0, "{line}");
+        // `time_s` is printed to 0.01 s: allow its rounding (relative 0.005 / t).
+        let tol = 0.01 + 0.005 / t;
+        assert!((col("chains/s") * t / chains - 1.0).abs() < tol, "{line}");
+        assert!(col("scores/s") > col("chains/s"), "{line}");
+        let fom = 1.0 / (col("rms_R").powi(2) * t);
+        assert!((col("FOM") / fom - 1.0).abs() < tol, "{line}");
+        assert!(col("rms_R") > 0.0 && col("rms_R") <= col("max_R"), "{line}");
+        assert!(col("peak_MiB") > 1.0 && col("peak_MiB") < 4096.0, "{line}");
+        assert!(col("setup_s") >= 0.0, "{line}");
+        seen.push(cells[0].to_string());
+        if cells[0] == "grid" {
+            assert_eq!(col("points"), 10_000.0);
+            // Against the exact answers: within a few standard errors.
+            assert!(col("rms_err") < 3.0 * col("rms_R"), "{line}");
+        } else {
+            assert_eq!(col("points"), 66.0);
+        }
+    }
+    assert_eq!(seen, ["grid", "office"], "{out}");
+    assert!(out.contains("grid: RMS R = 1e-3 at all 10,000 points projects to"));
+}
+
 #[test]
 fn bench_reports_only_what_it_measures() {
     // Throughput table: no speed-up against an estimator it does not run;
     // the projected time follows from the printed columns.
     let o = lumest()
-        .args(["bench", "--points", "4", "--time", "0.2", "--threads", "1"])
+        .args([
+            "bench",
+            "--points",
+            "4",
+            "--time",
+            "0.2",
+            "--threads",
+            "1",
+            "--cases",
+            "none",
+        ])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

@@ -82,3 +82,34 @@ fn a_short_time_limit_still_gives_enough_batches() {
     assert!(r.tallies.batches() >= lumest::run::MIN_BATCHES);
     assert_eq!(r.reason, lumest::run::StopReason::Time);
 }
+
+/// A `--rel-error` run that sizes its own batches (two pilot stages here)
+/// plans alike on any thread count, and its result is that of a
+/// `--chains` run of the planned batches at the planned size.
+#[test]
+fn planned_batch_size_is_reproducible() {
+    let p = (0.5, 0.5, 0.5, 0.5);
+    let cfg = |t| RunConfig {
+        seed: 11,
+        threads: t,
+        stop: Stop {
+            rel_error: Some(5e-4),
+            time: Some(120.0),
+            ..Stop::default()
+        },
+        ..RunConfig::default()
+    };
+    let (_, one) = sobolev_run(p, 4, 1.0, &cfg(1));
+    let (_, three) = sobolev_run(p, 4, 1.0, &cfg(3));
+    assert_eq!(one.reason, lumest::run::StopReason::RelError);
+    let pilot = one.pilot.expect("a pilot");
+    assert_eq!(pilot.stages, 2, "{pilot:?}");
+    assert!(one.batch_size > 256 && one.tallies.batches() >= 32);
+    assert_eq!(bits(&one), bits(&three));
+    let fixed = RunConfig {
+        batch_size: Some(one.batch_size),
+        ..chains_cfg(one.chains, 11, 2)
+    };
+    let (_, again) = sobolev_run(p, 4, 1.0, &fixed);
+    assert_eq!(bits(&one), bits(&again));
+}

@@ -1,7 +1,9 @@
 //! `lumest bench`: throughput and figure of merit on the Sobolev scene.
 //!
 //! Reports chains/s, point scores/s, the RMS relative standard error of E
-//! reached, and FOM = 1/(R_rms^2 T), for each point count. The targets (2
+//! reached, FOM = 1/(R_rms^2 T) and the peak resident memory, for each
+//! point count, then for the named cases ([`cases`]: the 100 x 100 Sobolev
+//! grid and the office). The targets (2
 //! cores, h1 = h2 = 0.5, rho = 0.5, points on both planes with r in [0, 3]):
 //! RMS R < 1e-4 with 100 points within 20 s, and < 1e-3 with 10,000 points
 //! within 60 s. Every number printed is measured by the run itself (or
@@ -71,6 +73,15 @@ pub struct BenchArgs {
     /// Candidates per RIS pick for `--many-lights`.
     #[arg(long = "ris-candidates", default_value_t = crate::light::array::RIS_CANDIDATES)]
     pub ris_candidates: usize,
+    /// Named cases run after the point counts: `grid` (the Sobolev scene,
+    /// h = 0.5, rho = 0.5, a 100 x 100 grid on [-3, 3]^2 of the lower
+    /// plane, 10,000 points with exact answers), `office` (data/office.toml
+    /// at data/office_grid.csv); a comma list, or `none`.
+    #[arg(long, default_value = "grid,office")]
+    pub cases: String,
+    /// Seconds per named case.
+    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
+    pub case_time: f64,
 }
 
 /// `lumest bench --shapes N,...`: what scene size costs. For each count,
@@ -395,9 +406,15 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
     if a.luminaires {
         return luminaires(a);
     }
+    let cases_list = named_cases(&a.cases)?;
+    anyhow::ensure!(
+        a.case_time.is_finite() && a.case_time > 0.0,
+        "--case-time must be a positive number of seconds, got {}",
+        a.case_time
+    );
     let problem = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).map_err(|e| anyhow::anyhow!("{e}"))?;
     println!(
-        "{:>7} {:>7} {:>12} {:>11} {:>11} {:>10} {:>10} {:>11} {:>10} {:>8} {:>7}",
+        "{:>7} {:>7} {:>12} {:>11} {:>11} {:>10} {:>10} {:>11} {:>10} {:>8} {:>7} {:>9}",
         "points",
         "time_s",
         "chains",
@@ -408,10 +425,12 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
         "FOM",
         "rms_err",
         "target",
-        "met"
+        "met",
+        "peak_MiB"
     );
     for (k, &n) in counts.iter().enumerate() {
         let t = if times.len() == 1 { times[0] } else { times[k] };
+        super::peak_rss::reset();
         let case = sobolev_case(&problem, n, 3.0);
         let receivers =
             Receivers::new(&case.scene, &case.points).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -420,8 +439,9 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
         let exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
         let cp = checkpoint(&r.progress(), &exact, 0..n);
         let target = if n <= 100 { 1e-4 } else { 1e-3 };
+        let peak = super::peak_rss::peak();
         println!(
-            "{:>7} {:>7.1} {:>12} {:>11.4e} {:>11.4e} {:>10.3e} {:>10.3e} {:>11.4e} {:>10.3e} {:>8.0e} {:>7}",
+            "{:>7} {:>7.1} {:>12} {:>11.4e} {:>11.4e} {:>10.3e} {:>10.3e} {:>11.4e} {:>10.3e} {:>8.0e} {:>7} {:>9}",
             n,
             r.wall,
             r.chains,
@@ -433,6 +453,7 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
             cp.rms_err,
             target,
             if cp.rms_r < target { "yes" } else { "no" },
+            super::peak_rss::format_mib(peak),
         );
         // Projected from this run alone (errors fall like 1/sqrt(T)); no
         // other estimator is quoted here: `--compare` runs the backward one.
@@ -443,5 +464,198 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
             r.threads, r.wall
         );
     }
+    cases(a, &cases_list)
+}
+
+/// The named cases of `--cases`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NamedCase {
+    /// The Sobolev scene (h = 0.5, rho = 0.5) at a 100 x 100 grid on
+    /// [-3, 3]^2 of the lower plane: 10,000 points with exact answers.
+    Grid,
+    /// The office (data/office.toml) at its grid (data/office_grid.csv).
+    Office,
+}
+
+/// Parse `--cases`: `grid`, `office`, a comma list of them, or `none`.
+pub fn named_cases(list: &str) -> anyhow::Result<Vec<NamedCase>> {
+    if list.trim() == "none" {
+        return Ok(Vec::new());
+    }
+    list.split(',')
+        .map(|c| match c.trim() {
+            "grid" => Ok(NamedCase::Grid),
+            "office" => Ok(NamedCase::Office),
+            other => anyhow::bail!("--cases: unknown case {other:?} (grid, office or none)"),
+        })
+        .collect()
+}
+
+/// Points of the Sobolev grid case: a `side` x `side` grid on [-3, 3]^2
+/// of plane 1 (z = 0, normal +z), row by row in x then y, with each
+/// point's exact illuminance [lx] (one Sobolev integral per distinct
+/// radius: the grid's symmetry leaves about an eighth of them).
+pub fn sobolev_grid(s: &Sobolev, side: usize) -> (Vec<(glam::DVec3, glam::DVec3)>, Vec<f64>) {
+    use rayon::prelude::*;
+    let at = |k: usize| -3.0 + 6.0 * k as f64 / (side.max(2) - 1) as f64;
+    let points: Vec<(glam::DVec3, glam::DVec3)> = (0..side * side)
+        .map(|j| {
+            (
+                glam::DVec3::new(at(j % side), at(j / side), 0.0),
+                glam::DVec3::Z,
+            )
+        })
+        .collect();
+    let r: Vec<f64> = points.iter().map(|(p, _)| p.x.hypot(p.y)).collect();
+    let mut distinct: Vec<u64> = r.iter().map(|r| r.to_bits()).collect();
+    distinct.sort_unstable();
+    distinct.dedup();
+    let values: Vec<f64> = distinct
+        .par_iter()
+        .map(|&b| s.illuminance(1, f64::from_bits(b)).e)
+        .collect();
+    let exact = r
+        .iter()
+        .map(|r| values[distinct.binary_search(&r.to_bits()).expect("listed")])
+        .collect();
+    (points, exact)
+}
+
+/// Run the named cases for `--case-time` seconds each and print, per
+/// case, chains/s, scores/s, the RMS and largest relative standard error,
+/// FOM = 1/(R_rms^2 T), the set-up time before the run proper (loading the
+/// scene and points, the receivers, the near/far split) and the peak
+/// resident memory of the case (scene, points, receivers and run; the peak
+/// is reset before each case). The grid case also gives its RMS error
+/// against the exact answers and the time its FOM projects for RMS
+/// R = 1e-3.
+pub fn cases(a: &BenchArgs, list: &[NamedCase]) -> anyhow::Result<()> {
+    use std::time::Instant;
+    if list.is_empty() {
+        return Ok(());
+    }
+    let t = a.case_time;
+    println!("\nnamed cases, {t} s each (--cases, --case-time):");
+    println!(
+        "{:>7} {:>7} {:>8} {:>10} {:>11} {:>11} {:>10} {:>10} {:>11} {:>8} {:>9} {:>10}",
+        "case",
+        "points",
+        "time_s",
+        "chains",
+        "chains/s",
+        "scores/s",
+        "rms_R",
+        "max_R",
+        "FOM",
+        "setup_s",
+        "peak_MiB",
+        "rms_err"
+    );
+    for &case in list {
+        super::peak_rss::reset();
+        // The set-up is timed from loading the scene and the points to the
+        // first batch (the grid's exact answers are the bench's own).
+        let (name, scene, points, exact, t0) = match case {
+            NamedCase::Grid => {
+                let problem =
+                    Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).map_err(|e| anyhow::anyhow!("{e}"))?;
+                let (points, exact) = sobolev_grid(&problem, 100);
+                let t0 = Instant::now();
+                (
+                    "grid",
+                    crate::cases::sobolev::sobolev_scene(&problem),
+                    points,
+                    Some(exact),
+                    t0,
+                )
+            }
+            NamedCase::Office => {
+                let t0 = Instant::now();
+                let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data");
+                let scene = crate::scene::load(&dir.join("office.toml"))
+                    .map_err(|e| anyhow::anyhow!("{e}"))?;
+                let table = crate::io::read_points(&dir.join("office_grid.csv").to_string_lossy())
+                    .map_err(|e| anyhow::anyhow!("{e}"))?;
+                ("office", scene, table.points, None, t0)
+            }
+        };
+        let receivers = Receivers::new(&scene, &points).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let cfg = RunConfig::timed(a.seed, a.threads, t);
+        let r = run(&scene, &receivers, &cfg, &mut |_| true);
+        let setup = t0.elapsed().as_secs_f64() - r.wall;
+        let peak = super::peak_rss::peak();
+        let rms_r = r.tallies.rms_rel_error(&r.direct);
+        let rms_err = exact.as_ref().map(|ex| {
+            let n = points.len().max(1) as f64;
+            ((0..points.len())
+                .map(|j| ((r.direct[j] + r.tallies.estimated[j].mean() - ex[j]) / ex[j]).powi(2))
+                .sum::<f64>()
+                / n)
+                .sqrt()
+        });
+        println!(
+            "{:>7} {:>7} {:>8.2} {:>10} {:>11.4e} {:>11.4e} {:>10.3e} {:>10.3e} {:>11.4e} {:>8.3} {:>9} {:>10}",
+            name,
+            points.len(),
+            r.wall,
+            r.chains,
+            r.chains as f64 / r.wall,
+            r.scores as f64 / r.wall,
+            rms_r,
+            r.tallies.max_rel_error(&r.direct),
+            1.0 / (rms_r * rms_r * r.wall),
+            setup,
+            super::peak_rss::format_mib(peak),
+            rms_err.map_or_else(|| "-".to_string(), |e| format!("{e:.3e}")),
+        );
+        if case == NamedCase::Grid {
+            // Errors fall like 1/sqrt(T): the run's FOM gives the time to 1e-3.
+            let needed = rms_r * rms_r * r.wall / 1e-6;
+            println!(
+                "        grid: RMS R = 1e-3 at all 10,000 points projects to {needed:.2} s of run on {} \
+                 thread(s), after {setup:.2} s of set-up (issue 15 target: 6 s on 2 cores: {})",
+                r.threads,
+                if needed + setup <= 6.0 {
+                    "met"
+                } else {
+                    "NOT met"
+                }
+            );
+        }
+    }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn named_cases_parse() {
+        assert_eq!(
+            named_cases("grid,office").unwrap(),
+            [NamedCase::Grid, NamedCase::Office]
+        );
+        assert_eq!(named_cases(" office ").unwrap(), [NamedCase::Office]);
+        assert!(named_cases("none").unwrap().is_empty());
+        assert!(named_cases("grid,room").is_err());
+    }
+
+    /// The grid's corners, centre and its exact answers by symmetry.
+    #[test]
+    fn sobolev_grid_points_and_answers() {
+        let s = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).unwrap();
+        let (points, exact) = sobolev_grid(&s, 5);
+        assert_eq!(points.len(), 25);
+        assert_eq!(points[0].0, glam::DVec3::new(-3.0, -3.0, 0.0));
+        assert_eq!(points[24].0, glam::DVec3::new(3.0, 3.0, 0.0));
+        assert_eq!(points[12].0, glam::DVec3::ZERO);
+        assert!(points.iter().all(|(_, n)| *n == glam::DVec3::Z));
+        assert_eq!(exact[12], s.illuminance(1, 0.0).e);
+        assert_eq!(exact[0], s.illuminance(1, 18f64.sqrt()).e);
+        // (x, y) -> (y, x) and (-x, y) keep r.
+        assert_eq!(exact[1], exact[5]);
+        assert_eq!(exact[1], exact[3]);
+        assert!(exact.iter().all(|e| e.is_finite() && *e > 0.0));
+    }
 }

@@ -380,12 +380,20 @@ pub fn summary(r: &RunResult) -> String {
             ("--rel-error", "max", max)
         };
         text += &format!(
-            "\n{flag} {target:.3e}: a pilot of {} batches of {} chains ({:.3} s, own streams) \
+            "\n{flag} {target:.3e}: a pilot of {} batches of {} chains ({:.3} s, own streams{}) \
              gave {what} R {:.3e} per batch of {}, so {} fresh batches were planned; achieved {what} R \
              {max:.3e}{}",
             p.batches,
             p.batch_size,
             p.wall,
+            if p.stages > 1 {
+                format!(
+                    ", after a first stage of batches of {} chains that sized it",
+                    crate::run::MIN_TIMED_BATCH
+                )
+            } else {
+                String::new()
+            },
             p.rel_error,
             r.batch_size,
             format_number(p.planned as f64),

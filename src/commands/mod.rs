@@ -13,6 +13,7 @@ pub mod merge;
 pub mod modelling;
 pub mod mpi_run;
 pub mod outputs;
+pub mod peak_rss;
 pub mod photometry;
 pub mod render;
 pub mod report;
