@@ -109,7 +109,7 @@ pub struct RunArgs {
     /// (an Owen-scrambled Sobol' net over the light pick, emission position
     /// and direction and the first three reflections), `shift` (a digitally
     /// shifted Sobol' net over the emitted direction and the first
-    /// reflection) or `off`. Local estimator only. [default: shift]
+    /// reflection) or `off`. Local estimator only. [default: owen]
     #[arg(long, value_enum)]
     pub qmc: Option<QmcArg>,
     /// No progress bar.

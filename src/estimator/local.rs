@@ -178,7 +178,7 @@ impl BatchWork for LocalWork<'_> {
                 ]
                 .into(),
                 Qmc::Owen => {
-                    if i > 0 && i % MAX_POINTS == 0 {
+                    if i > 0 && i.is_multiple_of(MAX_POINTS) {
                         owen = OwenSobol::random(&mut srng);
                     }
                     let i = i % MAX_POINTS;
