@@ -84,9 +84,57 @@ pub enum ChainEnd {
     Truncated,
 }
 
+/// The uniforms of a chain's leading decisions, given by the caller (from a
+/// stratified net over the batch, or from the chain's stream); a `None`
+/// draws from the chain's stream where it is used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeadingUniforms {
+    /// The light pick.
+    pub pick: Option<f64>,
+    /// The emission position on the light (area lights, openings).
+    pub pos: Option<[f64; 2]>,
+    /// The emitted direction.
+    pub dir: [f64; 2],
+    /// The reflections at collisions 1, 2, 3.
+    pub reflect: [Option<[f64; 2]>; 3],
+}
+
+/// Coordinates of one point of a net that [`LeadingUniforms::from_point`] reads.
+pub const LEADING_DIMS: usize = 11;
+
+impl LeadingUniforms {
+    /// All leading uniforms from the coordinates `u(d)`, `d < LEADING_DIMS`,
+    /// of one point of a net, the decisions that shape the first collisions
+    /// most on the best-stratified coordinates: the emitted direction on
+    /// 0-1 (a (0,2)-pair of Sobol' points), the first reflection on 2-3,
+    /// the emission position on 4-5, the light pick on 6, the second and
+    /// third reflections on 7-8 and 9-10.
+    #[inline]
+    pub fn from_point(mut u: impl FnMut(usize) -> f64) -> Self {
+        Self {
+            dir: [u(0), u(1)],
+            reflect: [Some([u(2), u(3)]), Some([u(7), u(8)]), Some([u(9), u(10)])],
+            pos: Some([u(4), u(5)]),
+            pick: Some(u(6)),
+        }
+    }
+}
+
+/// The emitted direction and the first reflection; the rest from the stream.
+impl From<[[f64; 2]; 2]> for LeadingUniforms {
+    fn from(u: [[f64; 2]; 2]) -> Self {
+        Self {
+            pick: None,
+            pos: None,
+            dir: u[0],
+            reflect: [Some(u[1]), None, None],
+        }
+    }
+}
+
 /// Trace one chain, calling `on_collision` at every front-side collision.
-/// `u_first` are the uniforms of the emitted direction and of the first
-/// reflection (from `rng`, or from a stratified net over the batch);
+/// `u_first` are the uniforms of its leading decisions ([`LeadingUniforms`];
+/// `[[f64; 2]; 2]`: the emitted direction and the first reflection);
 /// everything else draws from `rng`.
 /// Returns the number of collisions.
 #[inline]
@@ -94,7 +142,7 @@ pub fn trace<F: FnMut(&Collision)>(
     scene: &Scene,
     rng: &mut Philox4x32,
     params: &ChainParams,
-    u_first: [[f64; 2]; 2],
+    u_first: impl Into<LeadingUniforms>,
     on_collision: F,
 ) -> u32 {
     trace_ex(scene, rng, params, u_first, on_collision).0
@@ -106,18 +154,19 @@ pub fn trace_ex<F: FnMut(&Collision)>(
     scene: &Scene,
     rng: &mut Philox4x32,
     params: &ChainParams,
-    u_first: [[f64; 2]; 2],
+    u_first: impl Into<LeadingUniforms>,
     mut on_collision: F,
 ) -> (u32, ChainEnd) {
-    let k_light = scene.pick_light_index(rng.next_f64());
+    let lead: LeadingUniforms = u_first.into();
+    let k_light = scene.pick_light_index(lead.pick.unwrap_or_else(|| rng.next_f64()));
     let light = &scene.lights[k_light];
-    let u_pos = rng.next_2d();
+    let u_pos = lead.pos.unwrap_or_else(|| rng.next_2d());
     let u_extra = if light.emits_from_opening() {
         rng.next_f64()
     } else {
         u_pos[0]
     };
-    let e = light.sample_emission(u_first[0], u_pos, u_extra);
+    let e = light.sample_emission(lead.dir, u_pos, u_extra);
     let q0 = scene.total_power();
     // A light picked with probability power/total carries the total power per chain.
     let mut q = e.phi / light.power() * q0;
@@ -213,11 +262,12 @@ pub fn trace_ex<F: FnMut(&Collision)>(
         let m = &scene.surfaces[hit.surface as usize].material;
         let frame = Frame::from_normal(hit.n);
         let wi_local = frame.to_local(wi);
-        let u = if order == 1 {
-            u_first[1]
-        } else {
-            rng.next_2d()
-        };
+        let u = lead
+            .reflect
+            .get(order as usize - 1)
+            .copied()
+            .flatten()
+            .unwrap_or_else(|| rng.next_2d());
         let s = m.sample(wi_local, u);
         if s.pdf <= 0.0 || s.w.z <= 0.0 {
             break;

@@ -78,6 +78,7 @@
 //! error with `B - 1` degrees of freedom.
 
 use crate::chain::ChainParams;
+use crate::sampling::qmc::Qmc;
 use crate::tally::bucket_count;
 pub use crate::tally::{Batch, Tallies};
 use std::collections::BTreeMap;
@@ -110,13 +111,17 @@ pub const MIN_BATCHES: u64 = 32;
 
 /// Run configuration.
 ///
-/// With `stratify`, the emitted directions of a batch's chains form a
-/// randomly shifted Sobol' (0,2)-net, and the first reflections use Sobol'
-/// dimensions 3-4 of the same points (see [`crate::sampling::qmc`]): each
-/// batch mean stays unbiased and batches stay independent, while the first
+/// With `qmc` [`Qmc::Shift`], the emitted directions of a batch's chains
+/// form a randomly shifted Sobol' (0,2)-net, and the first reflections use
+/// Sobol' dimensions 3-4 of the same points (see [`crate::sampling::qmc`]);
+/// with [`Qmc::Owen`], the light pick, emission position and direction and
+/// the first three reflections are the coordinates of an Owen-scrambled
+/// Sobol' net drawn afresh for every batch ([`crate::sampling::owen`],
+/// [`crate::chain::LeadingUniforms::from_point`]). Either way each batch
+/// mean stays unbiased and batches stay independent, while the first
 /// collisions cover the surfaces evenly. Chain `c` then depends on `(seed, c)`
-/// and on its batch's shift, i.e. on `(seed, c, batch_size)`; still never on
-/// the thread count.
+/// and on its batch's scramble, i.e. on `(seed, c, batch_size)`; still never
+/// on the thread count.
 #[derive(Clone, Debug)]
 pub struct RunConfig {
     /// Seed of every random stream.
@@ -131,8 +136,8 @@ pub struct RunConfig {
     pub chain: ChainParams,
     /// Chains per batch; `None` picks it from the number of points and `stop.chains`.
     pub batch_size: Option<u64>,
-    /// Stratify emitted directions over each batch (randomised Sobol' net).
-    pub stratify: bool,
+    /// How each batch stratifies its chains' leading uniforms (randomised Sobol' nets).
+    pub qmc: Qmc,
     /// Near/far split of the local estimator: radius [m] (0: off) and
     /// backward paths per receiver for every 256 chains of a batch, for the
     /// near part (see [`crate::estimator::Receivers::with_near_field`]).
@@ -190,7 +195,7 @@ impl Default for RunConfig {
             orders: 0,
             chain: ChainParams::default(),
             batch_size: None,
-            stratify: true,
+            qmc: Qmc::default(),
             near: (0.0, 16),
             near_auto: true,
             shard: None,

@@ -14,6 +14,7 @@ fn backward_estimator_refuses_local_only_options() {
         &["--near-radius", "auto"][..],
         &["--near-paths", "4"][..],
         &["--no-stratify"][..],
+        &["--qmc", "owen"][..],
     ] {
         let out = lumest()
             .args([

@@ -77,10 +77,14 @@ fn a_u0_target_is_planned_and_met() {
         .arg(d.join("p.csv"))
         .assert()
         .success();
+    // The batch size is fixed (`--batch-size`): the plan's own sizing of
+    // batches is checked by tests/batch_plan.rs; here the batch counts of
+    // the runs are compared, so they must hold the same chains.
+    const BS: &str = "1024";
     // A loose target plans the minimum, 32 batches, for comparison.
     let err0 = run(
         d,
-        &["--figure-target", "work plane:U0:1"],
+        &["--figure-target", "work plane:U0:1", "--batch-size", BS],
         "min.csv",
         "min_f.csv",
     );
@@ -92,7 +96,12 @@ fn a_u0_target_is_planned_and_met() {
     assert_eq!(b_min, 32);
     let target = h_min / 1.6;
     let spec = format!("work plane:U0:{target}");
-    let err = run(d, &["--figure-target", &spec], "e.csv", "f.csv");
+    let err = run(
+        d,
+        &["--figure-target", &spec, "--batch-size", BS],
+        "e.csv",
+        "f.csv",
+    );
     let (h, b) = half_width(d.join("f.csv").to_str().unwrap(), "work plane", "U0");
     assert!(h <= target, "half-width {h} > target {target}: {err}");
     assert!(err.contains("target met"), "{err}");
@@ -108,7 +117,12 @@ fn a_u0_target_is_planned_and_met() {
         .parse()
         .unwrap();
     let chains = (b as u64 * bs).to_string();
-    run(d, &["--chains", &chains], "c.csv", "cf.csv");
+    run(
+        d,
+        &["--chains", &chains, "--batch-size", BS],
+        "c.csv",
+        "cf.csv",
+    );
     assert_eq!(
         std::fs::read(d.join("e.csv")).unwrap(),
         std::fs::read(d.join("c.csv")).unwrap()
@@ -119,7 +133,14 @@ fn a_u0_target_is_planned_and_met() {
     let cap = (32 * bs).to_string();
     let err2 = run(
         d,
-        &["--figure-target", &spec2, "--chains", &cap],
+        &[
+            "--figure-target",
+            &spec2,
+            "--chains",
+            &cap,
+            "--batch-size",
+            BS,
+        ],
         "e2.csv",
         "f2.csv",
     );

@@ -22,13 +22,15 @@ const NOT_PASS: &[(&str, &str, &str, Verdict)] = &[
         "plane 1 r=10000",
         Verdict::ExpectedFlag,
     ),
-    // The same at rho1 rho2 = 0.9, where the batch checks fire too: z-tested,
-    // FAIL, and explained by its `near-radius=auto` row.
+    // The same at rho1 rho2 = 0.9 (with the digitally shifted nets the batch
+    // checks fired too there, making it a z-tested FAIL explained by its
+    // `near-radius=auto` row; with the Owen nets, the default since issue 15
+    // item 4, only the expected flag is raised).
     (
         "sobolev",
         "rho1rho2=0.9 h1=0.5",
         "plane 1 r=10000",
-        Verdict::Explained,
+        Verdict::ExpectedFlag,
     ),
     // A wall in view at 1e-6 m: the plain estimate misses a third of E;
     // the split rows (R = 0.2 m) pass.
@@ -71,12 +73,8 @@ const NOT_PASS: &[(&str, &str, &str, Verdict)] = &[
         "plane 1 r=100",
         Verdict::Flagged,
     ),
-    (
-        "near-source",
-        "h1=1e-6 h2=1-h1 rho=0.5",
-        "plane 1 r=10",
-        Verdict::Flagged,
-    ),
+    // (near-source h1=1e-6 rho=0.5 at plane 1 r=10 was flagged here with the
+    // digitally shifted nets; with the Owen nets it passes.)
     (
         "scaled",
         "room s=0.001",

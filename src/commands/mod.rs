@@ -24,6 +24,7 @@ pub mod validate;
 
 use crate::chain::ChainParams;
 use crate::run::{RunConfig, Stop};
+use crate::sampling::qmc::Qmc;
 use clap::Args;
 
 /// Most reflection orders `--orders` resolves.
@@ -120,9 +121,16 @@ pub struct RunArgs {
     #[arg(long = "ris-candidates", default_value_t = crate::light::array::RIS_CANDIDATES, value_parser = parse_ris_candidates)]
     pub ris_candidates: usize,
     /// Draw emitted directions independently instead of stratifying them
-    /// over each batch. Local estimator only.
-    #[arg(long = "no-stratify")]
+    /// over each batch (`--qmc off`). Local estimator only.
+    #[arg(long = "no-stratify", conflicts_with = "qmc")]
     pub no_stratify: bool,
+    /// How each batch stratifies its chains' leading uniforms: `owen`
+    /// (an Owen-scrambled Sobol' net over the light pick, emission position
+    /// and direction and the first three reflections), `shift` (a digitally
+    /// shifted Sobol' net over the emitted direction and the first
+    /// reflection) or `off`. Local estimator only. [default: owen]
+    #[arg(long, value_enum)]
+    pub qmc: Option<QmcArg>,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -257,7 +265,11 @@ impl RunArgs {
                 guide: !self.no_guide,
             },
             batch_size: self.batch_size,
-            stratify: !self.no_stratify,
+            qmc: if self.no_stratify {
+                Qmc::Off
+            } else {
+                self.qmc.map_or(Qmc::default(), QmcArg::into)
+            },
             near: (near_radius, self.near_paths.unwrap_or(16)),
             near_auto,
             shard: None,
@@ -265,6 +277,27 @@ impl RunArgs {
             keep_batch_means: 0,
             pilot_measure: None,
         })
+    }
+}
+
+/// `--qmc`: [`Qmc`] on the command line.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum QmcArg {
+    /// Independent uniforms.
+    Off,
+    /// Digitally shifted Sobol' net (4 dimensions).
+    Shift,
+    /// Owen-scrambled Sobol' net (11 dimensions).
+    Owen,
+}
+
+impl From<QmcArg> for Qmc {
+    fn from(q: QmcArg) -> Self {
+        match q {
+            QmcArg::Off => Qmc::Off,
+            QmcArg::Shift => Qmc::Shift,
+            QmcArg::Owen => Qmc::Owen,
+        }
     }
 }
 
@@ -276,6 +309,7 @@ impl RunArgs {
             ("--near-radius", self.near_radius.is_some()),
             ("--near-paths", self.near_paths.is_some()),
             ("--no-stratify", self.no_stratify),
+            ("--qmc", self.qmc.is_some()),
         ]
         .into_iter()
         .filter_map(|(name, set)| set.then_some(name))

@@ -7,7 +7,8 @@ use crate::backward::{self, PathSetup, Pool};
 use crate::chain;
 use crate::run::{Batch, BatchWork, Checks, Progress, RunConfig, RunResult, cap_batch_size, drive};
 use crate::sampling::Philox4x32;
-use crate::sampling::qmc::{DigitalShift, shifted_sobol_2d, shifted_sobol_34};
+use crate::sampling::owen::{MAX_POINTS, OwenSobol};
+use crate::sampling::qmc::{DigitalShift, Qmc, shifted_sobol_2d, shifted_sobol_34};
 use crate::scene::Scene;
 use crate::tally::bucket;
 use glam::DVec3;
@@ -158,6 +159,9 @@ impl BatchWork for LocalWork<'_> {
         let mut srng = Philox4x32::new(cfg.seed, (1 << 63) | b);
         let shift12 = DigitalShift([srng.next_u32(), srng.next_u32()]);
         let shift34 = DigitalShift([srng.next_u32(), srng.next_u32()]);
+        // An Owen scramble from the same stream, afresh for every
+        // `MAX_POINTS` chains of the batch.
+        let mut owen = OwenSobol::<{ chain::LEADING_DIMS }>::random(&mut srng);
         // The recursive near/far split joins the near part's path vertices to
         // the batch's collisions (its own stream for the reservoir choices).
         const POOL_KEY: u64 = 0x706f_6f6c; // "pool"
@@ -165,14 +169,21 @@ impl BatchWork for LocalWork<'_> {
         let mut pool = (paths > 0).then(|| Pool::new(bs, Philox4x32::new(cfg.seed ^ POOL_KEY, b)));
         for c in b * bs..(b + 1) * bs {
             let mut rng = Philox4x32::new(cfg.seed, c);
-            let u_first = if cfg.stratify {
-                let i = (c - b * bs) as u32;
-                [
+            let i = (c - b * bs) as u32;
+            let u_first: chain::LeadingUniforms = match cfg.qmc {
+                Qmc::Off => [rng.next_2d(), rng.next_2d()].into(),
+                Qmc::Shift => [
                     shifted_sobol_2d(i, shift12, rng.next_2d()),
                     shifted_sobol_34(i, shift34, rng.next_2d()),
                 ]
-            } else {
-                [rng.next_2d(), rng.next_2d()]
+                .into(),
+                Qmc::Owen => {
+                    if i > 0 && i.is_multiple_of(MAX_POINTS) {
+                        owen = OwenSobol::random(&mut srng);
+                    }
+                    let i = i % MAX_POINTS;
+                    chain::LeadingUniforms::from_point(|d| owen.unit(i, d, rng.next_u32()))
+                }
             };
             collisions += u64::from(chain::trace(scene, &mut rng, &cfg.chain, u_first, |col| {
                 let k = bucket(col.order, cfg.orders);

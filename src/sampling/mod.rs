@@ -5,6 +5,7 @@
 
 pub mod alias;
 pub mod cone;
+pub mod owen;
 pub mod qmc;
 pub mod rng;
 pub mod sphere_table;

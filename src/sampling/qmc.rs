@@ -9,6 +9,22 @@
 //! with independent shifts are independent realisations, so batch statistics
 //! stay honest (Owen 1997; L'Ecuyer & Lemieux 2002).
 
+/// How the chains of a batch stratify their leading uniforms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Qmc {
+    /// Independent uniforms from each chain's stream.
+    Off,
+    /// A digitally shifted Sobol' net over the emitted direction and the
+    /// first reflection (this module).
+    Shift,
+    /// An Owen-scrambled Sobol' net over the light pick, emission position
+    /// and direction and the first three reflections ([`super::owen`]).
+    /// The default: at least as good as `Shift` in every case measured
+    /// with batches of 256 chains or more (`validation/qmc/README.md`).
+    #[default]
+    Owen,
+}
+
 /// Direction numbers `v_k = m_k 2^(31-k)` of a Sobol' dimension with primitive
 /// polynomial of degree `s`, inner coefficients `a` (bits, highest first) and
 /// initial `m` (Joe & Kuo 2008 notation):
