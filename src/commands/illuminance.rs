@@ -787,23 +787,37 @@ pub(crate) fn measure_with(
         views,
         estimator,
         run_args,
-        None,
-        None,
-        &[],
+        &GridOutputs::default(),
     )
 }
 
-/// [`measure_with`], also writing the grid figures to `figures_out`.
+/// What a run on grid points adds: the figures' CSV, the report and
+/// plots, and the figures the plan aims at (`--figure-target`).
+#[derive(Default)]
+pub(crate) struct GridOutputs<'a> {
+    /// `--figures-out`.
+    pub figures_out: Option<&'a str>,
+    /// `--report`, `--isolux-dir`.
+    pub report: Option<super::report::ReportOutputs>,
+    /// `--figure-target`.
+    pub targets: Vec<super::figure_target::FigureTarget>,
+}
+
+/// [`measure_with`], also writing the grid figures, report and plots and
+/// planning for figure targets ([`GridOutputs`]).
 pub(crate) fn measure_full(
     scene_path: &std::path::Path,
     points: Option<(&str, &str)>,
     views: Option<(&str, Option<ViewTable>, &str)>,
     estimator: EstimatorKind,
     run_args: &RunArgs,
-    figures_out: Option<&str>,
-    report: Option<&super::report::ReportOutputs>,
-    targets: &[super::figure_target::FigureTarget],
+    grid: &GridOutputs,
 ) -> anyhow::Result<(Job, RunResult)> {
+    let (figures_out, report, targets) = (
+        grid.figures_out,
+        grid.report.as_ref(),
+        grid.targets.as_slice(),
+    );
     let mut cfg = run_args.config()?;
     if estimator == EstimatorKind::Backward {
         run_args.check_local_only("backward")?;
@@ -1230,9 +1244,11 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
         views.map(|v| (v.0, None, v.1)),
         a.estimator,
         &a.run,
-        a.figures_out.as_deref(),
-        report.as_ref(),
-        &targets,
+        &GridOutputs {
+            figures_out: a.figures_out.as_deref(),
+            report,
+            targets,
+        },
     )
     .map(|_| ())
 }

@@ -68,6 +68,21 @@ pub fn local_kernel(x: DVec3, n_x: DVec3, p: DVec3, n_p: DVec3) -> f64 {
     }
 }
 
+/// The geometric kernel of a score from a surface point `x` (front normal
+/// `n_x`) into a receiver at `p` (normal `n_p`): [`local_kernel`] for a
+/// receiver with a plane (its cosine in the kernel), or `cos_x / d^2` for a
+/// solid receiver, whose response (applied by the caller) stands for the
+/// plane's cosine.
+#[inline]
+fn pair_kernel(x: DVec3, n_x: DVec3, p: DVec3, n_p: DVec3, solid: bool) -> f64 {
+    if solid {
+        let [cx, _, d2] = kernel_parts(x, n_x, p.to_array(), n_p.to_array());
+        if cx > 0.0 { cx / (d2 * d2.sqrt()) } else { 0.0 }
+    } else {
+        local_kernel(x, n_x, p, n_p)
+    }
+}
+
 /// The factors of the local kernel between a surface point `x` (front
 /// normal `n`) and a receiver at `p` (normal `np`), as
 /// `[cos_x d, cos_p d, d^2]` with `d = |p - x|` (unnormalised cosines,
@@ -1051,14 +1066,8 @@ impl Receivers {
                 let p_img = p - pl.n * (2.0 * pl.signed_distance(p));
                 let j = list.idx[k] as usize;
                 // A solid receiver: `cos_x / d^2`, its response in `w`.
-                let g = if self.all[j].solid_kind().is_some() {
-                    let n_img = mirror(np);
-                    let [cx, _, d2] =
-                        kernel_parts(c.p, c.n, [p_img.x, p_img.y, p_img.z], n_img.to_array());
-                    if cx > 0.0 { cx / (d2 * d2.sqrt()) } else { 0.0 }
-                } else {
-                    local_kernel(c.p, c.n, p_img, mirror(np))
-                };
+                let solid = self.all[j].solid_kind().is_some();
+                let g = pair_kernel(c.p, c.n, p_img, mirror(np), solid);
                 if g == 0.0 {
                     continue;
                 }
@@ -1108,12 +1117,7 @@ impl Receivers {
             // A solid receiver: `cos_x / d^2`, its response (in `w` below)
             // standing for the plane's cosine.
             let solid = k >= list.n_const && self.all[j].solid_kind().is_some();
-            let g = if solid {
-                let [cx, _, d2] = kernel_parts(c.p, c.n, [p.x, p.y, p.z], [np.x, np.y, np.z]);
-                if cx > 0.0 { cx / (d2 * d2.sqrt()) } else { 0.0 }
-            } else {
-                local_kernel(c.p, c.n, p, np)
-            };
+            let g = pair_kernel(c.p, c.n, p, np, solid);
             let d2 = (p - c.p).length_squared();
             if g == 0.0
                 || d2 < list.eps2[k]

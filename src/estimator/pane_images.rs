@@ -58,8 +58,9 @@ pub fn image_direct(scene: &Scene, k: usize, x: DVec3, n: DVec3, closed: &Closed
         let x_img = mirror_point(x, o, pn);
         let n_img = mirror_dir(n, pn);
         let unmirror = move |w: DVec3| mirror_dir(w, pn);
-        // Where the path meets the pane, and the direction it arrives in.
-        let (m, d_in) = match l {
+        // The direction the path arrives at the pane in, and the
+        // transmittance of other panes on its two legs.
+        let (d_in, glass) = match l {
             Light::Distant(dl) if dl.collimated() => {
                 // Looking from x along the mirrored sun direction.
                 let look = mirror_dir(-dl.d, pn);
@@ -75,12 +76,7 @@ pub fn image_direct(scene: &Scene, k: usize, x: DVec3, n: DVec3, closed: &Closed
                 }
                 let glass =
                     scene.pane_transmittance(x, m) * scene.pane_transmittance_ray(m, -dl.d, false);
-                let (r, _) = pane.glass.reflect_transmit(dl.d.dot(pn));
-                if r * glass <= 0.0 {
-                    continue;
-                }
-                total += r * glass * closed(x_img, n_img, &unmirror);
-                continue;
+                (dl.d, glass)
             }
             _ if l.is_point_like() => {
                 let lp = l.position();
@@ -100,11 +96,11 @@ pub fn image_direct(scene: &Scene, k: usize, x: DVec3, n: DVec3, closed: &Closed
                 {
                     continue;
                 }
-                (m, (m - lp).normalize())
+                let glass = scene.pane_transmittance(lp, m) * scene.pane_transmittance(m, x);
+                ((m - lp).normalize(), glass)
             }
             _ => continue,
         };
-        let glass = scene.pane_transmittance(l.position(), m) * scene.pane_transmittance(m, x);
         let (r, _) = pane.glass.reflect_transmit(d_in.dot(pn));
         if r * glass > 0.0 {
             total += r * glass * closed(x_img, n_img, &unmirror);
