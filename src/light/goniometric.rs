@@ -242,6 +242,42 @@ impl Goniometric {
             };
             return i * c * (inv * inv * inv);
         }
+        if let Some((vg, Some(hg))) = &self.grids {
+            // Type C without rotational symmetry: the local components
+            // unnormalised; |w| and the axis distance r give the polar
+            // (cos, sin) and r alone the azimuth's, so the two searches
+            // are independent of each other.
+            let (lx, ly, lz) = (w.dot(frame.x), w.dot(frame.y), w.dot(frame.z));
+            let r2 = lx * lx + ly * ly;
+            let d2 = r2 + lz * lz;
+            if d2 == 0.0 {
+                return 0.0;
+            }
+            let (len, r) = (d2.sqrt(), r2.sqrt());
+            let inv = len.recip();
+            let Some((k, tv)) = vg.locate_polar(-lz * inv, r * inv) else {
+                return 0.0;
+            };
+            // At the poles (r = 0) the azimuth is atan2's, as in
+            // [`Self::intensity`].
+            let (cc, sc) = if r > 0.0 {
+                let ir = r.recip();
+                (lx * ir, ly * ir)
+            } else if lx.is_sign_negative() {
+                (-1.0, 0.0)
+            } else {
+                (1.0, 0.0)
+            };
+            let Some((a, th)) = hg.locate(cc, sc) else {
+                return 0.0;
+            };
+            let nv = self.v.len();
+            let (j0, j1) = (a * nv + k, (a + 1) * nv + k);
+            let (i00, i01, i10, i11) = (self.i[j0], self.i[j0 + 1], self.i[j1], self.i[j1 + 1]);
+            let lo = i00 + tv * (i01 - i00);
+            let hi = i10 + tv * (i11 - i10);
+            return (lo + th * (hi - lo)) * c * (inv * inv * inv);
+        }
         let d2 = w.length_squared();
         if d2 == 0.0 {
             return 0.0;
@@ -772,19 +808,37 @@ mod fast_path_tests {
                 let (a, b) = (g.intensity_world(&frame, w), g.intensity(frame.to_local(w)));
                 assert!((a - b).abs() <= 1e-12 * b.max(1.0), "{aim} {w}: {a} vs {b}");
             }
-            // The direct term: I cos / d^2 by hand, at receivers around.
-            for g in [&g, &Goniometric::new(&super::tests::tables()[2].1, 1.0)] {
-                for _ in 0..2000 {
+            // The direct term: I cos / d^2 by hand, with I from the
+            // inverse-trigonometric rule (acos, atan2: no AngleGrid), at
+            // receivers on all sides: the rotational, the asymmetric (full
+            // C0-C360 after expansion) and the 0-90 degree quadrant tables,
+            // whose fast paths differ.
+            let tables = super::tests::tables();
+            let quadrant = Goniometric::new(&tables[1].1, 1.0);
+            let bilateral = Goniometric::new(&tables[2].1, 1.0);
+            assert!(matches!(quadrant.grids, Some((_, Some(_)))));
+            assert!(matches!(bilateral.grids, Some((_, Some(_)))));
+            for g in [&g, &quadrant, &bilateral] {
+                for j in 0..3000 {
                     let u = rng.next_2d();
-                    let w = DVec3::new(4.0 * u[0] - 2.0, 4.0 * u[1] - 2.0, -1.5);
-                    let n = DVec3::new(0.2, -0.1, 1.0).normalize();
-                    let c = n.dot(-w);
-                    let want = g.intensity(frame.to_local(w.normalize())) * c
-                        / w.length_squared()
-                        / w.length();
+                    let z = [-1.5, 0.7, -0.2][j % 3];
+                    let w = DVec3::new(4.0 * u[0] - 2.0, 4.0 * u[1] - 2.0, z);
+                    let c = 0.8 * w.length();
+                    let (h, v) = g.angles(frame.to_local(w.normalize()));
+                    let want = g.intensity_at(h, v) * c / w.length_squared() / w.length();
                     let got = g.direct_term(&frame, w, c);
                     assert!(
-                        (got - want).abs() <= 1e-12 * want.abs().max(1e-300),
+                        (got - want).abs() <= 1e-9 * want.abs().max(1e-300),
+                        "{w}: {got} vs {want}"
+                    );
+                }
+                // Poles, where the azimuth is atan2's.
+                for w in [frame.z, -frame.z, -2.0 * frame.z] {
+                    let (h, v) = g.angles(frame.to_local(w.normalize()));
+                    let want = g.intensity_at(h, v) / w.length_squared();
+                    let got = g.direct_term(&frame, w, w.length());
+                    assert!(
+                        (got - want).abs() <= 1e-9 * want.max(1e-300),
                         "{w}: {got} vs {want}"
                     );
                 }
