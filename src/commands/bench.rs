@@ -82,6 +82,17 @@ pub struct BenchArgs {
     /// Seconds per named case.
     #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
     pub case_time: f64,
+    /// Bench this scene file instead: chains/s, scores/s, FOM, set-up and
+    /// peak memory at `--scene-points` for `--case-time` seconds, and the
+    /// planes-only rate beside it (the Sobolev scene with a square grid of
+    /// at least as many points, the same time): the ratio of the two
+    /// scores/s is the cost of the scene's shadow tests.
+    #[arg(long)]
+    pub scene: Option<std::path::PathBuf>,
+    /// Points CSV for `--scene` (default: the points of the scene's planar
+    /// `[[grid]]` tables).
+    #[arg(long = "scene-points")]
+    pub scene_points: Option<std::path::PathBuf>,
 }
 
 /// `lumest bench --shapes N,...`: what scene size costs. For each count,
@@ -429,6 +440,9 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
     if a.luminaires {
         return luminaires(a);
     }
+    if let Some(path) = &a.scene {
+        return scene_case(a, path);
+    }
     let cases_list = named_cases(&a.cases)?;
     anyhow::ensure!(
         a.case_time.is_finite() && a.case_time > 0.0,
@@ -559,21 +573,7 @@ pub fn cases(a: &BenchArgs, list: &[NamedCase]) -> anyhow::Result<()> {
     }
     let t = a.case_time;
     println!("\nnamed cases, {t} s each (--cases, --case-time):");
-    println!(
-        "{:>7} {:>7} {:>8} {:>10} {:>11} {:>11} {:>10} {:>10} {:>11} {:>8} {:>9} {:>10}",
-        "case",
-        "points",
-        "time_s",
-        "chains",
-        "chains/s",
-        "scores/s",
-        "rms_R",
-        "max_R",
-        "FOM",
-        "setup_s",
-        "peak_MiB",
-        "rms_err"
-    );
+    case_header();
     for &case in list {
         super::peak_rss::reset();
         // The set-up is timed from loading the scene and the points to the
@@ -602,37 +602,10 @@ pub fn cases(a: &BenchArgs, list: &[NamedCase]) -> anyhow::Result<()> {
                 ("office", scene, table.points, None, t0)
             }
         };
-        let receivers = Receivers::new(&scene, &points).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let cfg = RunConfig::timed(a.seed, a.threads, t);
-        let r = run(&scene, &receivers, &cfg, &mut |_| true);
-        let setup = t0.elapsed().as_secs_f64() - r.wall;
-        let peak = super::peak_rss::peak();
-        let rms_r = r.tallies.rms_rel_error(&r.direct);
-        let rms_err = exact.as_ref().map(|ex| {
-            let n = points.len().max(1) as f64;
-            ((0..points.len())
-                .map(|j| ((r.direct[j] + r.tallies.estimated[j].mean() - ex[j]) / ex[j]).powi(2))
-                .sum::<f64>()
-                / n)
-                .sqrt()
-        });
-        println!(
-            "{:>7} {:>7} {:>8.2} {:>10} {:>11.4e} {:>11.4e} {:>10.3e} {:>10.3e} {:>11.4e} {:>8.3} {:>9} {:>10}",
-            name,
-            points.len(),
-            r.wall,
-            r.chains,
-            r.chains as f64 / r.wall,
-            r.scores as f64 / r.wall,
-            rms_r,
-            r.tallies.max_rel_error(&r.direct),
-            1.0 / (rms_r * rms_r * r.wall),
-            setup,
-            super::peak_rss::format_mib(peak),
-            rms_err.map_or_else(|| "-".to_string(), |e| format!("{e:.3e}")),
-        );
+        let (r, setup) = case_row(a, name, &scene, &points, exact.as_deref(), t0)?;
         if case == NamedCase::Grid {
             // Errors fall like 1/sqrt(T): the run's FOM gives the time to 1e-3.
+            let rms_r = r.tallies.rms_rel_error(&r.direct);
             let needed = rms_r * rms_r * r.wall / 1e-6;
             println!(
                 "        grid: RMS R = 1e-3 at all 10,000 points projects to {needed:.2} s of run on {} \
@@ -646,6 +619,127 @@ pub fn cases(a: &BenchArgs, list: &[NamedCase]) -> anyhow::Result<()> {
             );
         }
     }
+    Ok(())
+}
+
+/// The header of the case rows.
+fn case_header() {
+    println!(
+        "{:>7} {:>7} {:>8} {:>10} {:>11} {:>11} {:>10} {:>10} {:>11} {:>8} {:>9} {:>10}",
+        "case",
+        "points",
+        "time_s",
+        "chains",
+        "chains/s",
+        "scores/s",
+        "rms_R",
+        "max_R",
+        "FOM",
+        "setup_s",
+        "peak_MiB",
+        "rms_err"
+    );
+}
+
+/// Run one case for `--case-time` seconds and print its row; the set-up
+/// is timed from `t0` (loading the scene and points) to the first batch.
+/// Returns the run and the set-up time [s].
+fn case_row(
+    a: &BenchArgs,
+    name: &str,
+    scene: &crate::scene::Scene,
+    points: &[(glam::DVec3, glam::DVec3)],
+    exact: Option<&[f64]>,
+    t0: std::time::Instant,
+) -> anyhow::Result<(crate::run::RunResult, f64)> {
+    let receivers = Receivers::new(scene, points).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let cfg = RunConfig::timed(a.seed, a.threads, a.case_time);
+    let r = run(scene, &receivers, &cfg, &mut |_| true);
+    let setup = t0.elapsed().as_secs_f64() - r.wall;
+    let peak = super::peak_rss::peak();
+    let rms_r = r.tallies.rms_rel_error(&r.direct);
+    let rms_err = exact.map(|ex| {
+        let n = points.len().max(1) as f64;
+        ((0..points.len())
+            .map(|j| ((r.direct[j] + r.tallies.estimated[j].mean() - ex[j]) / ex[j]).powi(2))
+            .sum::<f64>()
+            / n)
+            .sqrt()
+    });
+    println!(
+        "{:>7} {:>7} {:>8.2} {:>10} {:>11.4e} {:>11.4e} {:>10.3e} {:>10.3e} {:>11.4e} {:>8.3} {:>9} {:>10}",
+        name,
+        points.len(),
+        r.wall,
+        r.chains,
+        r.chains as f64 / r.wall,
+        r.scores as f64 / r.wall,
+        rms_r,
+        r.tallies.max_rel_error(&r.direct),
+        1.0 / (rms_r * rms_r * r.wall),
+        setup,
+        super::peak_rss::format_mib(peak),
+        rms_err.map_or_else(|| "-".to_string(), |e| format!("{e:.3e}")),
+    );
+    Ok((r, setup))
+}
+
+/// `lumest bench --scene S [--scene-points P]`: the scene's row, then the
+/// planes-only Sobolev scene at a square grid of at least as many points
+/// for the same time, and the ratio of their scores/s (issue 15: a room's
+/// rate within 4 times of the planes-only rate).
+pub fn scene_case(a: &BenchArgs, path: &std::path::Path) -> anyhow::Result<()> {
+    use std::time::Instant;
+    anyhow::ensure!(
+        a.case_time.is_finite() && a.case_time > 0.0,
+        "--case-time must be a positive number of seconds, got {}",
+        a.case_time
+    );
+    println!(
+        "scene {} , {} s each (--case-time):",
+        path.display(),
+        a.case_time
+    );
+    case_header();
+    super::peak_rss::reset();
+    let t0 = Instant::now();
+    let scene = crate::scene::load(path).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let points: Vec<(glam::DVec3, glam::DVec3)> = match &a.scene_points {
+        Some(p) => {
+            crate::io::read_points(&p.to_string_lossy())
+                .map_err(|e| anyhow::anyhow!("{e}"))?
+                .points
+        }
+        None => crate::grid::load(path)
+            .map_err(|e| anyhow::anyhow!("{e}"))?
+            .iter()
+            .filter(|g| g.receiver == "planar")
+            .flat_map(|g| g.points.iter().map(|q| (q.p, q.n)))
+            .collect(),
+    };
+    anyhow::ensure!(
+        !points.is_empty(),
+        "{}: no planar [[grid]] points; give --scene-points",
+        path.display()
+    );
+    let (r, _) = case_row(a, "scene", &scene, &points, None, t0)?;
+    super::peak_rss::reset();
+    let problem = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let side = (points.len() as f64).sqrt().ceil().max(2.0) as usize;
+    let (grid, exact) = sobolev_grid(&problem, side);
+    let t0 = Instant::now();
+    let planes = crate::cases::sobolev::sobolev_scene(&problem);
+    let (rp, _) = case_row(a, "planes", &planes, &grid, Some(&exact), t0)?;
+    let (rate, rate_p) = (r.scores as f64 / r.wall, rp.scores as f64 / rp.wall);
+    println!(
+        "        scores/s: the planes-only rate is {:.2} times the scene's (issue 15 target for the office: within 4: {})",
+        rate_p / rate,
+        if rate_p <= 4.0 * rate {
+            "met"
+        } else {
+            "NOT met"
+        }
+    );
     Ok(())
 }
 

@@ -34,6 +34,7 @@
 pub mod backward;
 pub mod direct;
 pub mod local;
+mod occluded_kernel;
 mod open_kernel;
 pub mod pane_images;
 pub mod solid;
@@ -391,7 +392,18 @@ struct ReceiverList {
     blockers: u64,
     /// Offset of this list in a flat accumulator.
     offset: usize,
+    /// Per entry, the finite shapes that may shadow it from a collision on
+    /// this list's surfaces (`occ[occ_start[k]..occ_start[k + 1]]`, see
+    /// [`crate::scene::world::Occluder`]); empty `occ_start` when the scene
+    /// has none on loops or the lists would be too large (every shape is
+    /// then tested).
+    occ_start: Vec<u32>,
+    occ: Vec<crate::scene::world::Occluder>,
 }
+
+/// Most occluders kept over all receiver lists (80 bytes each); past it a
+/// list tests every shape.
+const MAX_OCCLUDERS: usize = 2_000_000;
 
 /// Receivers compiled against a scene.
 #[derive(Clone, Debug)]
@@ -724,6 +736,39 @@ impl Receivers {
             offset += list.idx.len();
             lists.push(list);
         }
+        // Occluder lists: per list, the region its surfaces span.
+        if scene.uses_occluder_lists() {
+            let mut region: Vec<Option<Option<(DVec3, DVec3)>>> = vec![None; lists.len()];
+            for (s, &k) in list_of.iter().enumerate() {
+                let b = scene.surface_bounds(s as u32);
+                let r = &mut region[k as usize];
+                *r = Some(match (*r, b) {
+                    (None, b) => b,
+                    (Some(Some((lo, hi))), Some((l, h))) => Some((lo.min(l), hi.max(h))),
+                    _ => None,
+                });
+            }
+            let mut total = 0;
+            for (list, region) in lists.iter_mut().zip(region) {
+                let region = region.flatten();
+                let mut start = vec![0u32];
+                let mut occ = Vec::new();
+                for &j in &list.idx {
+                    let rec = &receivers[j as usize];
+                    let front = rec.solid_kind().is_none().then_some(rec.n);
+                    occ.extend(scene.occluders(rec.p, front, region));
+                    start.push(occ.len() as u32);
+                    if total + occ.len() > MAX_OCCLUDERS {
+                        break;
+                    }
+                }
+                if start.len() == list.idx.len() + 1 {
+                    total += occ.len();
+                    list.occ_start = start;
+                    list.occ = occ;
+                }
+            }
+        }
         // With glass panes, one more stretch of the accumulators holds
         // every receiver once: the scores reflected to it by a pane
         // ([`Self::score_images`]).
@@ -1016,6 +1061,42 @@ impl Receivers {
             Some(f) if open && shapes_open => {
                 score_open::<false>(list, x, n, c.q * f, &mut acc[..nc], &mut [])
             }
+            // Shapes may be in the way: through the occluder lists, where
+            // the general loop would give the same terms (no panes, and
+            // light arriving on the front, where its BRDF is `f`).
+            Some(f)
+                if open
+                    && !list.occ_start.is_empty()
+                    && !scene.has_panes()
+                    && c.n.dot(c.wi) > 0.0 =>
+            {
+                let from = Some((c.surface, c.prim));
+                if counting {
+                    occluded_kernel::score_occluded::<true>(
+                        scene,
+                        list,
+                        x,
+                        n,
+                        from,
+                        x_inside,
+                        (c.q, f),
+                        &mut acc[..nc],
+                        &mut near[..nc],
+                    )
+                } else {
+                    occluded_kernel::score_occluded::<false>(
+                        scene,
+                        list,
+                        x,
+                        n,
+                        from,
+                        x_inside,
+                        (c.q, f),
+                        &mut acc[..nc],
+                        &mut [],
+                    )
+                }
+            }
             _ => self.score_general(scene, list, x_inside, 0..nc, material, c, xm, acc, near),
         }
         if nc < len {
@@ -1121,8 +1202,16 @@ impl Receivers {
             let d2 = (p - c.p).length_squared();
             if g == 0.0
                 || d2 < list.eps2[k]
-                || (!planes_only
-                    && scene.blocked_by_shapes(c.p, from, p, x_inside & list.inside[k]))
+                || (!planes_only && {
+                    let inside = x_inside & list.inside[k];
+                    if list.occ_start.is_empty() {
+                        scene.blocked_by_shapes(c.p, from, p, inside)
+                    } else {
+                        let occ =
+                            &list.occ[list.occ_start[k] as usize..list.occ_start[k + 1] as usize];
+                        scene.blocked_by_occluders(c.p, from, p, inside, occ, d2)
+                    }
+                })
             {
                 continue;
             }

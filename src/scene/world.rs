@@ -20,9 +20,11 @@
 //! [`Sides`] names; the other side is black. Every surface is opaque.
 
 mod nearest;
+mod occluders;
 mod panes;
 mod shape_tree;
 
+pub use occluders::Occluder;
 pub use panes::{Pane, PaneHit, PaneShape};
 
 pub use shape_tree::{AUTO_MIN_SHAPES, Accel};

@@ -85,14 +85,14 @@ impl ShapeTree {
 }
 
 /// A box grown by [`PAD_REL`] of its largest coordinate and of its size.
-fn padded((lo, hi): (DVec3, DVec3)) -> (DVec3, DVec3) {
+pub(super) fn padded((lo, hi): (DVec3, DVec3)) -> (DVec3, DVec3) {
     let mag = lo.abs().max(hi.abs()).max_element() + (hi - lo).max_element();
     let pad = DVec3::splat(PAD_REL * mag);
     (lo - pad, hi + pad)
 }
 
 /// Bounds of everything the shape's tests can report [m].
-fn prim_bounds(scene: &Scene, p: Prim) -> (DVec3, DVec3) {
+pub(super) fn prim_bounds(scene: &Scene, p: Prim) -> (DVec3, DVec3) {
     match p {
         Prim::Rect(i) => {
             let r = &scene.rects[i as usize].0;

@@ -1,0 +1,390 @@
+//! Per-receiver occluder lists: which finite shapes can possibly shadow a
+//! segment from a collision on a given set of surfaces to one receiver,
+//! and cheap tests that rule a shape out for one segment before its exact
+//! test (issue 15, fast rooms).
+//!
+//! The local estimate tests, at every collision, the segment to every
+//! receiver against every finite shape (or the shape BVH). In a furnished
+//! room most of those tests cannot succeed: a desk below a work-plane
+//! point, a cabinet on the far side, a whiteboard behind. Per receiver `p`
+//! and per receiver list (the surfaces whose collisions may score into it,
+//! all in a box `R`), a shape `B` stays a candidate only if
+//!
+//! - it is not wholly behind the receiver's tangent plane (a planar or
+//!   luminance receiver scores only collisions strictly in front of it, so
+//!   the open segment lies strictly in front), and
+//! - its box meets the convex hull of `R` and `p`: every segment from a
+//!   point of `R` to `p` lies in that hull, which is the union of the boxes
+//!   `p + t (R - p)`, `t` in `[0, 1]`; each axis bounds `t` by two linear
+//!   inequalities, so the test is exact for the boxes.
+//!
+//! Per segment, a candidate is then skipped by a separating plane `m . y =
+//! h` with the shape in `m . y <= h` and the receiver in `m . y >= h`
+//! (a collision with `m . x > h` gives a segment strictly beyond it): a box
+//! face the receiver lies on or beyond (exact coordinates, so a point on a
+//! desk top is never tested against the desk), the plane of a flat shape,
+//! or a face of a curved shape's box; and by the cone from `p` round the
+//! shape's bounding sphere (direction and nearest distance). Only then
+//! the shape's own test runs, the one [`Scene::blocked_by_shapes`] runs,
+//! so a segment's visibility is the same bit for bit: every skip above
+//! rules out a hit by a margin (a relative `1e-9` of the scene's
+//! coordinates, the shapes' boxes padded as in the shape tree) far above
+//! the rounding of the shapes' own tests.
+
+use super::shape_tree::{padded, prim_bounds};
+use super::{Prim, Scene, ShapeRef, segment};
+use glam::DVec3;
+
+/// Relative margin of every skip (of the largest coordinate magnitude of
+/// the receiver, the shape and the region).
+const SLACK_REL: f64 = 1e-9;
+
+/// One finite shape that may shadow segments ending at one receiver, with
+/// the tests that rule it out for a segment (module docs).
+#[derive(Clone, Copy, Debug)]
+pub struct Occluder {
+    prim: Prim,
+    /// Separating plane: skip when `m . x > h` (`m = 0`: never).
+    m: DVec3,
+    h: f64,
+    /// Cone round the bounding sphere from the receiver: unit axis, the
+    /// squared cosine of the half-angle (negative: no cone, the receiver
+    /// is inside the sphere or the cone is a half-space or wider) and the
+    /// squared nearest distance [m^2].
+    axis: DVec3,
+    cos2: f64,
+    near2: f64,
+}
+
+impl Scene {
+    /// Whether the local estimate's scoring uses occluder lists: scenes
+    /// with finite shapes on loops (without the shape tree, which already
+    /// costs `log n` per segment).
+    pub fn uses_occluder_lists(&self) -> bool {
+        !self.planes_only() && self.tree.is_none()
+    }
+
+    /// The box [m] holding surface `s` (a box face: that face alone);
+    /// `None` for an infinite plane (unbounded) and a glass pane (never a
+    /// collision site).
+    pub fn surface_bounds(&self, s: u32) -> Option<(DVec3, DVec3)> {
+        let prim = match self.surfaces[s as usize].shape {
+            ShapeRef::Plane(_) | ShapeRef::Pane(_) => return None,
+            ShapeRef::BoxFace(i, f) => {
+                let b = &self.boxes[i as usize].0;
+                let (mut lo, mut hi) = (b.lo, b.hi);
+                let a = f as usize / 2;
+                let c = if f % 2 == 1 { b.hi[a] } else { b.lo[a] };
+                (lo[a], hi[a]) = (c, c);
+                return Some(padded((lo, hi)));
+            }
+            ShapeRef::Rect(i) => Prim::Rect(i),
+            ShapeRef::Disc(i) => Prim::Disc(i),
+            ShapeRef::Sphere(i) => Prim::Sphere(i),
+            ShapeRef::Mesh(i) => Prim::Mesh(i),
+            ShapeRef::Sh(i) => Prim::Sh(i),
+        };
+        Some(padded(prim_bounds(self, prim)))
+    }
+
+    /// The occluders of a receiver at `p` for collisions within `region`
+    /// (`None`: anywhere), in the order of [`Scene::blocked_by_shapes`]'s
+    /// loops. `front`: the unit normal of a receiver that scores only
+    /// collisions strictly in front of it (`None` for a solid receiver).
+    pub fn occluders(
+        &self,
+        p: DVec3,
+        front: Option<DVec3>,
+        region: Option<(DVec3, DVec3)>,
+    ) -> Vec<Occluder> {
+        let mut out = Vec::new();
+        for prim in self.finite_prims() {
+            if self.holds_both(prim, p, region) {
+                continue;
+            }
+            let (lo, hi) = padded(prim_bounds(self, prim));
+            let mut scale = p.abs().max(lo.abs()).max(hi.abs()).max_element();
+            if let Some((rlo, rhi)) = region {
+                scale = scale.max(rlo.abs().max(rhi.abs()).max_element());
+            }
+            let slack = SLACK_REL * scale;
+            let (lo, hi) = (lo - DVec3::splat(slack), hi + DVec3::splat(slack));
+            // Wholly behind the receiver's tangent plane: a solid box whose
+            // face the receiver lies on or beyond, facing the same way
+            // (exact coordinates: a point on a desk top and the desk), or
+            // any shape's grown box by the margin.
+            if let (Some(n), Prim::Box(i)) = (front, prim) {
+                let b = &self.boxes[i as usize].0;
+                let behind = (0..3).any(|a| {
+                    let mut e = DVec3::ZERO;
+                    e[a] = 1.0;
+                    (n == e && p[a] >= b.hi[a]) || (n == -e && p[a] <= b.lo[a])
+                });
+                if behind {
+                    continue;
+                }
+            }
+            if let Some(n) = front {
+                let far = (0..8)
+                    .map(|k| {
+                        let c = DVec3::new(
+                            if k & 1 == 0 { lo.x } else { hi.x },
+                            if k & 2 == 0 { lo.y } else { hi.y },
+                            if k & 4 == 0 { lo.z } else { hi.z },
+                        );
+                        n.dot(c - p)
+                    })
+                    .fold(f64::NEG_INFINITY, f64::max);
+                if far < -slack {
+                    continue;
+                }
+            }
+            if let Some((rlo, rhi)) = region
+                && !hull_meets_box(
+                    p,
+                    rlo - DVec3::splat(slack),
+                    rhi + DVec3::splat(slack),
+                    lo,
+                    hi,
+                )
+            {
+                continue;
+            }
+            let (m, h) = self.separating_plane(prim, p, lo, hi, slack);
+            // The cone round the bounding sphere of the grown box.
+            let c = 0.5 * (lo + hi);
+            let r = 0.5 * (hi - lo).length() + slack;
+            let v = c - p;
+            let dist = v.length();
+            let (axis, cos2, near2) = if dist > r {
+                let s = r / dist;
+                let cos = (1.0 - s * s).sqrt() - SLACK_REL;
+                let near = dist - r;
+                (
+                    v / dist,
+                    if cos > 0.0 { cos * cos } else { -1.0 },
+                    near * near,
+                )
+            } else {
+                (DVec3::ZERO, -1.0, 0.0)
+            };
+            out.push(Occluder {
+                prim,
+                m,
+                h,
+                axis,
+                cos2,
+                near2,
+            });
+        }
+        out
+    }
+
+    /// Whether `prim` is a sphere or box that holds the receiver `p` and
+    /// every point of `region` (inside or on, by the shape's own
+    /// classification): a segment between two such points never crosses
+    /// its surface (the room a receiver stands in).
+    fn holds_both(&self, prim: Prim, p: DVec3, region: Option<(DVec3, DVec3)>) -> bool {
+        use crate::geometry::shapes::Inside;
+        let Some((lo, hi)) = region else {
+            return false;
+        };
+        let classify = |q: DVec3| match prim {
+            Prim::Sphere(i) => self.spheres[i as usize].0.classify(q),
+            Prim::Box(i) => self.boxes[i as usize].0.classify(q),
+            _ => Inside::Out,
+        };
+        // The region's corners: the shapes are convex, so they hold the
+        // whole box when they hold its corners.
+        classify(p) != Inside::Out
+            && (0..8).all(|k| {
+                let c = DVec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                );
+                classify(c) != Inside::Out
+            })
+    }
+
+    /// A plane with `prim` on its `m . y <= h` side and `p` on the other
+    /// (or on it); `(0, 0)` when there is none. `lo, hi`: the shape's
+    /// grown box.
+    fn separating_plane(
+        &self,
+        prim: Prim,
+        p: DVec3,
+        lo: DVec3,
+        hi: DVec3,
+        slack: f64,
+    ) -> (DVec3, f64) {
+        // A flat shape: its own plane, from the receiver's side (a segment
+        // that stays on one side never crosses it), unless the receiver
+        // lies within the margin of that plane.
+        let flat = match prim {
+            Prim::Rect(i) => Some(self.rects[i as usize].0.plane),
+            Prim::Disc(i) => Some(self.discs[i as usize].0.plane),
+            _ => None,
+        };
+        if let Some(pl) = flat {
+            let s = pl.signed_distance(p);
+            if s.abs() > slack {
+                let m = if s > 0.0 { pl.n } else { -pl.n };
+                return (m, m.dot(pl.p) + slack);
+            }
+            return (DVec3::ZERO, 0.0);
+        }
+        // A box face the receiver lies on or beyond: the exact faces of a
+        // solid box (axis-aligned, so `m . x` is a coordinate, exact),
+        // else the faces of the grown box.
+        let (blo, bhi) = match prim {
+            Prim::Box(i) => {
+                let b = &self.boxes[i as usize].0;
+                (b.lo, b.hi)
+            }
+            _ => (lo, hi),
+        };
+        let mut best = (DVec3::ZERO, 0.0, f64::NEG_INFINITY);
+        for a in 0..3 {
+            let mut e = DVec3::ZERO;
+            e[a] = 1.0;
+            for (m, h, out) in [(e, bhi[a], p[a] - bhi[a]), (-e, -blo[a], blo[a] - p[a])] {
+                if out >= 0.0 && out > best.2 {
+                    best = (m, h, out);
+                }
+            }
+        }
+        if best.2 >= 0.0 {
+            (best.0, best.1)
+        } else {
+            (DVec3::ZERO, 0.0)
+        }
+    }
+
+    /// Whether a shape among `occ` (from [`Self::occluders`] for the
+    /// receiver `b`) blocks the open segment from the collision `a` (on
+    /// `from`) to `b`: the same answer as [`Self::blocked_by_shapes`] for
+    /// collisions in the region and in front of the receiver the list was
+    /// made for. `l2 = |a - b|^2`. No square root unless a shape's own
+    /// test runs: the cone test squared (`w . axis >= cos |w|` for a cone
+    /// narrower than a half-space).
+    #[inline]
+    pub fn blocked_by_occluders(
+        &self,
+        a: DVec3,
+        from: Option<(u32, u32)>,
+        b: DVec3,
+        inside_both: u64,
+        occ: &[Occluder],
+        l2: f64,
+    ) -> bool {
+        let w = a - b;
+        for o in occ {
+            if o.m.dot(a) > o.h || l2 < o.near2 {
+                continue;
+            }
+            if o.cos2 >= 0.0 {
+                let t = w.dot(o.axis);
+                if t < 0.0 || t * t < o.cos2 * l2 {
+                    continue;
+                }
+            }
+            if self.exact_blocks(o.prim, a, from, b, inside_both) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// The shape's own test of the open segment `a b` (out of line; the
+    /// segment's direction and length computed only for the shapes whose
+    /// tests take them, meshes and SH objects).
+    #[inline(never)]
+    fn exact_blocks(
+        &self,
+        prim: Prim,
+        a: DVec3,
+        from: Option<(u32, u32)>,
+        b: DVec3,
+        inside_both: u64,
+    ) -> bool {
+        match prim {
+            Prim::Mesh(_) | Prim::Sh(_) => {
+                segment(a, b).is_some_and(|s| self.blocks(prim, a, from, b, s, inside_both))
+            }
+            // (Their tests take the end points alone.)
+            _ => {
+                (b - a).length_squared() > 0.0
+                    && self.blocks(prim, a, from, b, (DVec3::ZERO, 0.0), inside_both)
+            }
+        }
+    }
+}
+
+/// Whether the convex hull of the box `[rlo, rhi]` and the point `p` meets
+/// the box `[lo, hi]`: some `t` in `[0, 1]` with `p + t (r - p)` in it for
+/// every axis, i.e. the box `p + t ([rlo, rhi] - p)` overlapping `[lo, hi]`.
+fn hull_meets_box(p: DVec3, rlo: DVec3, rhi: DVec3, lo: DVec3, hi: DVec3) -> bool {
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for a in 0..3 {
+        // The hull's interval along axis a at t: [p + t (rlo - p), p + t (rhi - p)];
+        // it overlaps [lo, hi] when its low end <= hi and its high end >= lo.
+        for (slope, bound, upper) in [
+            (rlo[a] - p[a], hi[a] - p[a], true),
+            (rhi[a] - p[a], lo[a] - p[a], false),
+        ] {
+            // upper: slope t <= bound; else slope t >= bound.
+            let (s, b) = if upper {
+                (slope, bound)
+            } else {
+                (-slope, -bound)
+            };
+            // s t <= b
+            if s > 0.0 {
+                t1 = t1.min(b / s);
+            } else if s < 0.0 {
+                t0 = t0.max(b / s);
+            } else if b < 0.0 {
+                return false;
+            }
+        }
+    }
+    t0 <= t1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hull_test_matches_sampling() {
+        let mut rng = crate::sampling::Philox4x32::new(5, 0);
+        let mut u = || rng.next_2d()[0] * 4.0 - 2.0;
+        let mut met = [0usize; 2];
+        for _ in 0..4000 {
+            let p = DVec3::new(u(), u(), u());
+            let (a, b) = (DVec3::new(u(), u(), u()), DVec3::new(u(), u(), u()));
+            let (rlo, rhi) = (a.min(b), a.max(b));
+            let (c, d) = (DVec3::new(u(), u(), u()), DVec3::new(u(), u(), u()));
+            let (lo, hi) = (c.min(d) * 0.3, c.max(d) * 0.3);
+            let got = hull_meets_box(p, rlo, rhi, lo, hi);
+            // Sampled: points of the hull (t, corner mixes) inside the box.
+            let inside = |q: DVec3| q.cmpge(lo).all() && q.cmple(hi).all();
+            let mut seen = false;
+            for i in 0..=40 {
+                let t = i as f64 / 40.0;
+                let (qlo, qhi) = (p + (rlo - p) * t, p + (rhi - p) * t);
+                // The box at t overlaps [lo, hi]: its clamp of the centre.
+                let q = (0.5 * (lo + hi)).clamp(qlo, qhi);
+                if inside(q) {
+                    seen = true;
+                    break;
+                }
+            }
+            // Sampling finds a subset of what the exact test finds.
+            assert!(!seen || got, "{p} {rlo} {rhi} {lo} {hi}");
+            met[got as usize] += 1;
+        }
+        assert!(met[0] > 200 && met[1] > 200, "{met:?}");
+    }
+}

@@ -1,0 +1,264 @@
+//! Occluder lists (issue 15, fast rooms) give the same visibility as the
+//! full shape test, pair by pair: in the furnished office and in a room of
+//! every finite shape kind (tilted rectangle, disc, sphere, solid boxes, a
+//! mesh), with receivers in the air, on desk tops and box faces (where the
+//! list drops the box they stand on), on walls, and solid receivers. Each
+//! collision point is a real ray hit on a surface, tested against the
+//! list made for that surface's region; a planar receiver only against
+//! collisions in front of it (the only ones it scores).
+
+mod common;
+use common::chains_cfg;
+use glam::DVec3;
+use lumest::estimator::Receivers;
+use lumest::sampling::Philox4x32;
+use lumest::scene::Accel;
+use lumest::scene::Scene;
+use std::path::Path;
+
+/// Points on the scene's surfaces: ray hits from random points in `[lo, hi]`.
+fn hits(
+    scene: &Scene,
+    lo: DVec3,
+    hi: DVec3,
+    n: usize,
+    rng: &mut Philox4x32,
+) -> Vec<lumest::geometry::Hit> {
+    let mut out = Vec::new();
+    while out.len() < n {
+        let u = rng.next_2d();
+        let v = rng.next_2d();
+        let o = lo + (hi - lo) * DVec3::new(u[0], u[1], v[0]);
+        let w = rng.next_2d();
+        let z = 1.0 - 2.0 * w[0];
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let phi = 2.0 * std::f64::consts::PI * w[1];
+        let d = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+        if let Some(h) = scene.first_hit_from(o, d) {
+            out.push(h);
+        }
+        let _ = v[1];
+    }
+    out
+}
+
+/// Every (receiver, collision) pair: the lists' answer against the full test.
+fn check(
+    scene: &Scene,
+    receivers: &[(DVec3, Option<DVec3>)],
+    collisions: &[lumest::geometry::Hit],
+) {
+    assert!(scene.uses_occluder_lists());
+    let (mut pairs, mut blocked, mut kept, mut all) = (0usize, 0usize, 0usize, 0usize);
+    let shapes = scene.occluders(DVec3::splat(1e3), None, None).len();
+    for &(p, front) in receivers {
+        let ip = scene.inside_mask(p);
+        let mut lists = std::collections::HashMap::new();
+        for h in collisions {
+            if front.is_some_and(|n| n.dot(h.p - p) <= 0.0) {
+                continue;
+            }
+            let occ = lists
+                .entry(h.surface)
+                .or_insert_with(|| scene.occluders(p, front, scene.surface_bounds(h.surface)));
+            let from = Some((h.surface, h.prim));
+            let inside = scene.inside_mask(h.p) & ip;
+            let want = scene.blocked_by_shapes(h.p, from, p, inside);
+            let got =
+                scene.blocked_by_occluders(h.p, from, p, inside, occ, (h.p - p).length_squared());
+            assert_eq!(
+                got, want,
+                "receiver {p} (front {front:?}), collision {} on surface {}",
+                h.p, h.surface
+            );
+            pairs += 1;
+            blocked += want as usize;
+            kept += occ.len();
+            all += shapes;
+        }
+    }
+    // The check means something: many pairs, a good share shadowed, and
+    // the lists much shorter than the shape count.
+    eprintln!("{pairs} pairs, {blocked} shadowed, occluders kept {kept} of {all}");
+    assert!(pairs > 20_000, "{pairs}");
+    assert!(blocked * 20 > pairs, "{blocked} of {pairs}");
+    assert!(kept * 2 < all, "{kept} of {all}");
+}
+
+fn receivers(
+    rng: &mut Philox4x32,
+    lo: DVec3,
+    hi: DVec3,
+    fixed: &[(DVec3, Option<DVec3>)],
+) -> Vec<(DVec3, Option<DVec3>)> {
+    let mut r = fixed.to_vec();
+    for k in 0..40 {
+        let u = rng.next_2d();
+        let v = rng.next_2d();
+        let p = lo + (hi - lo) * DVec3::new(u[0], u[1], v[0]);
+        let front = match k % 4 {
+            0 => None,
+            1 => Some(DVec3::Z),
+            2 => Some(DVec3::new(v[1] - 0.5, 0.3, 0.8).normalize()),
+            _ => Some(-DVec3::X),
+        };
+        r.push((p, front));
+    }
+    r
+}
+
+#[test]
+fn office_lists_agree_with_the_full_test() {
+    let scene =
+        lumest::scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("data/office.toml"))
+            .unwrap();
+    let mut rng = Philox4x32::new(11, 0);
+    let (lo, hi) = (DVec3::new(0.05, 0.05, 0.05), DVec3::new(5.95, 3.95, 2.75));
+    let fixed = [
+        // On the desk tops (z = 0.75), facing up: the desk is dropped.
+        (DVec3::new(1.5, 1.4, 0.75), Some(DVec3::Z)),
+        (DVec3::new(2.6, 1.0, 0.75), Some(DVec3::Z)),
+        (DVec3::new(4.0, 1.8, 0.75), Some(DVec3::Z)),
+        // Just inside a desk, below its top, facing up: never dropped.
+        (DVec3::new(1.5, 1.4, 0.7), Some(DVec3::Z)),
+        // On the cabinet's front face, facing -y; on a wall; on the floor.
+        (DVec3::new(0.9, 3.45, 0.6), Some(-DVec3::Y)),
+        (DVec3::new(3.0, 0.0, 1.5), Some(DVec3::Y)),
+        (DVec3::new(3.2, 3.0, 0.0), Some(DVec3::Z)),
+        // Beside the partition's plane (x = 3), and a solid receiver by it.
+        (DVec3::new(3.0, 1.0, 1.2), Some(DVec3::Z)),
+        (DVec3::new(3.01, 3.0, 1.0), None),
+    ];
+    let recs = receivers(&mut rng, lo, hi, &fixed);
+    let collisions = hits(&scene, lo, hi, 1500, &mut rng);
+    check(&scene, &recs, &collisions);
+}
+
+#[test]
+fn every_shape_kind_agrees_with_the_full_test() {
+    let dir = std::env::temp_dir().join(format!("lumest-occluders-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/blob.obj"),
+        dir.join("blob.obj"),
+    )
+    .unwrap();
+    let path = dir.join("room.toml");
+    std::fs::write(
+        &path,
+        r#"
+[[surface]]
+type = "box"
+min = [0, 0, 0]
+max = [5, 4, 3]
+normals = "inward"
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+type = "box"
+min = [1, 1, 0]
+max = [2, 2, 1]
+normals = "outward"
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+type = "sphere"
+center = [3.5, 1.2, 1.5]
+radius = 0.4
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+type = "rectangle"
+corner = [2.5, 2.5, 0.5]
+edge1 = [1.0, 0.3, 0.2]
+edge2 = [-0.2, 0.1, 1.2]
+sides = "both"
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+type = "disc"
+center = [1.2, 3.0, 1.8]
+normal = [0.3, -0.5, 1]
+radius = 0.5
+sides = "both"
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+type = "mesh"
+file = "blob.obj"
+translate = [4.0, 3.0, 0.8]
+scale = 0.4
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[light]]
+type = "point"
+position = [2.5, 2, 2.9]
+intensity = 100
+"#,
+    )
+    .unwrap();
+    let scene = lumest::scene::load(&path);
+    std::fs::remove_dir_all(&dir).ok();
+    let scene = scene.unwrap();
+    let mut rng = Philox4x32::new(12, 0);
+    let (lo, hi) = (DVec3::splat(0.05), DVec3::new(4.95, 3.95, 2.95));
+    let fixed = [
+        // On the solid box's top and side.
+        (DVec3::new(1.5, 1.5, 1.0), Some(DVec3::Z)),
+        (DVec3::new(2.0, 1.5, 0.5), Some(DVec3::X)),
+        (DVec3::new(1.0, 1.2, 0.3), None),
+        // Just inside it, below the top and behind the side.
+        (DVec3::new(1.5, 1.5, 0.95), Some(DVec3::Z)),
+        (DVec3::new(1.95, 1.5, 0.5), Some(DVec3::X)),
+        // On the sphere, facing out.
+        (DVec3::new(3.5, 1.2, 1.9), Some(DVec3::Z)),
+    ];
+    let recs = receivers(&mut rng, lo, hi, &fixed);
+    let collisions = hits(&scene, lo, hi, 1500, &mut rng);
+    check(&scene, &recs, &collisions);
+}
+
+/// A whole office run scores the same bits through the occluder lists
+/// (shapes on loops) as through the shape tree (every shape tested), and
+/// the lists are in use there.
+#[test]
+fn office_run_is_bit_identical_with_the_tree() {
+    let scene =
+        lumest::scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("data/office.toml"))
+            .unwrap();
+    let lists = scene.clone().with_accel(Accel::Never);
+    let tree = scene.with_accel(Accel::Always);
+    assert!(lists.uses_occluder_lists() && !tree.uses_occluder_lists());
+    let mut points: Vec<(DVec3, DVec3)> = Vec::new();
+    for i in 0..6 {
+        for j in 0..4 {
+            // (y below 3.45: clear of the cabinet.)
+            points.push((
+                DVec3::new(0.5 + i as f64, 0.5 + 0.95 * j as f64, 0.75),
+                DVec3::Z,
+            ));
+        }
+    }
+    // A desk top, the cabinet's front, a wall behind the partition.
+    points.push((DVec3::new(1.8, 1.4, 0.75), DVec3::Z));
+    points.push((DVec3::new(0.9, 3.45, 0.6), -DVec3::Y));
+    points.push((DVec3::new(3.5, 4.0, 1.0), -DVec3::Y));
+    let cfg = chains_cfg(20_000, 5, 2);
+    let (rl, rt) = (
+        Receivers::new(&lists, &points).unwrap(),
+        Receivers::new(&tree, &points).unwrap(),
+    );
+    let a = lumest::estimator::local::run(&lists, &rl, &cfg, &mut |_| true);
+    let b = lumest::estimator::local::run(&tree, &rt, &cfg, &mut |_| true);
+    let bits = |r: &lumest::run::RunResult| -> Vec<[u64; 2]> {
+        (0..points.len())
+            .map(|j| {
+                let w = &r.tallies.estimated[j];
+                [w.mean().to_bits(), w.std_error().to_bits()]
+            })
+            .collect()
+    };
+    assert_eq!((a.chains, a.scores), (b.chains, b.scores));
+    assert_eq!(bits(&a), bits(&b));
+    assert!((0..points.len()).all(|j| a.tallies.estimated[j].mean() > 0.0));
+}
