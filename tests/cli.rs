@@ -600,6 +600,67 @@ fn bench_runs_the_grid_and_the_office() {
     assert!(out.contains("grid: RMS R = 1e-3 at all 10,000 points projects to"));
 }
 
+/// `lumest bench --scene S`: the scene's row at its points (given, or its
+/// planar grids) and the planes-only row beside it, with their ratio.
+#[test]
+fn bench_runs_a_scene_against_the_planes() {
+    for extra in [&["--scene-points", "data/office_grid.csv"][..], &[][..]] {
+        let mut args = vec!["bench", "--scene", "data/office.toml", "--case-time", "0.3"];
+        args.extend_from_slice(extra);
+        let o = lumest().args(&args).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let out = String::from_utf8(o.stdout).unwrap();
+        let header: Vec<&str> = out
+            .lines()
+            .find(|l| l.trim_start().starts_with("case"))
+            .unwrap()
+            .split_whitespace()
+            .collect();
+        let row = |name: &str| -> Vec<f64> {
+            // (The title line starts with "scene" too: a row has a count next.)
+            let line = out
+                .lines()
+                .find(|l| {
+                    let mut t = l.split_whitespace();
+                    t.next() == Some(name) && t.next().is_some_and(|c| c.parse::<f64>().is_ok())
+                })
+                .unwrap();
+            line.split_whitespace()
+                .skip(1)
+                .map(|c| c.parse().unwrap_or(f64::NAN))
+                .collect()
+        };
+        let col = |r: &[f64], name: &str| r[header.iter().position(|h| *h == name).unwrap() - 1];
+        let (scene, planes) = (row("scene"), row("planes"));
+        // The office's 66 work-plane points, or its planar grids' points.
+        let n = col(&scene, "points");
+        assert!(
+            if extra.is_empty() {
+                n > 66.0
+            } else {
+                n == 66.0
+            },
+            "{out}"
+        );
+        assert!(col(&planes, "points") >= n, "{out}");
+        let ratio = col(&planes, "scores/s") / col(&scene, "scores/s");
+        let line = out
+            .lines()
+            .find(|l| l.contains("the planes-only rate is"))
+            .unwrap();
+        let printed: f64 = line
+            .split("rate is ")
+            .nth(1)
+            .unwrap()
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!((printed / ratio - 1.0).abs() < 0.01, "{line} vs {ratio}");
+    }
+}
+
 #[test]
 fn bench_reports_only_what_it_measures() {
     // Throughput table: no speed-up against an estimator it does not run;

@@ -696,7 +696,7 @@ pub fn scene_case(a: &BenchArgs, path: &std::path::Path) -> anyhow::Result<()> {
         a.case_time
     );
     println!(
-        "scene {} , {} s each (--case-time):",
+        "scene {}, {} s each (--case-time):",
         path.display(),
         a.case_time
     );
@@ -731,14 +731,11 @@ pub fn scene_case(a: &BenchArgs, path: &std::path::Path) -> anyhow::Result<()> {
     let planes = crate::cases::sobolev::sobolev_scene(&problem);
     let (rp, _) = case_row(a, "planes", &planes, &grid, Some(&exact), t0)?;
     let (rate, rate_p) = (r.scores as f64 / r.wall, rp.scores as f64 / rp.wall);
+    // (Issue 15's target, within 4 times, is for the office at its
+    // 66-point work plane, data/office_grid.csv: see the README.)
     println!(
-        "        scores/s: the planes-only rate is {:.2} times the scene's (issue 15 target for the office: within 4: {})",
-        rate_p / rate,
-        if rate_p <= 4.0 * rate {
-            "met"
-        } else {
-            "NOT met"
-        }
+        "        scores/s: the planes-only rate is {:.2} times the scene's",
+        rate_p / rate
     );
     Ok(())
 }

@@ -8,7 +8,11 @@
 //! loop spends on a direction-dependent BRDF (a normalised direction, the
 //! local frame, the BRDF call) and on panes (none here).
 
-use super::{ReceiverList, local_kernel};
+// Calling a function compiled for AVX2 is `unsafe` (the CPU must have it):
+// one call, after the run-time check.
+#![allow(unsafe_code)]
+
+use super::{ReceiverList, kernel_parts};
 use crate::scene::Scene;
 use glam::DVec3;
 
@@ -25,25 +29,104 @@ pub(super) fn score_occluded<const COUNT: bool>(
     n: DVec3,
     from: Option<(u32, u32)>,
     x_inside: u64,
+    qf: (f64, f64),
+    acc: &mut [f64],
+    near: &mut [f64],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if super::open_kernel::active_kernel() == super::open_kernel::Kernel::Avx2 {
+        // SAFETY: the CPU has AVX2 and FMA (checked by `active_kernel`).
+        unsafe { score_occluded_avx2::<COUNT>(scene, list, x, n, from, x_inside, qf, acc, near) };
+        return;
+    }
+    score_occluded_body::<COUNT>(scene, list, x, n, from, x_inside, qf, acc, near);
+}
+
+/// [`score_occluded_body`] compiled for AVX2 and FMA (the same bits: Rust
+/// never fuses a multiply and an add on its own, see `open_kernel`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn score_occluded_avx2<const COUNT: bool>(
+    scene: &Scene,
+    list: &ReceiverList,
+    x: DVec3,
+    n: DVec3,
+    from: Option<(u32, u32)>,
+    x_inside: u64,
+    qf: (f64, f64),
+    acc: &mut [f64],
+    near: &mut [f64],
+) {
+    score_occluded_body::<COUNT>(scene, list, x, n, from, x_inside, qf, acc, near);
+}
+
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn score_occluded_body<const COUNT: bool>(
+    scene: &Scene,
+    list: &ReceiverList,
+    x: DVec3,
+    n: DVec3,
+    from: Option<(u32, u32)>,
+    x_inside: u64,
     (q, f): (f64, f64),
     acc: &mut [f64],
     near: &mut [f64],
 ) {
-    for (k, a) in acc.iter_mut().enumerate() {
-        let p = DVec3::new(list.px[k], list.py[k], list.pz[k]);
-        let np = DVec3::new(list.nx[k], list.ny[k], list.nz[k]);
-        let g = local_kernel(x, n, p, np);
-        let d2 = (p - x).length_squared();
-        if g == 0.0 || d2 < list.eps2[k] {
-            continue;
+    // Two passes per block of entries: the kernels (straight-line code over
+    // the structure of arrays, which the compiler vectorises), then the
+    // shadow tests of the pairs that score.
+    const BLOCK: usize = 64;
+    let mut g = [0.0f64; BLOCK];
+    let mut d2 = [0.0f64; BLOCK];
+    let len = acc.len();
+    let mut start = 0;
+    while start < len {
+        let end = (start + BLOCK).min(len);
+        let m = end - start;
+        let it = g[..m]
+            .iter_mut()
+            .zip(d2[..m].iter_mut())
+            .zip(
+                list.px[start..end]
+                    .iter()
+                    .zip(&list.py[start..end])
+                    .zip(&list.pz[start..end]),
+            )
+            .zip(
+                list.nx[start..end]
+                    .iter()
+                    .zip(&list.ny[start..end])
+                    .zip(&list.nz[start..end]),
+            );
+        for (((g, d2), ((px, py), pz)), ((nx, ny), nz)) in it {
+            let [cx, cp, dd] = kernel_parts(x, n, [*px, *py, *pz], [*nx, *ny, *nz]);
+            // `local_kernel`'s value, as a select.
+            *g = if cx > 0.0 && cp > 0.0 {
+                cx * cp / (dd * dd)
+            } else {
+                0.0
+            };
+            *d2 = dd;
         }
-        let occ = &list.occ[list.occ_start[k] as usize..list.occ_start[k + 1] as usize];
-        if scene.blocked_by_occluders(x, from, p, x_inside & list.inside[k], occ, d2) {
-            continue;
+        for i in 0..m {
+            let k = start + i;
+            if g[i] == 0.0 || d2[i] < list.eps2[k] {
+                continue;
+            }
+            let p = DVec3::new(list.px[k], list.py[k], list.pz[k]);
+            let occ = &list.occ[list.occ_start[k] as usize..list.occ_start[k + 1] as usize];
+            if !occ.is_empty()
+                && scene.blocked_by_occluders(x, from, p, x_inside & list.inside[k], occ, d2[i])
+            {
+                continue;
+            }
+            acc[k] += q * f * g[i] * list.w[k];
+            if COUNT && d2[i] < list.watch2[k] {
+                near[k] += 1.0;
+            }
         }
-        *a += q * f * g * list.w[k];
-        if COUNT && d2 < list.watch2[k] {
-            near[k] += 1.0;
-        }
+        start = end;
     }
 }

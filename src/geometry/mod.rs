@@ -53,7 +53,7 @@ pub struct Plane {
 /// hit point projected onto it has a signed distance of a few ulps of its
 /// coordinates; anything within this band counts as "on" the plane, so a
 /// plane never shadows points on itself, at any scene scale.
-const ON_PLANE_REL: f64 = 1e-11;
+pub(crate) const ON_PLANE_REL: f64 = 1e-11;
 
 impl Plane {
     /// Plane through `p` with normal direction `n` (normalised here; must be non-zero).

@@ -33,6 +33,7 @@
 
 use super::shape_tree::{padded, prim_bounds};
 use super::{Prim, Scene, ShapeRef, segment};
+use crate::geometry::shapes::EDGE_REL;
 use glam::DVec3;
 
 /// Relative margin of every skip (of the largest coordinate magnitude of
@@ -41,7 +42,7 @@ const SLACK_REL: f64 = 1e-9;
 
 /// One finite shape that may shadow segments ending at one receiver, with
 /// the tests that rule it out for a segment (module docs).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Occluder {
     prim: Prim,
     /// Separating plane: skip when `m . x > h` (`m = 0`: never).
@@ -54,6 +55,17 @@ pub struct Occluder {
     axis: DVec3,
     cos2: f64,
     near2: f64,
+    /// A rectangle's pyramid from the receiver: inward normals of the four
+    /// planes through the receiver and the (grown) edges; a segment
+    /// crosses the rectangle only with `w . m_i >= 0` for all four (`w`
+    /// towards the collision). `None` for other shapes. (Boxed: it is
+    /// read only past the other tests, and the list stays compact.)
+    pyramid: Option<Box<[DVec3; 4]>>,
+    /// Other shapes: the receiver relative to the centre of the grown box,
+    /// and the box's half extents, for the separating-axis test of the
+    /// segment against the box (zero extents for flat shapes: unused).
+    rel: DVec3,
+    half: DVec3,
 }
 
 impl Scene {
@@ -168,6 +180,37 @@ impl Scene {
             } else {
                 (DVec3::ZERO, -1.0, 0.0)
             };
+            // A flat shape never blocks a receiver in its plane (the exact
+            // test needs the end points strictly on opposite sides).
+            let flat = match prim {
+                Prim::Rect(i) => Some(self.rects[i as usize].0.plane),
+                Prim::Disc(i) => Some(self.discs[i as usize].0.plane),
+                _ => None,
+            };
+            if flat.is_some_and(|pl| pl.side(p) == 0) {
+                continue;
+            }
+            // Nor collisions on its own plane (the region within the
+            // plane's tolerance at every point of it: the signed distance
+            // is linear, the tolerance at least `ON_PLANE_REL |plane.p|`).
+            if let (Some(pl), Some((rlo, rhi))) = (flat, region) {
+                let tol = crate::geometry::ON_PLANE_REL * pl.p.abs().max_element();
+                let on = (0..8).all(|k| {
+                    let c = DVec3::new(
+                        if k & 1 == 0 { rlo.x } else { rhi.x },
+                        if k & 2 == 0 { rlo.y } else { rhi.y },
+                        if k & 4 == 0 { rlo.z } else { rhi.z },
+                    );
+                    pl.signed_distance(c).abs() <= tol
+                });
+                if on {
+                    continue;
+                }
+            }
+            let pyramid = match prim {
+                Prim::Rect(i) => Some(Box::new(rect_pyramid(&self.rects[i as usize].0, p, slack))),
+                _ => None,
+            };
             out.push(Occluder {
                 prim,
                 m,
@@ -175,6 +218,9 @@ impl Scene {
                 axis,
                 cos2,
                 near2,
+                pyramid,
+                rel: p - c,
+                half: 0.5 * (hi - lo),
             });
         }
         out
@@ -268,7 +314,7 @@ impl Scene {
     /// made for. `l2 = |a - b|^2`. No square root unless a shape's own
     /// test runs: the cone test squared (`w . axis >= cos |w|` for a cone
     /// narrower than a half-space).
-    #[inline]
+    #[inline(always)]
     pub fn blocked_by_occluders(
         &self,
         a: DVec3,
@@ -287,6 +333,18 @@ impl Scene {
                 let t = w.dot(o.axis);
                 if t < 0.0 || t * t < o.cos2 * l2 {
                     continue;
+                }
+            }
+            match &o.pyramid {
+                Some(pm) => {
+                    if pm.iter().any(|m| w.dot(*m) < 0.0) {
+                        continue;
+                    }
+                }
+                None => {
+                    if segment_misses_box(o.rel, w, o.half) {
+                        continue;
+                    }
                 }
             }
             if self.exact_blocks(o.prim, a, from, b, inside_both) {
@@ -319,6 +377,45 @@ impl Scene {
             }
         }
     }
+}
+
+/// Whether the segment from `r` to `r + w` (relative to a box's centre)
+/// misses the box of half extents `e`: the separating-axis test on the
+/// box's three axes and their cross products with the segment (no
+/// division). The box is the grown one, so a miss rules out a hit.
+#[inline(always)]
+fn segment_misses_box(r: DVec3, w: DVec3, e: DVec3) -> bool {
+    let d = 0.5 * w;
+    let m = r + d;
+    let ad = d.abs();
+    if m.x.abs() > e.x + ad.x || m.y.abs() > e.y + ad.y || m.z.abs() > e.z + ad.z {
+        return true;
+    }
+    (m.y * d.z - m.z * d.y).abs() > e.y * ad.z + e.z * ad.y
+        || (m.z * d.x - m.x * d.z).abs() > e.x * ad.z + e.z * ad.x
+        || (m.x * d.y - m.y * d.x).abs() > e.x * ad.y + e.y * ad.x
+}
+
+/// The inward normals of the four planes through `p` and the edges of the
+/// rectangle `r` grown by its edge extension ([`EDGE_REL`]) and `slack`
+/// (module docs); zeros where `p` lies within the margin of its plane.
+fn rect_pyramid(r: &crate::geometry::shapes::Rect, p: DVec3, slack: f64) -> [DVec3; 4] {
+    let (l1, l2) = (r.e1.length(), r.e2.length());
+    // Grow each edge by twice the extension and by the margin.
+    let (g1, g2) = (2.0 * EDGE_REL + slack / l1, 2.0 * EDGE_REL + slack / l2);
+    let o = r.o - r.e1 * g1 - r.e2 * g2;
+    let (a, b) = (r.e1 * (1.0 + 2.0 * g1), r.e2 * (1.0 + 2.0 * g2));
+    let c = [o, o + a, o + a + b, o + b];
+    if r.plane.signed_distance(p).abs() <= slack {
+        return [DVec3::ZERO; 4];
+    }
+    let centre = o + 0.5 * (a + b);
+    let mut out = [DVec3::ZERO; 4];
+    for k in 0..4 {
+        let m = (c[k] - p).cross(c[(k + 1) % 4] - p);
+        out[k] = if m.dot(centre - p) >= 0.0 { m } else { -m };
+    }
+    out
 }
 
 /// Whether the convex hull of the box `[rlo, rhi]` and the point `p` meets
@@ -355,6 +452,37 @@ fn hull_meets_box(p: DVec3, rlo: DVec3, rhi: DVec3, lo: DVec3, hi: DVec3) -> boo
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The separating-axis test never misses a segment that enters the
+    /// box (sampled points of the segment), and rejects most that do not.
+    #[test]
+    fn segment_box_test_is_conservative() {
+        let mut rng = crate::sampling::Philox4x32::new(6, 0);
+        let mut u = || rng.next_2d()[0] * 4.0 - 2.0;
+        let (mut entered, mut missed, mut rejected) = (0, 0, 0);
+        for _ in 0..20_000 {
+            let r = DVec3::new(u(), u(), u());
+            let w = DVec3::new(u(), u(), u()) * 1.5;
+            let e = DVec3::new(u().abs(), u().abs(), u().abs()) * 0.4;
+            let inside = (0..=200).any(|k| {
+                let q = r + w * (k as f64 / 200.0);
+                q.abs().cmple(e).all()
+            });
+            let miss = segment_misses_box(r, w, e);
+            assert!(!(inside && miss), "{r} {w} {e}");
+            entered += inside as usize;
+            if !inside {
+                missed += 1;
+                rejected += miss as usize;
+            }
+        }
+        assert!(entered > 500, "{entered}");
+        // Exact for a box: all but the sampling's near misses rejected.
+        assert!(
+            rejected as f64 > 0.98 * missed as f64,
+            "{rejected} of {missed}"
+        );
+    }
 
     #[test]
     fn hull_test_matches_sampling() {
