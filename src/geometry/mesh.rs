@@ -114,6 +114,9 @@ pub struct Mesh {
     hi: DVec3,
     /// Zero-area triangles dropped when built.
     dropped: usize,
+    /// Largest distance [m] of a kept triangle's corner from the centre of
+    /// the bounds: the ball there of this radius holds every triangle.
+    reach: f64,
     bvh: TriangleBvh,
 }
 
@@ -288,6 +291,12 @@ impl Mesh {
             lo = lo.min(*p);
             hi = hi.max(*p);
         }
+        let centre = 0.5 * (lo + hi);
+        let reach = corners
+            .iter()
+            .flatten()
+            .map(|p| (*p - centre).length())
+            .fold(0.0, f64::max);
         let bvh = TriangleBvh::build(&corners);
         Ok(Self {
             vertices,
@@ -295,6 +304,7 @@ impl Mesh {
             lo,
             hi,
             dropped,
+            reach,
             bvh,
         })
     }
@@ -411,6 +421,13 @@ impl Mesh {
     /// Axis-aligned bounds `(lower, upper)` of the triangles [m].
     pub fn bounds(&self) -> (DVec3, DVec3) {
         (self.lo, self.hi)
+    }
+
+    /// A ball holding every triangle: the centre of [`Self::bounds`] and
+    /// the largest distance of a corner from it [m] (for a round mesh
+    /// tighter than the ball round its box, by up to `sqrt 3`).
+    pub fn bounding_ball(&self) -> (DVec3, f64) {
+        (0.5 * (self.lo + self.hi), self.reach)
     }
 
     /// Nearest hit of the ray `o + t d` (unit `d`) with `t` [m] in

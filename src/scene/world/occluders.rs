@@ -163,9 +163,17 @@ impl Scene {
                 continue;
             }
             let (m, h) = self.separating_plane(prim, p, lo, hi, slack);
-            // The cone round the bounding sphere of the grown box.
+            // The cone round the bounding sphere of the grown box (a mesh:
+            // the ball round its corners, grown by the box's padding and
+            // the margin, when that is smaller).
             let c = 0.5 * (lo + hi);
-            let r = 0.5 * (hi - lo).length() + slack;
+            let mut r = 0.5 * (hi - lo).length() + slack;
+            if let Prim::Mesh(i) = prim {
+                let (mc, reach) = self.meshes[i as usize].0.bounding_ball();
+                let grow = (hi - lo).max_element() * 1e-9 + 2.0 * slack;
+                let ball = reach + (mc - c).length() + grow;
+                r = r.min(ball);
+            }
             let v = c - p;
             let dist = v.length();
             let (axis, cos2, near2) = if dist > r {
