@@ -399,6 +399,9 @@ struct ReceiverList {
     /// then tested).
     occ_start: Vec<u32>,
     occ: Vec<crate::scene::world::Occluder>,
+    /// The list's surfaces are flat (an infinite plane or a flat shape's
+    /// support plane): every entry lies strictly in front of it.
+    flat: bool,
 }
 
 /// Most occluders kept over all receiver lists (136 bytes each, 96 more
@@ -678,6 +681,7 @@ impl Receivers {
             let mut list = ReceiverList {
                 offset,
                 inside_all: u64::MAX,
+                flat: key.2 <= 2,
                 ..Default::default()
             };
             // Which receivers a collision on surface `s` can score into: those
@@ -1062,10 +1066,14 @@ impl Receivers {
                 score_open::<false>(list, x, n, c.q * f, &mut acc[..nc], &mut [])
             }
             // Shapes may be in the way: through the occluder lists, where
-            // the general loop would give the same terms (no panes, and
-            // light arriving on the front, where its BRDF is `f`).
+            // the general loop would give the same terms (no panes, light
+            // arriving on the front, where its BRDF is `f`, and a flat
+            // surface with every entry strictly in front: on a curved one
+            // a receiver grazing the tangent plane could see `cos_x > 0`
+            // while the general loop's normalised direction says 0).
             Some(f)
                 if open
+                    && list.flat
                     && !list.occ_start.is_empty()
                     && !scene.has_panes()
                     && c.n.dot(c.wi) > 0.0 =>

@@ -61,9 +61,9 @@ pub struct Occluder {
     /// towards the collision). `None` for other shapes. (Boxed: it is
     /// read only past the other tests, and the list stays compact.)
     pyramid: Option<Box<[DVec3; 4]>>,
-    /// Other shapes: the receiver relative to the centre of the grown box,
-    /// and the box's half extents, for the separating-axis test of the
-    /// segment against the box (zero extents for flat shapes: unused).
+    /// Shapes other than rectangles (discs included): the receiver
+    /// relative to the centre of the grown box, and the box's half extents,
+    /// for the separating-axis test of the segment against the box.
     rel: DVec3,
     half: DVec3,
 }
