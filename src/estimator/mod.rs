@@ -400,7 +400,8 @@ struct ReceiverList {
     occ_start: Vec<u32>,
     occ: Vec<crate::scene::world::Occluder>,
     /// The list's surfaces are flat (an infinite plane or a flat shape's
-    /// support plane): every entry lies strictly in front of it.
+    /// support plane): every entry lies strictly in front of it, so a
+    /// positive unnormalised cosine at the collision is the BRDF's front.
     flat: bool,
 }
 
@@ -1067,13 +1068,11 @@ impl Receivers {
             }
             // Shapes may be in the way: through the occluder lists, where
             // the general loop would give the same terms (no panes, light
-            // arriving on the front, where its BRDF is `f`, and a flat
-            // surface with every entry strictly in front: on a curved one
-            // a receiver grazing the tangent plane could see `cos_x > 0`
-            // while the general loop's normalised direction says 0).
+            // arriving on the front, where its BRDF is `f`; on a curved
+            // surface the kernel repeats the general loop's test of the
+            // normalised direction, see `occluded_kernel`).
             Some(f)
                 if open
-                    && list.flat
                     && !list.occ_start.is_empty()
                     && !scene.has_panes()
                     && c.n.dot(c.wi) > 0.0 =>

@@ -122,6 +122,14 @@ fn score_occluded_body<const COUNT: bool>(
             {
                 continue;
             }
+            // On a curved surface the general loop's BRDF is 0 where the
+            // normalised direction to the receiver is not in front (a
+            // receiver grazing the tangent plane): the same test here.
+            let f = if list.flat || (p - x).normalize().dot(n) > 0.0 {
+                f
+            } else {
+                0.0
+            };
             acc[k] += q * f * g[i] * list.w[k];
             if COUNT && d2[i] < list.watch2[k] {
                 near[k] += 1.0;
