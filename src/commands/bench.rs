@@ -228,11 +228,6 @@ pub fn luminaires(_a: &BenchArgs) -> anyhow::Result<()> {
     use glam::DVec3;
     use std::hint::black_box;
     use std::time::Instant;
-    let ies = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/pendant.ies");
-    anyhow::ensure!(ies.exists(), "{} not found", ies.display());
-    let dir = std::env::temp_dir().join(format!("lumest-bench-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
-    std::fs::copy(&ies, dir.join("pendant.ies"))?;
     let mut src = String::from(
         "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
          material = { type = \"lambertian\", reflectance = 0.5 }\n",
@@ -244,13 +239,7 @@ pub fn luminaires(_a: &BenchArgs) -> anyhow::Result<()> {
             k % 360
         );
     }
-    let path = dir.join("many.toml");
-    std::fs::write(&path, &src)?;
-    let t = Instant::now();
-    let loaded = crate::scene::load(&path);
-    let load = t.elapsed().as_secs_f64();
-    std::fs::remove_dir_all(&dir).ok();
-    let scene = loaded.map_err(|e| anyhow::anyhow!("{e}"))?;
+    let (scene, load) = temp_scene("data/pendant.ies", "pendant.ies", &src)?;
     println!(
         "1000 IES luminaires (data/pendant.ies, 73 angles each): scene loaded in {load:.3} s ({} lights, {:.4e} lm){}",
         scene.lights.len(),
@@ -264,21 +253,14 @@ pub fn luminaires(_a: &BenchArgs) -> anyhow::Result<()> {
     let gonio = scene.lights[7].clone();
     // A table without rotational symmetry (type C, C0-C360, 19 x 25
     // angles): its direct term also locates the azimuth.
-    let asym = {
-        let f =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/photometry/sym_full.ies");
-        let dir = std::env::temp_dir().join(format!("lumest-bench-asym-{}", std::process::id()));
-        std::fs::create_dir_all(&dir)?;
-        std::fs::copy(&f, dir.join("asym.ies"))?;
-        let path = dir.join("asym.toml");
-        std::fs::write(
-            &path,
-            "[[light]]\ntype = \"ies\"\nfile = \"asym.ies\"\nposition = [10, 10, 3]\nrotate = 17\n",
-        )?;
-        let loaded = crate::scene::load(&path);
-        std::fs::remove_dir_all(&dir).ok();
-        loaded.map_err(|e| anyhow::anyhow!("{e}"))?.lights[0].clone()
-    };
+    let asym = temp_scene(
+        "data/photometry/sym_full.ies",
+        "asym.ies",
+        "[[light]]\ntype = \"ies\"\nfile = \"asym.ies\"\nposition = [10, 10, 3]\nrotate = 17\n",
+    )?
+    .0
+    .lights[0]
+        .clone();
     let point = Light::Point {
         p: gonio.position(),
         i: 100.0,
@@ -338,6 +320,28 @@ pub fn luminaires(_a: &BenchArgs) -> anyhow::Result<()> {
         }
     );
     Ok(())
+}
+
+/// The scene `src` loaded from a temporary folder that also holds the
+/// bundled photometric file `data_file` (relative to the crate) as
+/// `name`, and the load time [s].
+fn temp_scene(
+    data_file: &str,
+    name: &str,
+    src: &str,
+) -> anyhow::Result<(crate::scene::Scene, f64)> {
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(data_file);
+    anyhow::ensure!(file.exists(), "{} not found", file.display());
+    let dir = std::env::temp_dir().join(format!("lumest-bench-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    std::fs::copy(&file, dir.join(name))?;
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, src)?;
+    let t = std::time::Instant::now();
+    let loaded = crate::scene::load(&path);
+    let load = t.elapsed().as_secs_f64();
+    std::fs::remove_dir_all(&dir).ok();
+    Ok((loaded.map_err(|e| anyhow::anyhow!("{e}"))?, load))
 }
 
 /// Local against backward estimation at equal wall time: for each point

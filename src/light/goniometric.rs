@@ -255,28 +255,9 @@ impl Goniometric {
             }
             let (len, r) = (d2.sqrt(), r2.sqrt());
             let inv = len.recip();
-            let Some((k, tv)) = vg.locate_polar(-lz * inv, r * inv) else {
-                return 0.0;
-            };
-            // At the poles (r = 0) the azimuth is atan2's, as in
-            // [`Self::intensity`].
-            let (cc, sc) = if r > 0.0 {
-                let ir = r.recip();
-                (lx * ir, ly * ir)
-            } else if lx.is_sign_negative() {
-                (-1.0, 0.0)
-            } else {
-                (1.0, 0.0)
-            };
-            let Some((a, th)) = hg.locate(cc, sc) else {
-                return 0.0;
-            };
-            let nv = self.v.len();
-            let (j0, j1) = (a * nv + k, (a + 1) * nv + k);
-            let (i00, i01, i10, i11) = (self.i[j0], self.i[j0 + 1], self.i[j1], self.i[j1 + 1]);
-            let lo = i00 + tv * (i01 - i00);
-            let hi = i10 + tv * (i11 - i10);
-            return (lo + th * (hi - lo)) * c * (inv * inv * inv);
+            return self.bilinear_c(vg, hg, (-lz * inv, r * inv), (lx, ly, r))
+                * c
+                * (inv * inv * inv);
         }
         let d2 = w.length_squared();
         if d2 == 0.0 {
@@ -321,38 +302,49 @@ impl Goniometric {
         // sin gamma from the transverse components: accurate at the poles,
         // where sqrt(1 - cos^2) loses half the digits.
         let (c, r) = (-d.z, (d.x * d.x + d.y * d.y).sqrt());
-        let nv = self.v.len();
         match hg {
             // Rotational symmetry: gamma alone, no azimuth.
             None => match vg.locate_polar(c, r) {
                 Some((k, t)) => self.i[k] + t * (self.i[k + 1] - self.i[k]),
                 None => 0.0,
             },
-            Some(hg) => {
-                let Some((k, tv)) = vg.locate_polar(c, r) else {
-                    return 0.0;
-                };
-                // At the poles (r = 0) the azimuth is atan2's: C180 for a
-                // negative zero d_x, else C0.
-                let (cc, sc) = if r > 0.0 {
-                    let inv = r.recip();
-                    (d.x * inv, d.y * inv)
-                } else if d.x.is_sign_negative() {
-                    (-1.0, 0.0)
-                } else {
-                    (1.0, 0.0)
-                };
-                let Some((a, th)) = hg.locate(cc, sc) else {
-                    return 0.0;
-                };
-                let row = |a: usize| {
-                    let x = &self.i[a * nv + k..a * nv + k + 2];
-                    x[0] + tv * (x[1] - x[0])
-                };
-                let (lo, hi) = (row(a), row(a + 1));
-                lo + th * (hi - lo)
-            }
+            Some(hg) => self.bilinear_c(vg, hg, (c, r), (d.x, d.y, r)),
         }
+    }
+
+    /// The bilinear rule of a type C table in its angle grids, from the
+    /// polar angle's `(cos, sin)` and the azimuth's components `(x, y)`
+    /// with `r = hypot(x, y)` (any common scale): zero outside the
+    /// measured angles. At the poles (`r = 0`) the azimuth is atan2's: C180
+    /// for a negative zero `x`, else C0.
+    #[inline(always)]
+    fn bilinear_c(
+        &self,
+        vg: &AngleGrid,
+        hg: &AngleGrid,
+        (c, s): (f64, f64),
+        (x, y, r): (f64, f64, f64),
+    ) -> f64 {
+        let Some((k, tv)) = vg.locate_polar(c, s) else {
+            return 0.0;
+        };
+        let (cc, sc) = if r > 0.0 {
+            let inv = r.recip();
+            (x * inv, y * inv)
+        } else if x.is_sign_negative() {
+            (-1.0, 0.0)
+        } else {
+            (1.0, 0.0)
+        };
+        let Some((a, th)) = hg.locate(cc, sc) else {
+            return 0.0;
+        };
+        let nv = self.v.len();
+        let (j0, j1) = (a * nv + k, (a + 1) * nv + k);
+        let (i00, i01, i10, i11) = (self.i[j0], self.i[j0 + 1], self.i[j1], self.i[j1 + 1]);
+        let lo = i00 + tv * (i01 - i00);
+        let hi = i10 + tv * (i11 - i10);
+        lo + th * (hi - lo)
     }
 
     /// Intensity [cd] at angles `(h, v)` [rad]: bilinear, zero outside the

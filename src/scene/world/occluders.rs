@@ -137,15 +137,9 @@ impl Scene {
                 }
             }
             if let Some(n) = front {
-                let far = (0..8)
-                    .map(|k| {
-                        let c = DVec3::new(
-                            if k & 1 == 0 { lo.x } else { hi.x },
-                            if k & 2 == 0 { lo.y } else { hi.y },
-                            if k & 4 == 0 { lo.z } else { hi.z },
-                        );
-                        n.dot(c - p)
-                    })
+                let far = corners(lo, hi)
+                    .iter()
+                    .map(|&c| n.dot(c - p))
                     .fold(f64::NEG_INFINITY, f64::max);
                 if far < -slack {
                     continue;
@@ -203,14 +197,9 @@ impl Scene {
             // is linear, the tolerance at least `ON_PLANE_REL |plane.p|`).
             if let (Some(pl), Some((rlo, rhi))) = (flat, region) {
                 let tol = crate::geometry::ON_PLANE_REL * pl.p.abs().max_element();
-                let on = (0..8).all(|k| {
-                    let c = DVec3::new(
-                        if k & 1 == 0 { rlo.x } else { rhi.x },
-                        if k & 2 == 0 { rlo.y } else { rhi.y },
-                        if k & 4 == 0 { rlo.z } else { rhi.z },
-                    );
-                    pl.signed_distance(c).abs() <= tol
-                });
+                let on = corners(rlo, rhi)
+                    .iter()
+                    .all(|&c| pl.signed_distance(c).abs() <= tol);
                 if on {
                     continue;
                 }
@@ -250,15 +239,7 @@ impl Scene {
         };
         // The region's corners: the shapes are convex, so they hold the
         // whole box when they hold its corners.
-        classify(p) != Inside::Out
-            && (0..8).all(|k| {
-                let c = DVec3::new(
-                    if k & 1 == 0 { lo.x } else { hi.x },
-                    if k & 2 == 0 { lo.y } else { hi.y },
-                    if k & 4 == 0 { lo.z } else { hi.z },
-                );
-                classify(c) != Inside::Out
-            })
+        classify(p) != Inside::Out && corners(lo, hi).iter().all(|&c| classify(c) != Inside::Out)
     }
 
     /// A plane with `prim` on its `m . y <= h` side and `p` on the other
@@ -385,6 +366,17 @@ impl Scene {
             }
         }
     }
+}
+
+/// The eight corners of the box `[lo, hi]`.
+fn corners(lo: DVec3, hi: DVec3) -> [DVec3; 8] {
+    std::array::from_fn(|k| {
+        DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
 }
 
 /// Whether the segment from `r` to `r + w` (relative to a box's centre)
