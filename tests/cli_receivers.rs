@@ -115,13 +115,31 @@ fn bad_receivers_name_file_line_and_field() {
 #[test]
 fn modelling_ratio_of_points_listed_planar_and_cylindrical() {
     // e = 45 degrees: E_z / E_h = sin e / (pi cos e) = 1 / pi, exact (black floor).
-    let (_, log) = run_with_log(
+    let (csv, log) = run_with_log(
         "id,x,y,z,nx,ny,nz,receiver\n\
          h,2,0,1,0,0,1,planar\n\
          z,2,0,1,0,0,1,cylindrical\n\
          other,1,0,1,0,0,1,cylindrical\n",
     )
     .unwrap();
+    // The CSV's columns: the ratio on the pair's cylindrical row, empty on
+    // the others.
+    let mut rows = csv.lines().map(|l| l.split(',').collect::<Vec<_>>());
+    let head = rows.next().unwrap();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let (cr, cs) = (col("modelling_ratio"), col("modelling_ratio_stderr"));
+    assert_eq!(cs, cr + 1);
+    let rows: Vec<Vec<&str>> = rows.collect();
+    let ratio: f64 = rows[1][cr].parse().unwrap();
+    assert!((ratio - 1.0 / PI).abs() < 1e-12, "{ratio}");
+    assert_eq!(rows[1][cs], "0");
+    for k in [0, 2] {
+        assert_eq!((rows[k][cr], rows[k][cs]), ("", ""), "row {k}");
+    }
+    // The ratio is the row's E over the planar row's: a moved light would
+    // change both.
+    let e = |k: usize| rows[k][col("E")].parse::<f64>().unwrap();
+    assert!((ratio - e(1) / e(0)).abs() < 1e-12);
     assert!(
         log.contains("modelling E_z/E_h") && log.contains("at 1 point(s)"),
         "{log}"
@@ -135,6 +153,7 @@ fn modelling_ratio_of_points_listed_planar_and_cylindrical() {
         "{log}"
     );
     // No pair, no line.
-    let (_, log) = run_with_log("x,y,z,nx,ny,nz,receiver\n2,0,1,0,0,1,cylindrical\n").unwrap();
+    let (csv, log) = run_with_log("x,y,z,nx,ny,nz,receiver\n2,0,1,0,0,1,cylindrical\n").unwrap();
     assert!(!log.contains("modelling"), "{log}");
+    assert!(!csv.contains("modelling"), "{csv}");
 }

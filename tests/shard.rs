@@ -104,6 +104,48 @@ fn merged_shards_are_the_single_run_byte_for_byte() {
         full == merged,
         "sharded office run differs from the single run"
     );
+    // Points listed planar up and cylindrical at one position: the
+    // modelling ratio's columns, whose errors need the batch means the
+    // merge folds again.
+    let pairs = dir.path().join("pairs.csv");
+    std::fs::write(
+        &pairs,
+        "x,y,z,nx,ny,nz,receiver\n\
+         0.5,0,0.3,0,0,1,planar\n\
+         0.5,0,0.3,0,0,1,cylindrical\n\
+         1.5,1,0.6,0,0,1,\n\
+         1.5,1,0.6,0,0,-1,cylindrical\n\
+         2,0,0.5,1,0,0,planar\n",
+    )
+    .unwrap();
+    let (full, merged) = whole_and_merged(
+        &data("sobolev.toml"),
+        pairs.to_str().unwrap(),
+        &["--chains", "20000", "--seed", "5"],
+        3,
+        dir.path(),
+    );
+    let text = String::from_utf8_lossy(&full);
+    assert!(text.contains("modelling_ratio"), "{text}");
+    // Reflected light: both pairs' ratios carry a positive error.
+    let head: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let cs = head
+        .iter()
+        .position(|h| *h == "modelling_ratio_stderr")
+        .unwrap();
+    for k in [2, 4] {
+        let se: f64 = text
+            .lines()
+            .nth(k)
+            .unwrap()
+            .split(',')
+            .nth(cs)
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(se > 0.0, "row {k}: {se}");
+    }
+    assert!(full == merged, "sharded run with modelling pairs differs");
     // The backward estimator, one shard (the whole run in one state).
     let (full, merged) = whole_and_merged(
         &data("sobolev.toml"),

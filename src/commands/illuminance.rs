@@ -494,6 +494,32 @@ pub struct Job {
     pub daylight: Option<f64>,
 }
 
+/// The receivers of a point table `t` read from `path`: each row's
+/// position and normal, of the type its optional `receiver` column names
+/// (`planar` when the column is absent or the cell empty).
+pub fn point_receivers(t: &PointTable, path: &str) -> Result<Vec<Receiver>, InputError> {
+    let col = t.headers.iter().position(|h| h == "receiver");
+    let mut rec = Vec::with_capacity(t.points.len());
+    for (k, (&(p, n), &line)) in t.points.iter().zip(&t.lines).enumerate() {
+        let name = col.map_or("", |c| t.rows[k][c].as_str());
+        let kind = Solid::parse(name).map_err(|message| InputError::Field {
+            file: if path == "-" {
+                "<stdin>".into()
+            } else {
+                path.to_string()
+            },
+            line,
+            field: "receiver".into(),
+            message,
+        })?;
+        rec.push(match kind {
+            None => Receiver::illuminance(p, n),
+            Some(kind) => Receiver::solid(p, n, kind),
+        });
+    }
+    Ok(rec)
+}
+
 impl Job {
     /// Read the lists and compile them against `scene`.
     pub fn new(scene: &Scene, points: Option<&str>, views: Option<&str>) -> anyhow::Result<Job> {
@@ -513,27 +539,8 @@ impl Job {
         // File and line of each receiver, for error messages.
         let mut origin: Vec<(&str, u64)> = Vec::new();
         if let (Some(t), Some(path)) = (&points_t, points) {
-            // The optional `receiver` column: the type of each point
-            // (`planar` when absent or empty).
-            let col = t.headers.iter().position(|h| h == "receiver");
-            for (k, (&(p, n), &line)) in t.points.iter().zip(&t.lines).enumerate() {
-                let name = col.map_or("", |c| t.rows[k][c].as_str());
-                let kind = Solid::parse(name).map_err(|message| InputError::Field {
-                    file: if path == "-" {
-                        "<stdin>".into()
-                    } else {
-                        path.to_string()
-                    },
-                    line,
-                    field: "receiver".into(),
-                    message,
-                })?;
-                rec.push(match kind {
-                    None => Receiver::illuminance(p, n),
-                    Some(kind) => Receiver::solid(p, n, kind),
-                });
-                origin.push((path, line));
-            }
+            rec = point_receivers(t, path)?;
+            origin.extend(t.lines.iter().map(|&line| (path, line)));
         }
         let mut view_receiver = Vec::new();
         let mut emitted = Vec::new();
@@ -586,11 +593,14 @@ impl Job {
     /// Stream the points' results to the temporary file of `out` (input
     /// columns, then result columns); returns it staged, with the number of
     /// rows written (None without points).
+    /// The modelling ratio's columns follow where `pairs` (the points
+    /// listed planar up and cylindrical at one position) is not empty.
     pub fn write_points(
         &self,
         r: &RunResult,
         orders: u32,
         out: &str,
+        pairs: &[super::modelling::Pair],
     ) -> anyhow::Result<Option<(Staged, usize)>> {
         let Some(t) = self.points.as_ref() else {
             return Ok(None);
@@ -600,12 +610,19 @@ impl Job {
         if self.daylight.is_some() {
             headers.extend(DAYLIGHT_COLUMNS.map(String::from));
         }
+        let modelling = (!pairs.is_empty()).then(|| {
+            headers.extend(super::modelling::COLUMNS.map(String::from));
+            super::modelling::cells(&r.tallies.batch_means, &r.direct, pairs, t.rows.len())
+        });
         let rows = t.rows.iter().enumerate().map(|(j, row)| {
             let mut c = row.clone();
             c.resize(t.headers.len(), String::new());
             c.extend(result_cells(r, j));
             if let Some(e_h) = self.daylight {
                 c.extend(daylight_cells(r, j, e_h));
+            }
+            if let Some(m) = &modelling {
+                c.extend(m[j].clone());
             }
             c
         });
@@ -899,6 +916,7 @@ pub(crate) fn measure_full(
     if let (Some((input, _)), Some(t)) = (points, &job.points) {
         let mut names = result_headers("E", cfg.orders);
         names.extend(DAYLIGHT_COLUMNS.map(String::from));
+        names.extend(super::modelling::COLUMNS.map(String::from));
         reserved_columns(&t.headers, &names, input)?;
     }
     if let (Some((input, _)), Some((t, _))) = (views, &job.views) {
@@ -1030,7 +1048,7 @@ pub(crate) fn measure_full(
     let mut rows = Vec::new();
     let mut staged = Vec::new();
     if let (Some((input, out)), Some(t)) = (points, &job.points)
-        && let Some((file, n)) = job.write_points(&result, cfg.orders, out)?
+        && let Some((file, n)) = job.write_points(&result, cfg.orders, out, &modelling_pairs)?
     {
         let line = rows_line("points", input, t.rows.len(), t.comment_lines, out, n);
         rows.push((line, n == t.rows.len()));

@@ -204,7 +204,15 @@ pub fn merge_states(mut states: Vec<(String, ShardState)>, out: &str) -> anyhow:
         batches.len(),
         run.batches
     );
-    let (_, first) = &states[0];
+    let (first_name, first) = &states[0];
+    // Points listed planar up and cylindrical at one position get the
+    // modelling ratio's columns, as in a single run; its error needs the
+    // batch means.
+    let table = crate::io::csvio::points_of_rows(&first.headers, &first.rows, first_name)?;
+    let pairs = super::modelling::pairs(
+        &super::illuminance::point_receivers(&table, first_name)?,
+        table.rows.len(),
+    );
     let mut tallies = Tallies::new(n, run.orders);
     [
         tallies.watched,
@@ -212,6 +220,9 @@ pub fn merge_states(mut states: Vec<(String, ShardState)>, out: &str) -> anyhow:
         tallies.near_reach,
         tallies.enclosed,
     ] = first.checks.clone();
+    if !pairs.is_empty() {
+        tallies.batch_means = crate::tally::BatchMeans::new(table.rows.len().min(n));
+    }
     let tallies = fold_batches(tallies, &first.direct, run.batch_size, &batches);
     let result = RunResult {
         direct: first.direct.clone(),
@@ -230,11 +241,23 @@ pub fn merge_states(mut states: Vec<(String, ShardState)>, out: &str) -> anyhow:
     };
     let mut headers = first.headers.clone();
     headers.extend(result_headers("E", run.orders));
+    let modelling = (!pairs.is_empty()).then(|| {
+        headers.extend(super::modelling::COLUMNS.map(String::from));
+        super::modelling::cells(
+            &result.tallies.batch_means,
+            &result.direct,
+            &pairs,
+            first.rows.len(),
+        )
+    });
     let width = first.headers.len();
     let rows = first.rows.iter().enumerate().map(|(j, row)| {
         let mut c = row.clone();
         c.resize(width, String::new());
         c.extend(result_cells(&result, j));
+        if let Some(m) = &modelling {
+            c.extend(m[j].clone());
+        }
         c
     });
     let (staged, written) =

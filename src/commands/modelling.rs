@@ -80,6 +80,23 @@ pub fn ratio(bm: &BatchMeans, direct: &[f64], pair: Pair) -> Option<(f64, f64)> 
     Some((r, var.sqrt()))
 }
 
+/// The output columns of the points CSV that hold the ratio and its
+/// standard error, written where some points pair up: on each pair's
+/// cylindrical row, empty on the others (`NaN` where the ratio is
+/// undefined: `E_h` not positive).
+pub const COLUMNS: [&str; 2] = ["modelling_ratio", "modelling_ratio_stderr"];
+
+/// The [`COLUMNS`] cells of the first `n` rows: each pair's ratio and
+/// standard error ([`ratio`]) on its cylindrical row `z`.
+pub fn cells(bm: &BatchMeans, direct: &[f64], pairs: &[Pair], n: usize) -> Vec<[String; 2]> {
+    let mut c = vec![[String::new(), String::new()]; n];
+    for &p in pairs {
+        let (r, se) = ratio(bm, direct, p).unwrap_or((f64::NAN, f64::NAN));
+        c[p.z] = [r, se].map(crate::io::format_number);
+    }
+    c
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -255,8 +255,53 @@ fn read_rays(
     what_rows: &str,
 ) -> Result<(RawTable, Vec<(DVec3, DVec3)>), InputError> {
     let t = read_table(path)?;
+    let rays = rays_of(&t, path, names, what_dir, what_rows)?;
+    Ok((t, rays))
+}
+
+/// The point table of raw `headers` and `rows` already read (and checked)
+/// once, as a shard state keeps them: parsed as [`read_points`] parses a
+/// file, so positions and normals are the same to the bit. `path` names
+/// the table in messages; the line numbers count from a header on line 1.
+pub fn points_of_rows(
+    headers: &[String],
+    rows: &[Vec<String>],
+    path: &str,
+) -> Result<PointTable, InputError> {
+    let t = RawTable {
+        headers: headers.to_vec(),
+        rows: rows.to_vec(),
+        lines: (2..).take(rows.len()).collect(),
+        comment_lines: 0,
+        header_line: 1,
+    };
+    let points = rays_of(
+        &t,
+        path,
+        ["x", "y", "z", "nx", "ny", "nz"],
+        "normal",
+        "points",
+    )?;
+    Ok(PointTable {
+        headers: t.headers,
+        rows: t.rows,
+        lines: t.lines,
+        comment_lines: 0,
+        points,
+    })
+}
+
+/// The positions and unit directions of a table's rows from the six named
+/// columns (a zero direction is an error naming the line).
+fn rays_of(
+    t: &RawTable,
+    path: &str,
+    names: [&str; 6],
+    what_dir: &str,
+    what_rows: &str,
+) -> Result<Vec<(DVec3, DVec3)>, InputError> {
     let cols = columns(&t.headers, &names, path)?;
-    unique_columns(&t, path)?;
+    unique_columns(t, path)?;
     let mut rays = Vec::with_capacity(t.rows.len());
     for (row, &line) in t.rows.iter().zip(&t.lines) {
         let mut v = [0.0; 6];
@@ -294,7 +339,7 @@ fn read_rays(
             message: format!("no {what_rows} in the file"),
         });
     }
-    Ok((t, rays))
+    Ok(rays)
 }
 
 /// A view list as read: raw columns and parsed observer rays.
