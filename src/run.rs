@@ -27,9 +27,9 @@
 //! `B = max(32, ceil(B_p (R_p / target)^2 q))`, with
 //! `q = (B_p - 1) / chi2_{B_p - 1}(0.1)` (1.446 for `B_p = 32`)
 //!
-//! the 90 % upper confidence factor of the pilot's variance (`R_p` rescaled
-//! to the run's batch size, as if the variance per chain did not depend on
-//! it). The reported estimate uses the fresh batches only, whose number
+//! the 90 % upper confidence factor of the pilot's variance with `B_p - 1`
+//! degrees of freedom, or more for an RMS target (below); `R_p` rescaled
+//! to the run's batch size (below). The reported estimate uses the fresh batches only, whose number
 //! does not depend on their own values: the mean is unbiased and the
 //! interval is that of a fixed-count run; indeed the result is
 //! bit-identical to `--chains B * batch_size --batch-size batch_size` with
@@ -60,17 +60,33 @@
 //!    Sobolev points), and the plan from small batches would overshoot; a
 //!    second stage of 32 batches of an eighth of that size
 //!    ([`pilot_batch_size`], seed offset `SECOND_KEY`) then measures again
-//!    and the plan is made from it alone (step 2 again). Its cost is at most
-//!    four batches of the run proper.
+//!    and the plan is made from it (step 2 again). Its cost is at most
+//!    four batches of the run proper. Where the first stage measured its
+//!    error precisely (an RMS over many receivers, below), the second
+//!    stage runs 16 batches of a quarter of the run's size instead, for
+//!    the same chains.
+//! 4. With two stages, the fall of the variance per chain between them,
+//!    `v(b) ~ b^-alpha`, is measured and the pilot's error is rescaled to
+//!    the run's batches with it ([`variance_fall`]: a 90 % lower bound
+//!    on `alpha`, at most [`MAX_VARIANCE_FALL`]; about 0 for one receiver,
+//!    whose 31 degrees of freedom cannot resolve it).
+//!
+//! The margin `q` is sized for the precision of the pilot's measure: `B_p
+//! - 1` degrees of freedom for one receiver (and for a largest error over
+//! many, where one receiver decides), but an RMS over many receivers is
+//! measured more precisely, by the effective number of independent
+//! receivers behind it ([`crate::tally::rms_effective_receivers`], from
+//! the correlations of the pilot's batch means): on the 100 x 100 Sobolev
+//! grid about 8-16, so `q` about 1.12 in place of 1.446.
 //!
 //! Fewer chains per batch make batch means more skewed, which is why no
 //! batch goes below [`MIN_TIMED_BATCH`] and no run below [`MIN_BATCHES`]
 //! batches; larger batches are never worse for the error here. What
 //! remains of the overshoot is the margin `q`, the noise of the pilot's
-//! `R_p` (the largest of many noisy errors is biased up), and the
-//! variance's fall between the pilot's and the run's batch size. The
-//! target is met in about 90 % of runs where one receiver dominates, and
-//! more often with many receivers.
+//! `R_p` (the largest of many noisy errors is biased up), and the part of
+//! the variance's fall between the pilot's and the run's batch size that
+//! the lower bound on `alpha` leaves out. The target is met in about 90 %
+//! of runs (measured in `tests/batch_plan.rs` and `tests/rel_error_rule.rs`).
 //!
 //! Why batches rather than per-chain tallies: a chain scores into every point
 //! at every collision, so per-chain squares would cost as much as the scores
@@ -455,6 +471,15 @@ pub struct Pilot {
     pub rms: bool,
     /// The pilot measured a caller's quantity ([`RunConfig::pilot_measure`]).
     pub custom: bool,
+    /// Degrees of freedom of the pilot's squared error, which size the
+    /// margin ([`variance_margin`]): `batches - 1`, or that times the
+    /// effective receivers for an RMS over many
+    /// ([`crate::tally::rms_effective_receivers`]).
+    pub dof: f64,
+    /// Exponent of the fall of the variance per chain with the batch size
+    /// used to rescale the pilot to the run's batches ([`variance_fall`]; 0
+    /// with one stage).
+    pub fall: f64,
     /// Batches planned for the run proper.
     pub planned: u64,
     /// Wall time the planned batches need at the pilot's pace [s]
@@ -468,6 +493,67 @@ pub struct Pilot {
     /// `batches`, `batch_size` and `rel_error` are the last stage's, `wall`
     /// covers both.
     pub stages: u32,
+}
+
+/// Most batch means (receivers times pilot batches) a pilot keeps to
+/// measure the precision of an RMS target: 4M values, 32 MB (131,072
+/// receivers; beyond, the margin is one receiver's).
+const RMS_PRECISION_VALUES: u64 = 1 << 22;
+
+/// Degrees of freedom of a first pilot stage's squared error above which
+/// the second stage runs half the batches at twice the size (eight times
+/// one receiver's 31).
+const PRECISE_DOF: f64 = 248.0;
+
+/// Largest exponent of the fall of the variance per chain with the batch
+/// size that a plan extrapolates with: Owen-scrambled nets of an integrand
+/// with discontinuities in `d >= 2` dimensions reach a variance of
+/// `O(N^(-1 - 1/d))`, a fall of at most `1/d` per chain.
+pub const MAX_VARIANCE_FALL: f64 = 0.5;
+
+/// One pilot stage: its batches of `batch_size` chains, the error `r` it
+/// measured, and the degrees of freedom of `r^2`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stage {
+    pub batches: u64,
+    pub batch_size: u64,
+    pub r: f64,
+    pub dof: f64,
+}
+
+impl Stage {
+    /// Chains the target needs at this stage's variance per chain, with
+    /// its margin ([`planned_chains`]).
+    fn chains(&self, target: f64) -> u64 {
+        let q = variance_margin(self.dof);
+        planned_chains_with(self.batches, self.batch_size, self.r, target, q)
+    }
+
+    /// Variance per chain, relative: `r^2 batches batch_size`.
+    fn per_chain(&self) -> f64 {
+        self.r * self.r * self.batches as f64 * self.batch_size as f64
+    }
+}
+
+/// The exponent `alpha` of `v(b) ~ b^-alpha`, the variance per chain
+/// against the batch size, from two pilot stages at batch sizes `b1 < b2`
+/// (stratified batches: measured 0.33-0.45 per doubling on the Sobolev
+/// grid), as a 90 % lower confidence bound, so that a plan extrapolating
+/// with it errs on the long side: `alpha^ - 1.2816 sigma`, with
+/// `sigma^2 = (2 / dof_1 + 2 / dof_2) / ln(b2 / b1)^2` the variance of the
+/// log ratio of two chi-square estimates; within `[0,`
+/// [`MAX_VARIANCE_FALL`]`]`. One receiver's 31 degrees of freedom give
+/// `sigma = 0.52` per doubling, so such plans mostly keep 0 (no fall);
+/// an RMS over many receivers measures it well.
+pub fn variance_fall(first: &Stage, second: &Stage) -> f64 {
+    let (v1, v2) = (first.per_chain(), second.per_chain());
+    let span = (second.batch_size as f64 / first.batch_size as f64).ln();
+    if !(v1 > 0.0 && v2 > 0.0 && v1.is_finite() && v2.is_finite() && span > 0.0) {
+        return 0.0;
+    }
+    let alpha = (v1 / v2).ln() / span;
+    let sigma = (2.0 / first.dof + 2.0 / second.dof).sqrt() / span;
+    (alpha - 1.2816 * sigma).clamp(0.0, MAX_VARIANCE_FALL)
 }
 
 /// Time limit [s] of a `--rel-error` run given no `--time`: an unreachable
@@ -490,12 +576,22 @@ pub fn pilot_batch_size(bs: u64) -> u64 {
 /// confidence factor of the pilot's variance; `u64::MAX` when `r_p` is not
 /// finite (no plan can be made).
 pub fn planned_batches(pilot_batches: u64, r_p: f64, target: f64) -> u64 {
+    let q = variance_margin((pilot_batches.max(2) - 1) as f64);
+    planned_batches_with(pilot_batches, r_p, target, q)
+}
+
+/// The 90 % upper confidence factor `dof / chi2_dof(0.1)` of a variance
+/// estimated with `dof` degrees of freedom (1.446 for 31).
+pub fn variance_margin(dof: f64) -> f64 {
     use statrs::distribution::{ChiSquared, ContinuousCDF};
+    dof / ChiSquared::new(dof).expect("positive dof").inverse_cdf(0.1)
+}
+
+/// [`planned_batches`] with the margin `q` given.
+fn planned_batches_with(pilot_batches: u64, r_p: f64, target: f64, q: f64) -> u64 {
     if !r_p.is_finite() {
         return u64::MAX;
     }
-    let dof = (pilot_batches.max(2) - 1) as f64;
-    let q = dof / ChiSquared::new(dof).expect("positive dof").inverse_cdf(0.1);
     let b = (pilot_batches as f64 * (r_p / target).powi(2) * q).ceil();
     if b >= u64::MAX as f64 {
         u64::MAX
@@ -509,9 +605,12 @@ pub fn planned_batches(pilot_batches: u64, r_p: f64, target: f64) -> u64 {
 /// count of [`planned_batches`] expressed in chains, `B_p pilot_bs (r_p /
 /// target)^2 q` (no minimum of batches); `u64::MAX` when no plan can be made.
 pub fn planned_chains(pilot_batches: u64, pilot_bs: u64, r_p: f64, target: f64) -> u64 {
-    use statrs::distribution::{ChiSquared, ContinuousCDF};
-    let dof = (pilot_batches.max(2) - 1) as f64;
-    let q = dof / ChiSquared::new(dof).expect("positive dof").inverse_cdf(0.1);
+    let q = variance_margin((pilot_batches.max(2) - 1) as f64);
+    planned_chains_with(pilot_batches, pilot_bs, r_p, target, q)
+}
+
+/// [`planned_chains`] with the margin `q` given.
+fn planned_chains_with(pilot_batches: u64, pilot_bs: u64, r_p: f64, target: f64, q: f64) -> u64 {
     let c = (pilot_batches as f64 * pilot_bs as f64 * (r_p / target).powi(2) * q).ceil();
     if !c.is_finite() || c >= u64::MAX as f64 {
         u64::MAX
@@ -614,55 +713,95 @@ pub fn drive(
     // Every shard runs the whole pilot (deterministic), so all plan alike.
     // The first stage runs at the smallest batch size; a second stage runs
     // where the first plans batches more than 8 times larger (module docs).
-    let pilot_at = |key: u64, pilot_bs: u64, observe: &mut dyn FnMut(&Progress) -> bool| {
-        let pilot_cfg = RunConfig {
-            seed: cfg.seed ^ key,
-            shard: None,
-            ..cfg.clone()
+    // An RMS target over many receivers is measured more precisely than
+    // one receiver's error: the pilot keeps the batch means to count the
+    // effective receivers (module docs), where they fit in
+    // RMS_PRECISION_VALUES.
+    let n = work.len();
+    let correlations = stop.rms
+        && cfg.pilot_measure.is_none()
+        && (n as u64).saturating_mul(PILOT_BATCHES) <= RMS_PRECISION_VALUES;
+    let pilot_at =
+        |key: u64, pilot_bs: u64, batches: u64, observe: &mut dyn FnMut(&Progress) -> bool| {
+            let pilot_cfg = RunConfig {
+                seed: cfg.seed ^ key,
+                shard: None,
+                keep_batch_means: if correlations {
+                    n
+                } else {
+                    cfg.keep_batch_means
+                },
+                ..cfg.clone()
+            };
+            let cap = by_chains.saturating_mul(bs);
+            let batches = batches.min(cap / pilot_bs);
+            let pilot = drive_batches(work, &pilot_cfg, pilot_bs, batches, start, observe);
+            let r_p = match &cfg.pilot_measure {
+                Some(m) => (m.0)(&pilot),
+                None if stop.rms => pilot.tallies.rms_rel_error(&pilot.direct),
+                None => pilot.tallies.max_rel_error(&pilot.direct),
+            };
+            let receivers = if correlations {
+                crate::tally::rms_effective_receivers(&pilot.tallies.batch_means, &pilot.direct)
+            } else {
+                1.0
+            };
+            let dof = receivers * (pilot.tallies.batches().max(2) - 1) as f64;
+            let stage = Stage {
+                batches: pilot.tallies.batches(),
+                batch_size: pilot_bs,
+                r: r_p,
+                dof,
+            };
+            (pilot, stage)
         };
-        let cap = by_chains.saturating_mul(bs);
-        let batches = PILOT_BATCHES.min(cap / pilot_bs);
-        let pilot = drive_batches(work, &pilot_cfg, pilot_bs, batches, start, observe);
-        let r_p = match &cfg.pilot_measure {
-            Some(m) => (m.0)(&pilot),
-            None if stop.rms => pilot.tallies.rms_rel_error(&pilot.direct),
-            None => pilot.tallies.max_rel_error(&pilot.direct),
-        };
-        (pilot, r_p)
-    };
     let fixed = cfg.batch_size.is_some();
     let first_bs = if fixed {
         pilot_batch_size(bs)
     } else {
         MIN_TIMED_BATCH.min(bs)
     };
-    let (mut pilot, mut r_p) = pilot_at(PILOT_KEY, first_bs, observe);
+    let (mut pilot, mut stage) = pilot_at(PILOT_KEY, first_bs, PILOT_BATCHES, observe);
     if pilot.reason == StopReason::Observer {
         return pilot;
     }
-    let mut pilot_bs = first_bs;
     let mut stages = 1;
     let mut first_wall = 0.0;
+    let mut fall = 0.0;
     if !fixed {
-        let chains = planned_chains(pilot.tallies.batches(), pilot_bs, r_p, target);
-        let sized = plan_batch_size(chains, pilot_bs, bs);
-        if sized > 8 * pilot_bs {
-            let second_bs = pilot_batch_size(sized);
+        let sized = plan_batch_size(stage.chains(target), stage.batch_size, bs);
+        if sized > 8 * stage.batch_size {
+            let first = stage;
             first_wall = pilot.wall;
-            (pilot, r_p) = pilot_at(PILOT_KEY ^ SECOND_KEY, second_bs, observe);
+            // A precise first stage (an RMS over many receivers) affords
+            // half the batches at twice the size for the same chains: the
+            // fall is then measured over two doublings and extrapolated
+            // over two.
+            let (second_bs, second_batches) = if first.dof >= PRECISE_DOF {
+                (2 * pilot_batch_size(sized), PILOT_BATCHES / 2)
+            } else {
+                (pilot_batch_size(sized), PILOT_BATCHES)
+            };
+            (pilot, stage) = pilot_at(PILOT_KEY ^ SECOND_KEY, second_bs, second_batches, observe);
             if pilot.reason == StopReason::Observer {
                 return pilot;
             }
-            pilot_bs = second_bs;
             stages = 2;
+            // The effective receivers depend on how they share chains, not
+            // on the batches: the first stage's 32 batches count them
+            // more steadily.
+            stage.dof =
+                first.dof / (first.batches.max(2) - 1) as f64 * (stage.batches.max(2) - 1) as f64;
+            fall = variance_fall(&first, &stage);
         }
-        let chains = planned_chains(pilot.tallies.batches(), pilot_bs, r_p, target);
-        bs = plan_batch_size(chains, pilot_bs, bs);
+        bs = plan_batch_size(stage.chains(target), stage.batch_size, bs);
     }
+    let pilot_bs = stage.batch_size;
     let by_chains = stop.chains.map_or(u64::MAX, |c| c.div_ceil(bs).max(2));
-    // R^2 falls like 1 / chains: rescale the pilot's error to batches of `bs`.
-    let r_p = r_p * (pilot_bs as f64 / bs as f64).sqrt();
-    let planned = planned_batches(pilot.tallies.batches(), r_p, target);
+    // R^2 falls like 1 / chains, and with the variance per chain like
+    // (batch size)^-fall: rescale the pilot's error to batches of `bs`.
+    let r_p = stage.r * (pilot_bs as f64 / bs as f64).powf(0.5 * (1.0 + fall));
+    let planned = planned_batches_with(stage.batches, r_p, target, variance_margin(stage.dof));
     // The pilot's pace per chain gives the run proper's time; without a
     // time limit the run proper stops at a default cap.
     let per_chain = (pilot.wall - first_wall) / pilot.chains.max(1) as f64;
@@ -689,6 +828,8 @@ pub fn drive(
         rel_error: r_p,
         rms: stop.rms,
         custom: cfg.pilot_measure.is_some(),
+        dof: stage.dof,
+        fall,
         planned,
         estimated_time,
         default_cap,

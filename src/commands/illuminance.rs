@@ -381,21 +381,25 @@ pub fn summary(r: &RunResult) -> String {
         };
         text += &format!(
             "\n{flag} {target:.3e}: a pilot of {} batches of {} chains ({:.3} s, own streams{}) \
-             gave {what} R {:.3e} per batch of {}, so {} fresh batches were planned; achieved {what} R \
-             {max:.3e}{}",
+             gave {what} R {:.3e} per batch of {} (margin {:.3} for {:.0} degrees of freedom), so {} \
+             fresh batches were planned; achieved {what} R {max:.3e}{}",
             p.batches,
             p.batch_size,
             p.wall,
             if p.stages > 1 {
                 format!(
-                    ", after a first stage of batches of {} chains that sized it",
-                    crate::run::MIN_TIMED_BATCH
+                    ", after a first stage of batches of {} chains that sized it; variance per \
+                     chain taken to fall like batch size^-{:.3}",
+                    crate::run::MIN_TIMED_BATCH,
+                    p.fall
                 )
             } else {
                 String::new()
             },
             p.rel_error,
             r.batch_size,
+            crate::run::variance_margin(p.dof),
+            p.dof,
             format_number(p.planned as f64),
             if max <= target {
                 " (target met)".to_string()

@@ -84,12 +84,14 @@ pub mod zcheck;
 mod batch;
 mod batch_means;
 pub mod checkpoint;
+mod rms_precision;
 pub mod shard;
 mod state_file;
 pub mod surface_figures;
 mod tallies;
 pub use batch::Batch;
 pub use batch_means::BatchMeans;
+pub use rms_precision::rms_effective_receivers;
 pub use tallies::{Tallies, bucket, bucket_count};
 
 /// Mergeable running mean, variance, third and fourth central moments and
