@@ -53,8 +53,13 @@ use std::f64::consts::{LN_10, PI};
 ///
 /// the closed form fitted to Guth's tabulated position index (Luckiesh &
 /// Guth 1949; the fit as published by Levin, J. IES 4 (1975) 99-105, and
-/// used by Radiance's `glarendx`). It reproduces the table's `T/R = 0`
-/// column (CIE 117-1995, IES Handbook) within 4 % (tested).
+/// used by Radiance's `glarendx`, whose `posindex` has the same constants).
+/// It reproduces the table's `T/R = 0` column (CIE 117-1995, IES Handbook)
+/// within 4 % (tested). CIE 117-1995 (4.5) prescribes interpolating its
+/// Table 4.1 instead, which leaves out luminaires beyond `T/R = 3` and the
+/// positions hidden by brows; Levin gives the fit's largest departure from
+/// Guth's plot as about 12 % (0.8 on the rating for one dominant
+/// luminaire). That table is not bundled: ratings here are the fit's.
 pub fn guth_index(tau_deg: f64, sigma_deg: f64) -> f64 {
     let (t, s) = (tau_deg, sigma_deg);
     let a = (35.2 - 0.31889 * t - 1.22 * (-2.0 * t / 9.0).exp()) * 1e-3;
