@@ -156,4 +156,12 @@ fn modelling_ratio_of_points_listed_planar_and_cylindrical() {
     let (csv, log) = run_with_log("x,y,z,nx,ny,nz,receiver\n2,0,1,0,0,1,cylindrical\n").unwrap();
     assert!(!log.contains("modelling"), "{log}");
     assert!(!csv.contains("modelling"), "{csv}");
+    // A pair under the floor gets no light: the ratio is undefined, and
+    // written so (not 0, not an empty cell).
+    let (csv, log) =
+        run_with_log("x,y,z,nx,ny,nz,receiver\n2,0,-1,0,0,1,planar\n2,0,-1,0,0,1,cylindrical\n")
+            .unwrap();
+    assert!(log.contains("undefined (E_h = 0"), "{log}");
+    let row: Vec<&str> = csv.lines().nth(2).unwrap().split(',').collect();
+    assert_eq!(&row[row.len() - 2..], ["NaN", "NaN"], "{csv}");
 }

@@ -251,6 +251,11 @@ fn shard_options_are_checked() {
             vec!["--shard", "0/2", "--chains", "1000", "--time", "1"],
             "--time",
         ),
+        // The merge writes no daylight-factor columns: refused, not dropped.
+        (
+            vec!["--shard", "0/2", "--chains", "1000", "--daylight-factor"],
+            "--daylight-factor",
+        ),
     ] {
         let mut a = base.to_vec();
         a.extend(extra.iter());
@@ -259,4 +264,27 @@ fn shard_options_are_checked() {
         assert!(!o.status.success() && e.contains(want), "{extra:?}: {e}");
         assert!(!Path::new(&p).exists());
     }
+    // A points column named like a result column, refused by a shard as by
+    // a single run (the merge would write it twice).
+    let pts = dir.path().join("pts.csv");
+    std::fs::write(&pts, "x,y,z,nx,ny,nz,modelling_ratio\n1,0,0,0,0,1,3\n").unwrap();
+    let o = lumest(&[
+        "illuminance",
+        "--scene",
+        &data("sobolev.toml"),
+        "--points",
+        pts.to_str().unwrap(),
+        "--out",
+        &p,
+        "--shard",
+        "0/2",
+        "--chains",
+        "1000",
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("`modelling_ratio` has the name of a result column"),
+        "{e}"
+    );
+    assert!(!Path::new(&p).exists());
 }

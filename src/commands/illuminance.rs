@@ -62,17 +62,17 @@ pub struct IlluminanceArgs {
     /// Run shard `I/M` of a `--chains` run (batches I, I+M, I+2M, ...) and
     /// write its state to `--out` for `lumest merge` (shards 0 to M-1 merge
     /// into the single run's CSV, byte for byte).
-    #[arg(long, conflicts_with_all = ["views", "time", "mpi"])]
+    #[arg(long, conflicts_with_all = ["views", "time", "mpi", "daylight_factor"])]
     pub shard: Option<String>,
     /// Run over the MPI ranks this process was started with (`mpirun -np R
     /// lumest illuminance ... --mpi`): rank r traces the batches of shard
     /// r/R, rank 0 folds them in batch order and writes `--out`, the same
     /// bytes as one process. Needs a binary built with `--features mpi`.
-    #[arg(long, conflicts_with_all = ["views", "time"])]
+    #[arg(long, conflicts_with_all = ["views", "time", "daylight_factor"])]
     pub mpi: bool,
     /// Write the grid figures (points grouped by the `grid` column, see
     /// `lumest grid`) with their errors and verdicts to this CSV.
-    #[arg(long = "figures-out", conflicts_with = "shard")]
+    #[arg(long = "figures-out", conflicts_with_all = ["shard", "mpi"])]
     pub figures_out: Option<String>,
     /// Write a self-contained HTML report of the run (scene, luminaires,
     /// grid figures with intervals and verdicts, isolux plots, run
@@ -669,6 +669,15 @@ impl Job {
     }
 }
 
+/// Refuse a points column named like a column the output adds (results
+/// with `orders` resolved, daylight factors, the modelling ratio).
+pub fn reserved_point_columns(t: &PointTable, orders: u32, input: &str) -> anyhow::Result<()> {
+    let mut names = result_headers("E", orders);
+    names.extend(DAYLIGHT_COLUMNS.map(String::from));
+    names.extend(super::modelling::COLUMNS.map(String::from));
+    reserved_columns(&t.headers, &names, input)
+}
+
 /// Refuse an input column that has the name of a result column.
 fn reserved_columns(headers: &[String], results: &[String], input: &str) -> anyhow::Result<()> {
     if let Some(h) = headers.iter().find(|h| results.contains(h)) {
@@ -918,10 +927,7 @@ pub(crate) fn measure_full(
     // The output repeats the input columns and adds the result columns: an
     // input column named like a result column would appear twice.
     if let (Some((input, _)), Some(t)) = (points, &job.points) {
-        let mut names = result_headers("E", cfg.orders);
-        names.extend(DAYLIGHT_COLUMNS.map(String::from));
-        names.extend(super::modelling::COLUMNS.map(String::from));
-        reserved_columns(&t.headers, &names, input)?;
+        reserved_point_columns(t, cfg.orders, input)?;
     }
     if let (Some((input, _)), Some((t, _))) = (views, &job.views) {
         let mut names = result_headers("L", cfg.orders);

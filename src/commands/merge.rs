@@ -90,6 +90,7 @@ pub fn shard_state(a: &IlluminanceArgs, i: u64, m: u64) -> anyhow::Result<ShardS
     let scene = crate::scene::load(&a.scene)?;
     let job = super::illuminance::Job::new(&scene, Some(&a.points), None)?;
     let table = job.points.as_ref().context("no points")?;
+    super::illuminance::reserved_point_columns(table, cfg.orders, &a.points)?;
     cfg.shard = Some((i, m));
     eprintln!("lumest: scene {}: {}", a.scene.display(), scene.summary());
     let r = run_job(&scene, &job, &cfg, a.estimator, a.run.quiet, None);

@@ -20,16 +20,23 @@
 //! `(1 - rho^2) / (B - 1)`; the adjusted `1 - (1 - r^2) (B - 1) / (B - 2)`
 //! (exact in the mean for independent receivers) corrects it. Second
 //! moments only: steadier than a jackknife of `Q`, which needs the fourth.
-//! `m` depends on how the receivers share chains, not on the batch size, so
-//! a later pilot stage with other batches keeps it.
+//!
+//! `m` is at most `K = (sum_j w_j)^2 / sum_j w_j^2` (independent
+//! receivers; `n` for equal weights). Batch means with heavy tails make
+//! each `s_j^2` noisier, `var(s^2) / sigma^4 = 2 / (B - 1) + kappa / B`
+//! (`kappa` the excess kurtosis), so `m` is divided by `1 + kappa (B - 1)
+//! / (2 B)` with `kappa` the `w^2`-weighted sample excess kurtosis of the
+//! receivers' batch means (when positive): exact for identical or
+//! independent receivers.
 
 use super::BatchMeans;
 
-/// Effective number of independent receivers `m` in `[1, n]` behind the
-/// mean over the receivers of the squared relative error of the total
-/// `direct[j] + mean_j` (module docs), from the batch means `bm` of every
-/// receiver; 1 where it cannot be measured (fewer than four batches, no
-/// receiver kept, an undefined or zero mean square error).
+/// Effective number of independent receivers `m` (at most `K`, and below
+/// 1 only for heavy tails) behind the mean over the receivers of the
+/// squared relative error of the total `direct[j] + mean_j` (module docs),
+/// from the batch means `bm` of every receiver: `Q` has `m (B - 1)`
+/// degrees of freedom. 1 where it cannot be measured (fewer than four
+/// batches, no receiver kept, an undefined or zero mean square error).
 pub fn rms_effective_receivers(bm: &BatchMeans, direct: &[f64]) -> f64 {
     let (b, n) = (bm.batches(), bm.receivers().min(direct.len()));
     if b < 4 || n == 0 {
@@ -43,10 +50,12 @@ pub fn rms_effective_receivers(bm: &BatchMeans, direct: &[f64]) -> f64 {
         }
     }
     mean.iter_mut().for_each(|m| *m /= bf);
-    let mut ss = vec![0.0; n];
+    let (mut ss, mut s4) = (vec![0.0; n], vec![0.0; n]);
     for k in 0..b {
-        for ((s, x), m) in ss.iter_mut().zip(bm.batch(k)).zip(&mean) {
-            *s += (x - m) * (x - m);
+        for (((s, f), x), m) in ss.iter_mut().zip(&mut s4).zip(bm.batch(k)).zip(&mean) {
+            let d2 = (x - m) * (x - m);
+            *s += d2;
+            *f += d2 * d2;
         }
     }
     // w_j = R_j^2 (0 for an exact receiver) and 1 / s_j to standardise.
@@ -64,6 +73,15 @@ pub fn rms_effective_receivers(bm: &BatchMeans, direct: &[f64]) -> f64 {
     if !(total_w.is_finite() && total_w > 0.0) {
         return 1.0;
     }
+    // K, and the w^2-weighted sample excess kurtosis.
+    let sum_w2: f64 = w.iter().map(|x| x * x).sum();
+    let most = total_w * total_w / sum_w2;
+    let kurtosis = (0..n)
+        .filter(|&j| ss[j] > 0.0)
+        .map(|j| w[j] * w[j] * (bf * s4[j] / (ss[j] * ss[j]) - 3.0))
+        .sum::<f64>()
+        / sum_w2;
+    let tails = 1.0 + kurtosis.max(0.0) * (bf - 1.0) / (2.0 * bf);
     // G_bc = sum_j w_j z_bj z_cj, c >= b.
     let z: Vec<Vec<f64>> = (0..b)
         .map(|k| {
@@ -82,11 +100,12 @@ pub fn rms_effective_receivers(bm: &BatchMeans, direct: &[f64]) -> f64 {
     let c = (bf - 1.0) / (bf - 2.0);
     let adjusted = c * raw - (c - 1.0) * total_w * total_w;
     let m = total_w * total_w / adjusted;
-    if adjusted > 0.0 && m.is_finite() {
-        m.clamp(1.0, n as f64)
+    let m = if adjusted > 0.0 && m.is_finite() {
+        m.clamp(1.0, most)
     } else {
-        n as f64
-    }
+        most
+    };
+    m / tails
 }
 
 #[cfg(test)]
@@ -128,13 +147,14 @@ mod tests {
         (avg, sd)
     }
 
-    /// `m = 1 / (rho^2 + (1 - rho)^2 / n)` for a common share `rho` of the
-    /// variance: 4 for a half, 23 for a fifth of 200 receivers, near `n`
-    /// for independent ones, 1 for identical ones. Off by a factor 2 (the
-    /// bias of `r^2` left in) these fail.
+    /// `m = n / (1 + (n - 1) rho^2) = 1 / (rho^2 + (1 - rho^2) / n)` for a
+    /// common share `rho` of the variance (correlation `rho` between
+    /// receivers): 3.97 for a half of 400, 22.3 for a fifth of 200
+    /// receivers, near `n` for independent ones, 1 for identical ones. With
+    /// the bias of `r^2` left in, the fifth-of-200 cases fail.
     #[test]
     fn shared_errors_count_as_fewer_receivers() {
-        let want = |n: f64, rho: f64| 1.0 / (rho * rho + (1.0 - rho) * (1.0 - rho) / n);
+        let want = |n: f64, rho: f64| 1.0 / (rho * rho + (1.0 - rho * rho) / n);
         for (n, b, rho) in [(400, 32, 0.5), (200, 32, 0.2), (200, 16, 0.2)] {
             let (avg, sd) = measured(n, b, rho);
             let w = want(n as f64, rho);
@@ -148,6 +168,36 @@ mod tests {
         assert!(avg > 60.0, "independent: {avg}");
         let (avg, _) = measured(100, 32, 1.0);
         assert!(avg < 1.0 + 1e-9, "identical: {avg}");
+    }
+
+    /// Heavy-tailed batch means (lognormal, sigma 0.8: excess kurtosis
+    /// about 30) make `Q` noisier than normal ones: `m` falls below one
+    /// receiver's for a single receiver, and by the tails' factor for many.
+    #[test]
+    fn heavy_tails_count_as_fewer_receivers() {
+        let lognormal = |n: usize, seed: u64| {
+            let mut rng = Philox4x32::new(seed, 9);
+            let mut bm = BatchMeans::new(n);
+            for _ in 0..32 {
+                for j in 0..n {
+                    bm.record(j, (0.8 * normal(&mut rng)).exp());
+                }
+            }
+            bm
+        };
+        let mut one = 0.0;
+        let mut many = 0.0;
+        for seed in 0..16 {
+            one += rms_effective_receivers(&lognormal(1, seed), &[0.0]) / 16.0;
+            many += rms_effective_receivers(&lognormal(100, seed), &[0.0; 100]) / 16.0;
+        }
+        assert!(one < 0.5, "one heavy-tailed receiver: {one}");
+        // Independent: 100 receivers less the tails' factor (the sample
+        // kurtosis of 32 values: about 5-8, a factor 3.5-5).
+        assert!(
+            many > 10.0 && many < 40.0,
+            "100 heavy-tailed receivers: {many}"
+        );
     }
 
     #[test]
@@ -164,8 +214,16 @@ mod tests {
             bm.record(1, 2.0);
         }
         assert_eq!(rms_effective_receivers(&bm, &[0.0; 2]), 1.0);
-        // One receiver: exactly 1.
+        // One receiver: 1, less its tails' factor (normal: sample excess
+        // kurtosis near 0, so about 1).
         let m = rms_effective_receivers(&means(1, 32, 0.0, 3), &[0.0]);
-        assert!((m - 1.0).abs() < 1e-12, "{m}");
+        assert!(m <= 1.0 && m > 0.5, "{m}");
+        // Weights concentrated on one receiver: K, not n.
+        let mut bm = means(50, 32, 0.0, 4);
+        let direct: Vec<f64> = (0..50).map(|j| if j == 0 { 0.0 } else { 1e3 }).collect();
+        let m = rms_effective_receivers(&bm, &direct);
+        assert!(m < 1.5, "{m}");
+        bm = means(50, 32, 0.0, 4);
+        assert!(rms_effective_receivers(&bm, &[0.0; 50]) > 25.0);
     }
 }
