@@ -83,8 +83,19 @@ impl AngleKind {
     fn key_of(self, a: f64) -> f64 {
         match self {
             AngleKind::Polar => {
+                // The piecewise form (the same key to rounding): `4h - s`
+                // is exactly `4h` at a half turn, where `sin pi` is not
+                // quite 0.
                 let (s, c) = a.sin_cos();
-                polar_key(c, s.max(0.0))
+                let s = s.max(0.0);
+                let h = FRAC_1_SQRT_2;
+                if c > h {
+                    s
+                } else if c < -h {
+                    4.0 * h - s
+                } else {
+                    2.0 * h - c
+                }
             }
             AngleKind::Azimuth => {
                 let h = FRAC_1_SQRT_2;
@@ -118,23 +129,31 @@ impl AngleKind {
 }
 
 /// The polar key of unit `(c, s)`, `s >= 0` (module docs), in `[0, 4h]`.
+///
+/// Written without selects: `m = min(s, h)` is `s` on both outer pieces
+/// and `h` on the middle one; `h - sign(c) (h - m)` is `m` for `c >= 0`
+/// and `2h - m` for `c < 0` (`h - m >= 0`: `copysign` multiplies by the
+/// sign); `h - clamp(c, -h, h)` adds the
+/// middle piece's slope and the offsets. Receivers lie on all sides of a
+/// luminaire, so a branch on `c` would be mispredicted half the time, and
+/// LLVM turns `if`-selects into branches at will; `min`, `clamp` and
+/// `copysign` stay branch-free. (The sum differs from the piecewise form
+/// by rounding only, which moves a direction at most into the
+/// neighbouring bucket: harmless.)
 #[inline(always)]
 fn polar_key(c: f64, s: f64) -> f64 {
     let h = FRAC_1_SQRT_2;
-    // Selects, not branches: receivers lie on all sides of a luminaire.
-    let mid = 2.0 * h - c;
-    let k = if c > h { s } else { mid };
-    if c < -h { 4.0 * h - s } else { k }
+    (h - (h - s.min(h)).copysign(c)) + (h - c.clamp(-h, h))
 }
 
-/// The azimuth key of unit `(c, s)` (module docs), in `[0, 8h)`: the
-/// polar key over the upper half plane, mirrored below it. No division;
-/// a negative-zero `s` counts as the upper half (`atan2(-0, 1)` is `-0`,
-/// azimuth 0).
+/// The azimuth key of unit `(c, s)` (module docs), in `[0, 8h]`: the
+/// polar key over the upper half plane, mirrored below it (by the sign of
+/// `s`, branch-free). No division; a negative-zero `s` counts as the upper
+/// half (`atan2(-0, 1)` is `-0`, azimuth 0: `-0 + 0` is `+0`).
 #[inline(always)]
 fn azimuth_key(c: f64, s: f64) -> f64 {
-    let p = polar_key(c, s.abs());
-    if s < 0.0 { 8.0 * FRAC_1_SQRT_2 - p } else { p }
+    let q = 4.0 * FRAC_1_SQRT_2;
+    q - (q - polar_key(c, s.abs())).copysign(s + 0.0)
 }
 
 /// `asin x` for `|x| <= sin(BUCKET_MAX_ANGLE)` by its Maclaurin series.
@@ -147,7 +166,8 @@ fn asin_small(x: f64) -> f64 {
     x + x * (x2 * p)
 }
 
-/// A bucket's reference angle and the cell that holds it.
+/// A bucket's reference angle, the cell that holds it and the next cell's
+/// threshold (40 bytes: what one lookup needs, in one or two cache lines).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Bucket {
     /// `cos g`, `sin g` of the reference angle `g` [rad].
@@ -155,32 +175,72 @@ struct Bucket {
     sin: f64,
     /// `g` [rad].
     g: f64,
-    /// The cell holding `g`.
+    /// The next cell's threshold [rad] (+inf past the last cell): an angle
+    /// at or above it lies in the next cell.
+    next: f64,
+    /// The (padded) cell holding `g`.
     cell: u32,
 }
 
-/// An ascending grid of angles `a_0 < ... < a_n` [rad].
+/// A cell of the padded grid: its lower node, inverse width and the
+/// caller's offset of its values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Cell {
+    /// Lower node [rad].
+    a: f64,
+    /// `1 / width` [1/rad].
+    inv: f64,
+    /// The caller's offset ([`AngleGrid::with_offsets`]).
+    off: usize,
+}
+
+/// An ascending grid of angles `a_0 < ... < a_n` [rad], padded to the
+/// kind's whole range: a *virtual* cell `[0, a_0)` where `a_0 > 0` and
+/// `(a_n, range]` where `a_n` is short of the range. The buckets cover
+/// every key, so no range check comes before the lookup: the caller gives
+/// virtual cells an offset of zero values (outside the measured angles).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AngleGrid {
     kind: AngleKind,
-    /// Node `a_k` [rad] and `1 / (a_{k+1} - a_k)` [1/rad] (0 for the last).
-    nodes: Vec<(f64, f64)>,
-    /// Keys of the first and last node.
-    k0: f64,
-    k1: f64,
-    /// Buckets of equal width in the key over `[k0, k1]`.
+    /// The padded cells, ascending.
+    cells: Vec<Cell>,
+    /// Thresholds of the padded cells: an angle `theta` lies in cell `j`
+    /// for the largest `j` with `thr[j] <= theta`. `thr[0] = -inf`, a
+    /// last entry `+inf`; a real node's angle, except the last real node
+    /// before a virtual cell, whose threshold is the next float up (the
+    /// node itself belongs to the measured range, as in `v > v_n` of the
+    /// reference rule).
+    thr: Vec<f64>,
+    /// Virtual cells before `a_0` (0 or 1).
+    lead: usize,
+    /// Real cells (`n`).
+    real: usize,
+    /// Buckets of equal width over the kind's whole key range, plus one
+    /// (a key at the very top of the range rounds to it).
     bucket: Vec<Bucket>,
     /// Buckets per unit of the key.
     per_unit: f64,
-    /// Every bucket holds at most one node: no scan.
+    /// Every bucket holds at most one threshold: no scan.
     one_node: bool,
 }
 
 impl AngleGrid {
     /// The grid of ascending angles `a` [rad] (at least two, within
     /// `[0, pi]` for a polar angle and `[0, 2 pi]` for an azimuth); `None`
-    /// otherwise.
+    /// otherwise. Offsets of real cells are their index, and of virtual
+    /// cells the number of real cells plus one.
     pub fn new(kind: AngleKind, a: &[f64]) -> Option<Self> {
+        Self::with_offsets(kind, a, 1, a.len())
+    }
+
+    /// [`Self::new`] with the offset [`Self::locate_cell`] returns: `k *
+    /// scale` for the real cell `k`, `virtual_off` for a virtual cell.
+    pub fn with_offsets(
+        kind: AngleKind,
+        a: &[f64],
+        scale: usize,
+        virtual_off: usize,
+    ) -> Option<Self> {
         let n = a.len();
         if n < 2 || a[0] < 0.0 || a[n - 1] > kind.range() || a.windows(2).any(|w| w[1] <= w[0]) {
             return None;
@@ -189,9 +249,37 @@ impl AngleGrid {
         if keys.windows(2).any(|w| w[1] <= w[0]) {
             return None;
         }
-        let cells = n - 1;
-        let span = keys[n - 1] - keys[0];
-        let narrowest = a
+        // Padded nodes and thresholds.
+        let lead = usize::from(a[0] > 0.0);
+        let trail = a[n - 1] < kind.range();
+        let mut nodes = Vec::with_capacity(n + 2);
+        let mut cells = Vec::with_capacity(n + 1);
+        let mut thr = vec![f64::NEG_INFINITY];
+        if lead == 1 {
+            nodes.push(0.0);
+            cells.push(virtual_off);
+            thr.push(a[0]);
+        }
+        nodes.extend_from_slice(a);
+        cells.extend((0..n - 1).map(|k| k * scale));
+        thr.extend_from_slice(&a[1..n - 1]);
+        if trail {
+            nodes.push(kind.range());
+            cells.push(virtual_off);
+            thr.push(a[n - 1].next_up());
+        }
+        thr.push(f64::INFINITY);
+        let cells: Vec<Cell> = cells
+            .iter()
+            .enumerate()
+            .map(|(j, &off)| Cell {
+                a: nodes[j],
+                inv: 1.0 / (nodes[j + 1] - nodes[j]),
+                off,
+            })
+            .collect();
+        let span = kind.key_of(kind.range());
+        let narrowest = nodes
             .windows(2)
             .map(|w| w[1] - w[0])
             .fold(f64::INFINITY, f64::min);
@@ -199,13 +287,13 @@ impl AngleGrid {
         let width = BUCKET_MAX_ANGLE.min(narrowest) / kind.max_slope();
         let buckets = ((span / width).ceil() as usize + 1).clamp(16, MAX_BUCKETS);
         let per_unit = buckets as f64 / span;
-        let edge = |b: usize| kind.angle(keys[0] + b as f64 / per_unit);
-        let mut bucket = Vec::with_capacity(buckets);
+        let edge = |b: usize| kind.angle(b as f64 / per_unit).clamp(0.0, kind.range());
+        let mut bucket = Vec::with_capacity(buckets + 1);
         let mut k = 0;
-        for b in 0..buckets {
+        for b in 0..=buckets {
             // The reference angle: the bucket's lower edge.
-            let g = edge(b).clamp(a[0], a[n - 1]);
-            while k + 1 < cells && a[k + 1] <= g {
+            let g = edge(b);
+            while thr[k + 1] <= g {
                 k += 1;
             }
             let (sin, cos) = g.sin_cos();
@@ -213,29 +301,20 @@ impl AngleGrid {
                 cos,
                 sin,
                 g,
+                next: thr[k + 1],
                 cell: k as u32,
             });
         }
-        let one_node = (0..buckets).all(|b| {
+        let one_node = (0..=buckets).all(|b| {
             let (lo, hi) = (edge(b), edge(b + 1));
-            a.iter().filter(|&&x| x > lo && x <= hi).count() <= 1
+            thr.iter().filter(|&&x| x > lo && x <= hi).count() <= 1
         });
         Some(Self {
             kind,
-            nodes: (0..n)
-                .map(|k| {
-                    (
-                        a[k],
-                        if k + 1 < n {
-                            1.0 / (a[k + 1] - a[k])
-                        } else {
-                            0.0
-                        },
-                    )
-                })
-                .collect(),
-            k0: keys[0],
-            k1: keys[n - 1],
+            cells,
+            thr,
+            lead,
+            real: n - 1,
             bucket,
             per_unit,
             one_node,
@@ -244,41 +323,50 @@ impl AngleGrid {
 
     /// Cell `k` and fraction `t` in `[0, 1]` of the angle whose unit
     /// `(cos, sin)` is `(c, s)`; `None` outside `[a_0, a_n]`.
-    #[inline(always)]
     pub fn locate(&self, c: f64, s: f64) -> Option<(usize, f64)> {
-        self.locate_key(self.kind.key(c, s), c, s)
+        let (j, _, t) = self.padded(self.kind.key(c, s), c, s);
+        let k = j.checked_sub(self.lead)?;
+        (k < self.real).then_some((k, t))
     }
 
-    /// [`Self::locate`] for a grid known to be [`AngleKind::Polar`] (the
-    /// caller's promise; debug builds check it).
+    /// The offset ([`Self::with_offsets`]) of the cell holding the angle
+    /// whose unit `(cos, sin)` is `(c, s)`, and the fraction `t` in `[0,
+    /// 1]` of the way through it. `polar` is the caller's promise of the
+    /// kind (debug builds check it): the key needs no dispatch.
     #[inline(always)]
-    pub fn locate_polar(&self, c: f64, s: f64) -> Option<(usize, f64)> {
-        debug_assert_eq!(self.kind, AngleKind::Polar);
-        self.locate_key(polar_key(c, s), c, s)
+    pub fn locate_cell(&self, polar: bool, c: f64, s: f64) -> (usize, f64) {
+        debug_assert_eq!(polar, self.kind == AngleKind::Polar);
+        let key = if polar {
+            polar_key(c, s)
+        } else {
+            azimuth_key(c, s)
+        };
+        let (_, off, t) = self.padded(key, c, s);
+        (off, t)
     }
 
+    /// Padded cell, its offset and the fraction of the angle with key
+    /// `key` and unit `(c, s)`.
     #[inline(always)]
-    fn locate_key(&self, key: f64, c: f64, s: f64) -> Option<(usize, f64)> {
-        if !(key >= self.k0 && key <= self.k1) {
-            return None;
-        }
-        // (A 32-bit conversion is cheaper than a saturating one to usize.)
-        let b = (((key - self.k0) * self.per_unit) as u32 as usize).min(self.bucket.len() - 1);
+    fn padded(&self, key: f64, c: f64, s: f64) -> (usize, usize, f64) {
+        // (A 32-bit conversion is cheaper than a saturating one to usize;
+        // a key within the range gives at most the extra last bucket, the
+        // bound only guards against input that is not a unit vector.)
+        let b = ((key * self.per_unit) as u32 as usize).min(self.bucket.len() - 1);
         let r = self.bucket[b];
         let theta = r.g + asin_small(s * r.cos - c * r.sin);
-        let n = self.nodes.len();
-        // theta is at least g (to rounding), and one node at most lies
-        // between them (branch-free); a scan where a bucket holds more.
-        let mut k = r.cell as usize;
-        k += (k + 2 < n && theta >= self.nodes[k + 1].0) as usize;
+        // theta is at least g (to rounding), and one threshold at most
+        // lies between them (branch-free); a scan where a bucket holds
+        // more (the last threshold is +inf: the scan stops).
+        let mut k = r.cell as usize + usize::from(theta >= r.next);
         if !self.one_node {
-            while k + 2 < n && theta >= self.nodes[k + 1].0 {
+            while theta >= self.thr[k + 1] {
                 k += 1;
             }
         }
-        let (a, inv) = self.nodes[k];
+        let cell = self.cells[k];
         // (Rounding may put theta a hair below g at a node: t = 0 there.)
-        Some((k, ((theta - a) * inv).clamp(0.0, 1.0)))
+        (k, cell.off, ((theta - cell.a) * cell.inv).clamp(0.0, 1.0))
     }
 }
 
