@@ -5,33 +5,49 @@
 //! `acos` and `atan2` cost about as much as the whole direct term of a point
 //! light, so the goniometric direct term finds its angle this way:
 //!
-//! - A *key* rises strictly with the angle and costs no inverse
-//!   trigonometry. A polar angle `gamma` in `[0, pi]` (sine `s >= 0`) has
-//!   `k = s` while `c > h`, `k = 2h - c` while `|c| <= h`, and `k = 4h - s`
-//!   while `c < -h` (`h = sqrt(1/2)`): continuous, no division, and
-//!   `|dgamma/dk| <= sqrt 2`. An azimuth in `[0, 2 pi)` (unit `(c, s)`, `s`
-//!   of either sign) has the polar key of `(c, |s|)` over the upper half
-//!   plane and `8h` minus it below: continuous at `0`, `pi` and `2 pi`
-//!   (`4h` at a half turn), no division, the same slope bound. (An earlier
+//! - A *raw key* rises strictly with the angle and costs no inverse
+//!   trigonometry, no division and no branch. A polar angle `gamma` in `[0,
+//!   pi]` (sine `s >= 0`) has `k = 1 - c + s` up to a right angle and `k =
+//!   3 - c - s` beyond, that is `2 - c - sign(c) (1 - s)`, in `[0, 4]`: its
+//!   slope `|c| + s` lies in `[1, sqrt 2]`, so `|dgamma/dk| <= 1`. An
+//!   azimuth in `[0, 2 pi)` (unit `(c, s)`, `s` of either sign) continues
+//!   the pattern round the circle: `1 - c + s`, `3 - c - s`, `5 + c - s`,
+//!   `7 + c + s` in the four quadrants, in `[0, 8]`, continuous at every
+//!   quadrant edge (`4` at a half turn), the same slope bound. (The *key*
+//!   of the tests is `sqrt(1/2)` times the raw key. Earlier keys: a
 //!   pseudo-angle `s / (|c| + |s|)` per quadrant cost a division on the
-//!   direct term's critical path.)
-//! - Buckets of equal width in the key each keep a reference angle `g`, the
-//!   angle of their lower edge, with `cos g`, `sin g` and the cell holding
-//!   `g`. Then `theta = g + asin(s cos g - c sin g)`, and the buckets are narrow
-//!   enough ([`BUCKET_MAX_ANGLE`]) that the asin series to `x^7` is exact to
-//!   rounding: the first term left out, `35 x^9 / 1152`, is below 2e-17 for
-//!   `|x| <= 0.02`. (Buckets of 0.06 with the series to `x^11`, a third of
-//!   the table, measured slower: the direct term is bound by latency.)
+//!   critical path; a three-piece key in `s`, `c` and `s` cost selects
+//!   that LLVM turned into a branch, mispredicted on half the receivers.)
+//! - Buckets of equal width in the raw key each keep a reference angle
+//!   `g`, the angle of their lower edge, with `cos g`, `sin g`, the cell
+//!   holding `g` and the next cell's threshold. Then `theta = g + asin(s cos
+//!   g - c sin g)`, and the buckets are narrow enough
+//!   ([`BUCKET_MAX_ANGLE`]) that the asin series to `x^7` is exact to
+//!   rounding: the first term left out, `35 x^9 / 1152`, is below 2e-17
+//!   for `|x| <= 0.02`. (Buckets of 0.06 with the series to `x^11`, a third
+//!   of the table, measured slower.) The bucket is the nearest to the key
+//!   (one addition of [`ROUND_MAGIC`] rounds it).
 //! - Buckets are also no wider than the narrowest cell, so one compare finds
 //!   the cell (past [`MAX_BUCKETS`], a short scan).
+//! - The grid is padded to the kind's whole range with *virtual* cells
+//!   outside the measured angles, and the buckets cover every key: no range
+//!   check and no `Option` on the direct term's path. Each cell carries an
+//!   offset chosen by the caller, which points virtual cells at zero values.
 //!
 //! The angle agrees with `atan2(s, c)` to rounding, so the cell and fraction
 //! are those of the inverse-trigonometric rule (a test compares them).
 
-use std::f64::consts::{FRAC_1_SQRT_2, PI};
+#[cfg(test)]
+use std::f64::consts::FRAC_1_SQRT_2;
+use std::f64::consts::PI;
 
 /// Widest angle [rad] a bucket may span (the asin series' range).
 pub const BUCKET_MAX_ANGLE: f64 = 0.02;
+
+/// `1.5 * 2^52`: for `|x| < 2^51`, the sum `x + ROUND_MAGIC` holds `x`
+/// rounded to the nearest integer in the low bits of its mantissa (two's
+/// complement).
+const ROUND_MAGIC: f64 = 6_755_399_441_055_744.0;
 
 /// Most buckets of a grid's table.
 const MAX_BUCKETS: usize = 1 << 14;
@@ -46,66 +62,74 @@ pub enum AngleKind {
 }
 
 impl AngleKind {
-    /// The key of the angle with unit `(cos, sin) = (c, s)`.
+    /// The key of the angle with unit `(cos, sin) = (c, s)`: `h` times
+    /// the raw key ([`Self::raw`]).
     #[inline(always)]
+    #[cfg(test)]
     fn key(self, c: f64, s: f64) -> f64 {
+        FRAC_1_SQRT_2 * self.raw(c, s)
+    }
+
+    /// The raw key of the angle with unit `(cos, sin) = (c, s)` (module
+    /// docs).
+    #[inline(always)]
+    fn raw(self, c: f64, s: f64) -> f64 {
         match self {
-            AngleKind::Polar => polar_key(c, s),
-            AngleKind::Azimuth => azimuth_key(c, s),
+            AngleKind::Polar => polar_raw(c, s),
+            AngleKind::Azimuth => azimuth_raw(c, s),
         }
     }
 
     /// The angle [rad] of a key.
+    #[cfg(test)]
     fn angle(self, k: f64) -> f64 {
+        self.angle_of_raw(k * std::f64::consts::SQRT_2)
+    }
+
+    /// The angle [rad] of a raw key: `pi/4 + asin((k - 1) / sqrt 2)` up
+    /// to a right angle, `3 pi/4 - asin((3 - k) / sqrt 2)` beyond
+    /// (polar); an azimuth past the half turn mirrors it.
+    fn angle_of_raw(self, k: f64) -> f64 {
+        use std::f64::consts::{FRAC_PI_4, SQRT_2};
         match self {
             AngleKind::Polar => {
-                let h = FRAC_1_SQRT_2;
-                if k <= h {
-                    k.asin()
-                } else if k <= 3.0 * h {
-                    (2.0 * h - k).clamp(-1.0, 1.0).acos()
+                if k <= 2.0 {
+                    FRAC_PI_4 + ((k - 1.0) / SQRT_2).clamp(-1.0, 1.0).asin()
                 } else {
-                    PI - (4.0 * h - k).clamp(0.0, 1.0).asin()
+                    3.0 * FRAC_PI_4 - ((3.0 - k) / SQRT_2).clamp(-1.0, 1.0).asin()
                 }
             }
             AngleKind::Azimuth => {
-                let h = FRAC_1_SQRT_2;
-                if k <= 4.0 * h {
-                    AngleKind::Polar.angle(k)
+                if k <= 4.0 {
+                    AngleKind::Polar.angle_of_raw(k)
                 } else {
-                    2.0 * PI - AngleKind::Polar.angle(8.0 * h - k)
+                    2.0 * PI - AngleKind::Polar.angle_of_raw(8.0 - k)
                 }
             }
         }
     }
 
     /// The key of an angle [rad], with right angles exact for an azimuth.
+    #[cfg(test)]
     fn key_of(self, a: f64) -> f64 {
+        FRAC_1_SQRT_2 * self.raw_of(a)
+    }
+
+    /// The raw key of an angle [rad], with right angles exact for an
+    /// azimuth (`sin pi` is not quite 0, nor `cos pi/2`).
+    fn raw_of(self, a: f64) -> f64 {
         match self {
             AngleKind::Polar => {
-                // The piecewise form (the same key to rounding): `4h - s`
-                // is exactly `4h` at a half turn, where `sin pi` is not
-                // quite 0.
                 let (s, c) = a.sin_cos();
-                let s = s.max(0.0);
-                let h = FRAC_1_SQRT_2;
-                if c > h {
-                    s
-                } else if c < -h {
-                    4.0 * h - s
-                } else {
-                    2.0 * h - c
-                }
+                polar_raw(c, s.max(0.0))
             }
             AngleKind::Azimuth => {
-                let h = FRAC_1_SQRT_2;
-                // Half and full turns exact (sin pi is not quite 0).
                 if a <= PI {
-                    AngleKind::Polar.key_of(a)
+                    AngleKind::Polar.raw_of(a)
                 } else if a >= 2.0 * PI {
-                    8.0 * h
+                    8.0
                 } else {
-                    8.0 * h - AngleKind::Polar.key_of(2.0 * PI - a)
+                    8.0 - AngleKind::Polar.raw_of(2.0 * PI - a)
                 }
             }
         }
@@ -118,42 +142,38 @@ impl AngleKind {
             AngleKind::Azimuth => 2.0 * PI,
         }
     }
-
-    /// Largest `|dangle/dkey|`.
-    fn max_slope(self) -> f64 {
-        match self {
-            AngleKind::Polar => std::f64::consts::SQRT_2,
-            AngleKind::Azimuth => std::f64::consts::SQRT_2,
-        }
-    }
 }
 
-/// The polar key of unit `(c, s)`, `s >= 0` (module docs), in `[0, 4h]`.
-///
-/// Written without selects: `m = min(s, h)` is `s` on both outer pieces
-/// and `h` on the middle one; `h - sign(c) (h - m)` is `m` for `c >= 0`
-/// and `2h - m` for `c < 0` (`h - m >= 0`: `copysign` multiplies by the
-/// sign); `h - clamp(c, -h, h)` adds the
-/// middle piece's slope and the offsets. Receivers lie on all sides of a
-/// luminaire, so a branch on `c` would be mispredicted half the time, and
-/// LLVM turns `if`-selects into branches at will; `min`, `clamp` and
-/// `copysign` stay branch-free. (The sum differs from the piecewise form
-/// by rounding only, which moves a direction at most into the
-/// neighbouring bucket: harmless.)
+/// The azimuth key of unit `(c, s)` (module docs), in `[0, 8h]`.
 #[inline(always)]
-fn polar_key(c: f64, s: f64) -> f64 {
-    let h = FRAC_1_SQRT_2;
-    (h - (h - s.min(h)).copysign(c)) + (h - c.clamp(-h, h))
-}
-
-/// The azimuth key of unit `(c, s)` (module docs), in `[0, 8h]`: the
-/// polar key over the upper half plane, mirrored below it (by the sign of
-/// `s`, branch-free). No division; a negative-zero `s` counts as the upper
-/// half (`atan2(-0, 1)` is `-0`, azimuth 0: `-0 + 0` is `+0`).
-#[inline(always)]
+#[cfg(test)]
 fn azimuth_key(c: f64, s: f64) -> f64 {
-    let q = 4.0 * FRAC_1_SQRT_2;
-    q - (q - polar_key(c, s.abs())).copysign(s + 0.0)
+    AngleKind::Azimuth.key(c, s)
+}
+
+/// The raw polar key `2 - c - sign(c) (1 - s)` of unit `(c, s)`, `s >= 0`
+/// (module docs), in `[0, 4]`: `1 - c + s` up to a right angle, `3 - c -
+/// s` beyond. `copysign` multiplies by the sign (`1 - s >= 0`), without a
+/// branch: receivers lie on all sides of a luminaire, so a branch on `c`
+/// would be mispredicted half the time (and LLVM turns `if`-selects into
+/// branches at will). Rounding may leave a key an ulp outside its piece's
+/// formula: it moves a direction at most into the neighbouring bucket,
+/// which the lookup tolerates.
+#[inline(always)]
+fn polar_raw(c: f64, s: f64) -> f64 {
+    (2.0 - c) - (1.0 - s).copysign(c)
+}
+
+/// The raw azimuth key of unit `(c, s)` (module docs), in `[0, 8]`, per
+/// quadrant `1 - c + s`, `3 - c - s`, `5 + c - s`, `7 + c + s`: with the
+/// signs `sc`, `ss` of `c` and `s`, `4 - ss (2 + sc + c) + sc s`, branch
+/// free (`2 + sc + c >= 0`: `copysign` multiplies by `ss`). A negative-zero
+/// `s` counts as the upper half (`atan2(-0, 1)` is `-0`, azimuth 0: `-0 +
+/// 0` is `+0`).
+#[inline(always)]
+fn azimuth_raw(c: f64, s: f64) -> f64 {
+    let sc = 1.0f64.copysign(c);
+    (4.0 - ((c + sc) + 2.0).copysign(s + 0.0)) + s * sc
 }
 
 /// `asin x` for `|x| <= sin(BUCKET_MAX_ANGLE)` by its Maclaurin series.
@@ -218,7 +238,7 @@ pub struct AngleGrid {
     /// Buckets of equal width over the kind's whole key range, plus one
     /// (a key at the very top of the range rounds to it).
     bucket: Vec<Bucket>,
-    /// Buckets per unit of the key.
+    /// Buckets per unit of the raw key.
     per_unit: f64,
     /// Every bucket holds at most one threshold: no scan.
     one_node: bool,
@@ -245,7 +265,7 @@ impl AngleGrid {
         if n < 2 || a[0] < 0.0 || a[n - 1] > kind.range() || a.windows(2).any(|w| w[1] <= w[0]) {
             return None;
         }
-        let keys: Vec<f64> = a.iter().map(|&x| kind.key_of(x)).collect();
+        let keys: Vec<f64> = a.iter().map(|&x| kind.raw_of(x)).collect();
         if keys.windows(2).any(|w| w[1] <= w[0]) {
             return None;
         }
@@ -278,16 +298,21 @@ impl AngleGrid {
                 off,
             })
             .collect();
-        let span = kind.key_of(kind.range());
+        let span = kind.raw_of(kind.range());
         let narrowest = nodes
             .windows(2)
             .map(|w| w[1] - w[0])
             .fold(f64::INFINITY, f64::min);
-        // A bucket spans at most max_slope times its key width in angle.
-        let width = BUCKET_MAX_ANGLE.min(narrowest) / kind.max_slope();
+        // A bucket spans no more angle than raw key (|dangle/draw| <= 1).
+        let width = BUCKET_MAX_ANGLE.min(narrowest);
         let buckets = ((span / width).ceil() as usize + 1).clamp(16, MAX_BUCKETS);
         let per_unit = buckets as f64 / span;
-        let edge = |b: usize| kind.angle(b as f64 / per_unit).clamp(0.0, kind.range());
+        // Bucket b spans the raw keys within half a bucket of b / per_unit
+        // (the lookup rounds to the nearest).
+        let edge = |b: usize| {
+            kind.angle_of_raw((b as f64 - 0.5) / per_unit)
+                .clamp(0.0, kind.range())
+        };
         let mut bucket = Vec::with_capacity(buckets + 1);
         let mut k = 0;
         for b in 0..=buckets {
@@ -324,7 +349,7 @@ impl AngleGrid {
     /// Cell `k` and fraction `t` in `[0, 1]` of the angle whose unit
     /// `(cos, sin)` is `(c, s)`; `None` outside `[a_0, a_n]`.
     pub fn locate(&self, c: f64, s: f64) -> Option<(usize, f64)> {
-        let (j, _, t) = self.padded(self.kind.key(c, s), c, s);
+        let (j, _, t) = self.padded(self.kind.raw(c, s), c, s);
         let k = j.checked_sub(self.lead)?;
         (k < self.real).then_some((k, t))
     }
@@ -337,22 +362,25 @@ impl AngleGrid {
     pub fn locate_cell(&self, polar: bool, c: f64, s: f64) -> (usize, f64) {
         debug_assert_eq!(polar, self.kind == AngleKind::Polar);
         let key = if polar {
-            polar_key(c, s)
+            polar_raw(c, s)
         } else {
-            azimuth_key(c, s)
+            azimuth_raw(c, s)
         };
         let (_, off, t) = self.padded(key, c, s);
         (off, t)
     }
 
-    /// Padded cell, its offset and the fraction of the angle with key
-    /// `key` and unit `(c, s)`.
+    /// Padded cell, its offset and the fraction of the angle with raw
+    /// key `key` and unit `(c, s)`.
     #[inline(always)]
     fn padded(&self, key: f64, c: f64, s: f64) -> (usize, usize, f64) {
-        // (A 32-bit conversion is cheaper than a saturating one to usize;
-        // a key within the range gives at most the extra last bucket, the
-        // bound only guards against input that is not a unit vector.)
-        let b = ((key * self.per_unit) as u32 as usize).min(self.bucket.len() - 1);
+        // The nearest bucket centre by one addition: the low bits of `pos
+        // + ROUND_MAGIC` hold `pos` rounded (a saturating `as` conversion
+        // costs two more floating-point operations). A key within the
+        // range gives at most the extra last bucket; the bound only guards
+        // against a NaN.
+        let pos = key * self.per_unit + ROUND_MAGIC;
+        let b = ((pos.to_bits() as u32) as usize).min(self.bucket.len() - 1);
         let r = self.bucket[b];
         let theta = r.g + asin_small(s * r.cos - c * r.sin);
         // theta is at least g (to rounding), and one threshold at most
