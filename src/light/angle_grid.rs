@@ -354,13 +354,17 @@ impl AngleGrid {
     pub fn locate(&self, c: f64, s: f64) -> Option<(usize, f64)> {
         let (j, _, t) = self.padded(self.kind.raw(c, s), c, s);
         let k = j.checked_sub(self.lead)?;
-        (k < self.real).then_some((k, t))
+        (k < self.real).then_some((k, t.clamp(0.0, 1.0)))
     }
 
     /// The offset ([`Self::with_offsets`]) of the cell holding the angle
-    /// whose unit `(cos, sin)` is `(c, s)`, and the fraction `t` in `[0,
-    /// 1]` of the way through it. `polar` is the caller's promise of the
-    /// kind (debug builds check it): the key needs no dispatch.
+    /// whose unit `(cos, sin)` is `(c, s)`, and the fraction `t` of the way
+    /// through it: in `[0, 1]` but for rounding at a node, which may leave
+    /// it an ulp outside (not clamped: an interpolant between non-negative
+    /// values can then come out a rounding error below zero, so the caller
+    /// clamps its result at zero, one operation where two clamps cost
+    /// four). `polar` is the caller's promise of the kind (debug builds
+    /// check it): the key needs no dispatch.
     #[inline(always)]
     pub fn locate_cell(&self, polar: bool, c: f64, s: f64) -> (usize, f64) {
         debug_assert_eq!(polar, self.kind == AngleKind::Polar);
@@ -396,8 +400,8 @@ impl AngleGrid {
             }
         }
         let cell = self.cells[k];
-        // (Rounding may put theta a hair below g at a node: t = 0 there.)
-        (k, cell.off, ((theta - cell.a) * cell.inv).clamp(0.0, 1.0))
+        // (Rounding may put theta a hair below g at a node: t = -ulp.)
+        (k, cell.off, (theta - cell.a) * cell.inv)
     }
 }
 

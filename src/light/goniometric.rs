@@ -329,7 +329,8 @@ impl Goniometric {
     fn along_gamma(&self, vg: &AngleGrid, c: f64, s: f64) -> f64 {
         let (j, t) = vg.locate_cell(true, c, s);
         let (i0, i1) = (self.col[j][0], self.col[j + 1][0]);
-        i0 + t * (i1 - i0)
+        // (t may leave [0, 1] by an ulp at a node: no negative intensity.)
+        (i0 + t * (i1 - i0)).max(0.0)
     }
 
     /// The bilinear rule of a type C table in its angle grids, from the
@@ -361,7 +362,9 @@ impl Goniometric {
         let ([i00, i10], [i01, i11]) = (self.col[j], self.col[j + 1]);
         let lo = i00 + tv * (i01 - i00);
         let hi = i10 + tv * (i11 - i10);
-        lo + th * (hi - lo)
+        // (tv, th may leave [0, 1] by an ulp at a node: no negative
+        // intensity.)
+        (lo + th * (hi - lo)).max(0.0)
     }
 
     /// Intensity [cd] at angles `(h, v)` [rad]: bilinear, zero outside the
