@@ -189,18 +189,24 @@ fn asin_small(x: f64) -> f64 {
     x + x * (x2 * p)
 }
 
-/// A bucket's reference angle, the cell that holds it and the next cell's
-/// threshold (40 bytes: what one lookup needs, in one or two cache lines).
+/// A bucket's reference angle `g` and what the lookup needs of the cell
+/// holding it and the next one, relative to `g`: one load, no dependent
+/// one (72 bytes).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Bucket {
     /// `cos g`, `sin g` of the reference angle `g` [rad].
     cos: f64,
     sin: f64,
-    /// `g` [rad].
-    g: f64,
-    /// The next cell's threshold [rad] (+inf past the last cell): an angle
-    /// at or above it lies in the next cell.
+    /// The next cell's threshold less `g` [rad] (+inf past the last
+    /// cell): an angle `g + d` with `d` at or above it lies in the next
+    /// cell.
     next: f64,
+    /// For the cell holding `g` and the next: `(g - a) inv` and `inv`
+    /// (its lower node `a`, inverse width `inv`), so that the fraction of
+    /// `g + d` is `(g - a) inv + d inv`.
+    frac: [[f64; 2]; 2],
+    /// The two cells' offsets.
+    off: [u32; 2],
     /// The (padded) cell holding `g`.
     cell: u32,
 }
@@ -241,6 +247,8 @@ pub struct AngleGrid {
     /// Buckets of equal width over the kind's whole key range, plus one
     /// (a key at the very top of the range rounds to it).
     bucket: Vec<Bucket>,
+    /// The buckets' reference angles `g` [rad] (for the scan).
+    g: Vec<f64>,
     /// Buckets per unit of the raw key.
     per_unit: f64,
     /// Every bucket holds at most one threshold: no scan.
@@ -317,6 +325,7 @@ impl AngleGrid {
                 .clamp(0.0, kind.range())
         };
         let mut bucket = Vec::with_capacity(buckets + 1);
+        let mut gs = Vec::with_capacity(buckets + 1);
         let mut k = 0;
         for b in 0..=buckets {
             // The reference angle: the bucket's lower edge.
@@ -325,13 +334,17 @@ impl AngleGrid {
                 k += 1;
             }
             let (sin, cos) = g.sin_cos();
+            let k1 = (k + 1).min(cells.len() - 1);
+            let frac = |c: &Cell| [(g - c.a) * c.inv, c.inv];
             bucket.push(Bucket {
                 cos,
                 sin,
-                g,
-                next: thr[k + 1],
+                next: thr[k + 1] - g,
+                frac: [frac(&cells[k]), frac(&cells[k1])],
+                off: [cells[k].off as u32, cells[k1].off as u32],
                 cell: k as u32,
             });
+            gs.push(g);
         }
         let one_node = (0..=buckets).all(|b| {
             let (lo, hi) = (edge(b), edge(b + 1));
@@ -344,6 +357,7 @@ impl AngleGrid {
             lead,
             real: n - 1,
             bucket,
+            g: gs,
             per_unit,
             one_node,
         })
@@ -388,19 +402,31 @@ impl AngleGrid {
         // against a NaN.
         let pos = key * self.per_unit + ROUND_MAGIC;
         let b = ((pos.to_bits() as u32) as usize).min(self.bucket.len() - 1);
-        let r = self.bucket[b];
-        let theta = r.g + asin_small(s * r.cos - c * r.sin);
-        // theta is at least g (to rounding), and one threshold at most
-        // lies between them (branch-free); a scan where a bucket holds
+        let r = &self.bucket[b];
+        let d = asin_small(s * r.cos - c * r.sin);
+        // theta = g + d is at least g (to rounding), and one threshold at
+        // most lies between them (branch-free); a scan where a bucket holds
         // more (the last threshold is +inf: the scan stops).
-        let mut k = r.cell as usize + usize::from(theta >= r.next);
         if !self.one_node {
-            while theta >= self.thr[k + 1] {
-                k += 1;
-            }
+            return self.scan(b, d);
+        }
+        let sel = usize::from(d >= r.next);
+        let [u, inv] = r.frac[sel];
+        // (Rounding may put theta a hair below g at a node: t = -ulp.)
+        (r.cell as usize + sel, r.off[sel] as usize, u + d * inv)
+    }
+
+    /// [`Self::padded`] where a bucket may hold several thresholds: the
+    /// angle `g + d` of bucket `b` by a scan from the cell holding `g`.
+    #[cold]
+    #[inline(never)]
+    fn scan(&self, b: usize, d: f64) -> (usize, usize, f64) {
+        let theta = self.g[b] + d;
+        let mut k = self.bucket[b].cell as usize;
+        while theta >= self.thr[k + 1] {
+            k += 1;
         }
         let cell = self.cells[k];
-        // (Rounding may put theta a hair below g at a node: t = -ulp.)
         (k, cell.off, (theta - cell.a) * cell.inv)
     }
 }
