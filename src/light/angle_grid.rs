@@ -189,26 +189,22 @@ fn asin_small(x: f64) -> f64 {
     x + x * (x2 * p)
 }
 
-/// A bucket's reference angle `g` and what the lookup needs of the cell
-/// holding it and the next one, relative to `g`: one load, no dependent
-/// one (72 bytes).
+/// What the lookup needs of a bucket with reference angle `g`: `(cos g,
+/// sin g)` and, for the cell holding `g` and the next, the fraction of the
+/// angle `g + d` as `(d - base) inv` (56 bytes, one load, no dependent
+/// one).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Bucket {
     /// `cos g`, `sin g` of the reference angle `g` [rad].
     cos: f64,
     sin: f64,
-    /// The next cell's threshold less `g` [rad] (+inf past the last
-    /// cell): an angle `g + d` with `d` at or above it lies in the next
-    /// cell.
-    next: f64,
-    /// For the cell holding `g` and the next: `(g - a) inv` and `inv`
-    /// (its lower node `a`, inverse width `inv`), so that the fraction of
-    /// `g + d` is `(g - a) inv + d inv`.
+    /// `[base, inv]` of the cell holding `g` and of the next: `base` the
+    /// cell's lower node less `g` [rad], `inv` its inverse width [1/rad].
+    /// The next cell's `base` is also its threshold less `g` (+inf past
+    /// the last cell): `g + d` lies in it for `d` at or above it.
     frac: [[f64; 2]; 2],
     /// The two cells' offsets.
     off: [u32; 2],
-    /// The (padded) cell holding `g`.
-    cell: u32,
 }
 
 /// A cell of the padded grid: its lower node, inverse width and the
@@ -247,8 +243,9 @@ pub struct AngleGrid {
     /// Buckets of equal width over the kind's whole key range, plus one
     /// (a key at the very top of the range rounds to it).
     bucket: Vec<Bucket>,
-    /// The buckets' reference angles `g` [rad] (for the scan).
-    g: Vec<f64>,
+    /// The buckets' reference angles `g` [rad] and the (padded) cells
+    /// holding them (for the scan and [`Self::locate`]).
+    refs: Vec<(f64, u32)>,
     /// Buckets per unit of the raw key.
     per_unit: f64,
     /// Every bucket holds at most one threshold: no scan.
@@ -325,7 +322,7 @@ impl AngleGrid {
                 .clamp(0.0, kind.range())
         };
         let mut bucket = Vec::with_capacity(buckets + 1);
-        let mut gs = Vec::with_capacity(buckets + 1);
+        let mut refs = Vec::with_capacity(buckets + 1);
         let mut k = 0;
         for b in 0..=buckets {
             // The reference angle: the bucket's lower edge.
@@ -335,16 +332,16 @@ impl AngleGrid {
             }
             let (sin, cos) = g.sin_cos();
             let k1 = (k + 1).min(cells.len() - 1);
-            let frac = |c: &Cell| [(g - c.a) * c.inv, c.inv];
             bucket.push(Bucket {
                 cos,
                 sin,
-                next: thr[k + 1] - g,
-                frac: [frac(&cells[k]), frac(&cells[k1])],
+                frac: [
+                    [cells[k].a - g, cells[k].inv],
+                    [thr[k + 1] - g, cells[k1].inv],
+                ],
                 off: [cells[k].off as u32, cells[k1].off as u32],
-                cell: k as u32,
             });
-            gs.push(g);
+            refs.push((g, k as u32));
         }
         let one_node = (0..=buckets).all(|b| {
             let (lo, hi) = (edge(b), edge(b + 1));
@@ -357,7 +354,7 @@ impl AngleGrid {
             lead,
             real: n - 1,
             bucket,
-            g: gs,
+            refs,
             per_unit,
             one_node,
         })
@@ -410,10 +407,12 @@ impl AngleGrid {
         if !self.one_node {
             return self.scan(b, d);
         }
-        let sel = usize::from(d >= r.next);
-        let [u, inv] = r.frac[sel];
-        // (Rounding may put theta a hair below g at a node: t = -ulp.)
-        (r.cell as usize + sel, r.off[sel] as usize, u + d * inv)
+        let sel = usize::from(d >= r.frac[1][0]);
+        let [base, inv] = r.frac[sel];
+        // (Only `locate` reads the cell index: the fast path loads nothing
+        // more. Rounding may put theta a hair below g at a node: t = -ulp.)
+        let k = self.refs.get(b).map_or(0, |&(_, k)| k as usize) + sel;
+        (k, r.off[sel] as usize, (d - base) * inv)
     }
 
     /// [`Self::padded`] where a bucket may hold several thresholds: the
@@ -421,8 +420,8 @@ impl AngleGrid {
     #[cold]
     #[inline(never)]
     fn scan(&self, b: usize, d: f64) -> (usize, usize, f64) {
-        let theta = self.g[b] + d;
-        let mut k = self.bucket[b].cell as usize;
+        let (g, k) = self.refs[b];
+        let (theta, mut k) = (g + d, k as usize);
         while theta >= self.thr[k + 1] {
             k += 1;
         }
