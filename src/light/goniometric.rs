@@ -63,13 +63,16 @@ pub struct Goniometric {
     /// Type C: the vertical and horizontal angles located from a
     /// direction's components without `acos`/`atan2` ([`AngleGrid`]).
     grids: Option<(AngleGrid, Option<AngleGrid>)>,
-    /// Type C with `grids`: `[I(h_a, v_k), I(h_{a+1}, v_k)]` [cd] at
-    /// `col[a * stride + k]`, with two zero columns after each row and a
-    /// zero row after the last (the values of the grids' virtual cells,
-    /// outside the measured angles): a cell's four corners are
-    /// `col[j]`, `col[j + 1]` with `j` the sum of the grids' offsets.
-    col: Vec<[f64; 2]>,
-    /// Entries per row of `col` (`v.len() + 2`).
+    /// Type C with `grids`: the bilinear coefficients `[A, C, B, D]` [cd]
+    /// of the cell `h_a..h_{a+1}`, `v_k..v_{k+1}` at `coef[a * stride +
+    /// k]`, `I = (A + B tv) + th (C + D tv)` with `A = I00`, `B = I01 -
+    /// I00`, `C = I10 - I00`, `D = (I11 - I10) - (I01 - I00)` (first index
+    /// horizontal): one entry per cell (one load) and four products fewer
+    /// than the corners. A zero column after each row and a zero row after
+    /// the last hold the grids' virtual cells (outside the measured
+    /// angles); the grids' offsets sum to the entry.
+    coef: Vec<[f64; 4]>,
+    /// Entries per row of `coef` (`v.len()`: the cells and the zero one).
     stride: usize,
     /// The file's luminous opening [m] (all zero: the file gives none), for
     /// glare ([`crate::glare`]): luminance and solid angle need its area.
@@ -106,19 +109,20 @@ impl Goniometric {
             power: 0.0,
             rotational: false,
             grids: None,
-            col: Vec::new(),
-            stride: nv + 2,
+            coef: Vec::new(),
+            stride: nv,
             opening: p.opening,
         };
         g.rotational = p.kind == PhotometricType::C
             && !g.h.is_empty()
             && (0..g.h.len()).all(|a| (0..nv).all(|k| g.at(a, k) == g.at(0, k)));
-        // Offsets into `col`: the polar cell k is column k (virtual: the
-        // zero columns nv, nv + 1), the azimuth cell a is row a (virtual:
-        // the zero row after the last).
+        // Offsets into `coef`: the polar cell k is column k (virtual: the
+        // zero column nv - 1), the azimuth cell a is row a (virtual: the
+        // zero row after the last).
         let (stride, nhc) = (g.stride, g.h.len().saturating_sub(1));
         if p.kind == PhotometricType::C
-            && let Some(vg) = AngleGrid::with_offsets(AngleKind::Polar, &g.v, 1, nv)
+            && let Some(vg) =
+                AngleGrid::with_offsets(AngleKind::Polar, &g.v, 1, nv.saturating_sub(1))
         {
             let hg = if g.rotational {
                 None
@@ -127,10 +131,13 @@ impl Goniometric {
             };
             if g.rotational || hg.is_some() {
                 g.grids = Some((vg, hg));
-                g.col = vec![[0.0; 2]; (nhc + 1) * stride];
+                g.coef = vec![[0.0; 4]; (nhc + 1) * stride];
                 for a in 0..nhc {
-                    for k in 0..nv {
-                        g.col[a * stride + k] = [g.at(a, k), g.at(a + 1, k)];
+                    for k in 0..nv.saturating_sub(1) {
+                        let (i00, i01) = (g.at(a, k), g.at(a, k + 1));
+                        let (i10, i11) = (g.at(a + 1, k), g.at(a + 1, k + 1));
+                        g.coef[a * stride + k] =
+                            [i00, i10 - i00, i01 - i00, (i11 - i10) - (i01 - i00)];
                     }
                 }
             }
@@ -328,9 +335,10 @@ impl Goniometric {
     #[inline(always)]
     fn along_gamma(&self, vg: &AngleGrid, c: f64, s: f64) -> f64 {
         let (j, t) = vg.locate_cell(true, c, s);
-        let (i0, i1) = (self.col[j][0], self.col[j + 1][0]);
-        // (t may leave [0, 1] by an ulp at a node: no negative intensity.)
-        (i0 + t * (i1 - i0)).max(0.0)
+        // (Rotational: C = D = 0. t may leave [0, 1] by an ulp at a node:
+        // no negative intensity.)
+        let [a, _, b, _] = self.coef[j];
+        (a + t * b).max(0.0)
     }
 
     /// The bilinear rule of a type C table in its angle grids, from the
@@ -358,13 +366,12 @@ impl Goniometric {
         };
         let (jh, th) = hg.locate_cell(false, cc, sc);
         let j = jh + jv;
-        // (The same operations as intensity_at: lo and hi at once.)
-        let ([i00, i10], [i01, i11]) = (self.col[j], self.col[j + 1]);
-        let lo = i00 + tv * (i01 - i00);
-        let hi = i10 + tv * (i11 - i10);
+        // (intensity_at's lo and hi - lo, to rounding, at once.)
+        let [a, c, b, d] = self.coef[j];
+        let (lo, slope) = (a + tv * b, c + tv * d);
         // (tv, th may leave [0, 1] by an ulp at a node: no negative
         // intensity.)
-        (lo + th * (hi - lo)).max(0.0)
+        (lo + th * slope).max(0.0)
     }
 
     /// Intensity [cd] at angles `(h, v)` [rad]: bilinear, zero outside the
