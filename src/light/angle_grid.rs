@@ -19,14 +19,16 @@
 //!   critical path; a three-piece key in `s`, `c` and `s` cost selects
 //!   that LLVM turned into a branch, mispredicted on half the receivers.)
 //! - Buckets of equal width in the raw key each keep a reference angle
-//!   `g`, the angle of their lower edge, with `cos g`, `sin g`, the cell
-//!   holding `g` and the next cell's threshold. Then `theta = g + asin(s cos
-//!   g - c sin g)`, and the buckets are narrow enough
+//!   `g`, the angle of their lower edge, as `cos g`, `sin g` and, for the
+//!   cell holding `g` and the next, the cell's lower node less `g` and its
+//!   inverse width (the next cell's node is also its threshold). Then
+//!   `theta = g + d` with `d = asin(s cos g - c sin g)`, its fraction
+//!   through the cell is `(d - base) inv`, and the buckets are narrow enough
 //!   ([`BUCKET_MAX_ANGLE`]) that the asin series to `x^5` is exact to
 //!   rounding: the first term left out, `5 x^7 / 112`, is below 4e-18 for
 //!   `|x| <= 0.005`. (The direct term is bound by its floating-point
 //!   operations: buckets of 0.02 with the series to `x^7` measured 1 ns
-//!   slower, and 0.06 with `x^11` slower still; the tables, 40 bytes a
+//!   slower, and 0.06 with `x^11` slower still; the tables, 56 bytes a
 //!   bucket and 200 buckets per radian of key, fit the L2 cache.) The
 //!   bucket is the nearest to the key (one addition of [`ROUND_MAGIC`]
 //!   rounds it).
