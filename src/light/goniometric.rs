@@ -63,6 +63,17 @@ pub struct Goniometric {
     /// Type C: the vertical and horizontal angles located from a
     /// direction's components without `acos`/`atan2` ([`AngleGrid`]).
     grids: Option<(AngleGrid, Option<AngleGrid>)>,
+    /// Type C with `grids`: the bilinear coefficients `[A, C, B, D]` [cd]
+    /// of the cell `h_a..h_{a+1}`, `v_k..v_{k+1}` at `coef[a * stride +
+    /// k]`, `I = (A + B tv) + th (C + D tv)` with `A = I00`, `B = I01 -
+    /// I00`, `C = I10 - I00`, `D = (I11 - I10) - (I01 - I00)` (first index
+    /// horizontal): one entry per cell (one load) and four products fewer
+    /// than the corners. A zero column after each row and a zero row after
+    /// the last hold the grids' virtual cells (outside the measured
+    /// angles); the grids' offsets sum to the entry.
+    coef: Vec<[f64; 4]>,
+    /// Entries per row of `coef` (`v.len()`: the cells and the zero one).
+    stride: usize,
     /// The file's luminous opening [m] (all zero: the file gives none), for
     /// glare ([`crate::glare`]): luminance and solid angle need its area.
     opening: crate::io::photometry::Opening,
@@ -98,21 +109,37 @@ impl Goniometric {
             power: 0.0,
             rotational: false,
             grids: None,
+            coef: Vec::new(),
+            stride: nv,
             opening: p.opening,
         };
         g.rotational = p.kind == PhotometricType::C
             && !g.h.is_empty()
             && (0..g.h.len()).all(|a| (0..nv).all(|k| g.at(a, k) == g.at(0, k)));
+        // Offsets into `coef`: the polar cell k is column k (virtual: the
+        // zero column nv - 1), the azimuth cell a is row a (virtual: the
+        // zero row after the last).
+        let (stride, nhc) = (g.stride, g.h.len().saturating_sub(1));
         if p.kind == PhotometricType::C
-            && let Some(vg) = AngleGrid::new(AngleKind::Polar, &g.v)
+            && let Some(vg) =
+                AngleGrid::with_offsets(AngleKind::Polar, &g.v, 1, nv.saturating_sub(1))
         {
             let hg = if g.rotational {
                 None
             } else {
-                AngleGrid::new(AngleKind::Azimuth, &g.h)
+                AngleGrid::with_offsets(AngleKind::Azimuth, &g.h, stride, nhc * stride)
             };
             if g.rotational || hg.is_some() {
                 g.grids = Some((vg, hg));
+                g.coef = vec![[0.0; 4]; (nhc + 1) * stride];
+                for a in 0..nhc {
+                    for k in 0..nv.saturating_sub(1) {
+                        let (i00, i01) = (g.at(a, k), g.at(a, k + 1));
+                        let (i10, i11) = (g.at(a + 1, k), g.at(a + 1, k + 1));
+                        g.coef[a * stride + k] =
+                            [i00, i10 - i00, i01 - i00, (i11 - i10) - (i01 - i00)];
+                    }
+                }
             }
         }
         let mut acc = 0.0;
@@ -236,11 +263,7 @@ impl Goniometric {
                 return 0.0;
             }
             let inv = len.recip();
-            let i = match vg.locate_polar(-wz * inv, r * inv) {
-                Some((k, t)) => self.i[k] + t * (self.i[k + 1] - self.i[k]),
-                None => 0.0,
-            };
-            return i * c * (inv * inv * inv);
+            return self.along_gamma(vg, -wz * inv, r * inv) * c * (inv * inv * inv);
         }
         if let Some((vg, Some(hg))) = &self.grids {
             // Type C without rotational symmetry: the local components
@@ -282,10 +305,7 @@ impl Goniometric {
         if let Some((vg, None)) = &self.grids {
             let cz = w.dot(frame.z);
             let r = (w - frame.z * cz).length();
-            return match vg.locate_polar(-cz, r) {
-                Some((k, t)) => self.i[k] + t * (self.i[k + 1] - self.i[k]),
-                None => 0.0,
-            };
+            return self.along_gamma(vg, -cz, r);
         }
         self.intensity(frame.to_local(w))
     }
@@ -304,19 +324,29 @@ impl Goniometric {
         let (c, r) = (-d.z, (d.x * d.x + d.y * d.y).sqrt());
         match hg {
             // Rotational symmetry: gamma alone, no azimuth.
-            None => match vg.locate_polar(c, r) {
-                Some((k, t)) => self.i[k] + t * (self.i[k + 1] - self.i[k]),
-                None => 0.0,
-            },
+            None => self.along_gamma(vg, c, r),
             Some(hg) => self.bilinear_c(vg, hg, (c, r), (d.x, d.y, r)),
         }
+    }
+
+    /// The linear rule of a rotationally symmetric type C table in its
+    /// polar grid, from the polar angle's `(cos, sin)`: zero outside the
+    /// measured angles (a virtual cell's zero columns).
+    #[inline(always)]
+    fn along_gamma(&self, vg: &AngleGrid, c: f64, s: f64) -> f64 {
+        let (j, t) = vg.locate_cell(true, c, s);
+        // (Rotational: C = D = 0. t may leave [0, 1] by an ulp at a node:
+        // no negative intensity.)
+        let [a, _, b, _] = self.coef[j];
+        (a + t * b).max(0.0)
     }
 
     /// The bilinear rule of a type C table in its angle grids, from the
     /// polar angle's `(cos, sin)` and the azimuth's components `(x, y)`
     /// with `r = hypot(x, y)` (any common scale): zero outside the
-    /// measured angles. At the poles (`r = 0`) the azimuth is atan2's: C180
-    /// for a negative zero `x`, else C0.
+    /// measured angles (the grids' virtual cells point at zero entries).
+    /// At the poles (`r = 0`) the azimuth is atan2's: C180 for a negative
+    /// zero `x`, else C0.
     #[inline(always)]
     fn bilinear_c(
         &self,
@@ -325,9 +355,7 @@ impl Goniometric {
         (c, s): (f64, f64),
         (x, y, r): (f64, f64, f64),
     ) -> f64 {
-        let Some((k, tv)) = vg.locate_polar(c, s) else {
-            return 0.0;
-        };
+        let (jv, tv) = vg.locate_cell(true, c, s);
         let (cc, sc) = if r > 0.0 {
             let inv = r.recip();
             (x * inv, y * inv)
@@ -336,15 +364,14 @@ impl Goniometric {
         } else {
             (1.0, 0.0)
         };
-        let Some((a, th)) = hg.locate(cc, sc) else {
-            return 0.0;
-        };
-        let nv = self.v.len();
-        let (j0, j1) = (a * nv + k, (a + 1) * nv + k);
-        let (i00, i01, i10, i11) = (self.i[j0], self.i[j0 + 1], self.i[j1], self.i[j1 + 1]);
-        let lo = i00 + tv * (i01 - i00);
-        let hi = i10 + tv * (i11 - i10);
-        lo + th * (hi - lo)
+        let (jh, th) = hg.locate_cell(false, cc, sc);
+        let j = jh + jv;
+        // (intensity_at's lo and hi - lo, to rounding, at once.)
+        let [a, c, b, d] = self.coef[j];
+        let (lo, slope) = (a + tv * b, c + tv * d);
+        // (tv, th may leave [0, 1] by an ulp at a node: no negative
+        // intensity.)
+        (lo + th * slope).max(0.0)
     }
 
     /// Intensity [cd] at angles `(h, v)` [rad]: bilinear, zero outside the

@@ -153,8 +153,9 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
     let mut lights = Vec::with_capacity(desc.light.len());
     let mut notes = Vec::with_capacity(desc.light.len());
     let mut names = Vec::with_capacity(desc.light.len());
+    let mut tables = GonioTables::new();
     for (k, l) in desc.light.iter().enumerate() {
-        let (light, note) = light(l, ctx, &planes)?;
+        let (light, note) = light(l, ctx, &planes, &mut tables)?;
         let name = l
             .get_ref()
             .name
@@ -666,10 +667,17 @@ fn any_material(m: &Spanned<MaterialDesc>, ctx: &SourceCtx) -> Result<Material, 
     }
 }
 
+/// Goniometric tables already built in this scene, by file and scale:
+/// luminaires of one file share its tables (and their angle grids) rather
+/// than each holding a copy.
+type GonioTables =
+    std::collections::HashMap<(std::path::PathBuf, u64), std::sync::Arc<crate::light::Goniometric>>;
+
 fn light(
     l: &Spanned<LightDesc>,
     ctx: &SourceCtx,
     planes: &[Plane],
+    tables: &mut GonioTables,
 ) -> Result<(Light, Option<String>), SceneError> {
     let d = l.get_ref();
     // Fields that belong to the other kind of light are rejected.
@@ -761,7 +769,7 @@ fn light(
     ];
     not_for(kind, &area_only)?;
     if kind == "ies" || kind == "ldt" {
-        return goniometric(l, ctx);
+        return goniometric(l, ctx, tables);
     }
     let gonio_only = [
         ("file", d.file.as_ref().map(Spanned::span)),
@@ -1647,6 +1655,7 @@ fn f_span(d: &LightDesc, l: &Spanned<LightDesc>) -> Range<usize> {
 fn goniometric(
     l: &Spanned<LightDesc>,
     ctx: &SourceCtx,
+    tables: &mut GonioTables,
 ) -> Result<(Light, Option<String>), SceneError> {
     use crate::light::{Goniometric, LuminaireFrame};
     let d = l.get_ref();
@@ -1692,7 +1701,13 @@ fn goniometric(
         Some(r) => return Err(ctx.invalid(r.span(), "rotate", "must be a finite angle [deg]")),
         None => 0.0,
     };
-    let unscaled = Goniometric::new(&photometry, 1.0);
+    let mut table = |scale: f64| {
+        tables
+            .entry((path.clone(), scale.to_bits()))
+            .or_insert_with(|| std::sync::Arc::new(Goniometric::new(&photometry, scale)))
+            .clone()
+    };
+    let unscaled = table(1.0);
     let scale = match (&d.flux, &d.multiplier) {
         (Some(_), Some(m)) => {
             return Err(ctx.invalid(
@@ -1715,7 +1730,7 @@ fn goniometric(
         (None, Some(m)) => ctx.nonneg(m, "multiplier")?,
         (None, None) => 1.0,
     };
-    let dist = Goniometric::new(&photometry, scale);
+    let dist = table(scale);
     if !(dist.power().is_finite()
         && dist.max_intensity() <= MAX_INTENSITY
         && (dist.max_intensity() == 0.0 || dist.max_intensity() >= MIN_INTENSITY))
@@ -1769,7 +1784,7 @@ fn goniometric(
         Light::Gonio {
             p,
             frame: LuminaireFrame::aimed(aim, rotate),
-            dist: std::sync::Arc::new(dist),
+            dist,
             opening,
         },
         Some(note),
