@@ -292,6 +292,7 @@ impl Mesh {
             hi = hi.max(*p);
         }
         let centre = 0.5 * (lo + hi);
+        // (Vertices are finite, checked above: the fold drops no NaN.)
         let reach = corners
             .iter()
             .flatten()

@@ -137,6 +137,8 @@ impl Scene {
                 }
             }
             if let Some(n) = front {
+                // (Box corners are finite, checked at compile: the fold
+                // drops no NaN.)
                 let far = corners(lo, hi)
                     .iter()
                     .map(|&c| n.dot(c - p))
