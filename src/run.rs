@@ -521,9 +521,13 @@ pub const MAX_VARIANCE_FALL: f64 = 0.5;
 /// measured, and the degrees of freedom of `r^2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Stage {
+    /// Batches the stage ran.
     pub batches: u64,
+    /// Chains per batch.
     pub batch_size: u64,
+    /// Its largest (or RMS) relative error over the receivers.
     pub r: f64,
+    /// Degrees of freedom of `r^2`.
     pub dof: f64,
 }
 
