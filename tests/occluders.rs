@@ -50,6 +50,8 @@ fn check(
 ) {
     assert!(scene.uses_occluder_lists());
     let (mut pairs, mut blocked, mut kept, mut all) = (0usize, 0usize, 0usize, 0usize);
+    let (mut dark, mut clear) = (0usize, 0usize);
+    let mut rng = Philox4x32::new(12, 1);
     let shapes = scene.occluders(DVec3::splat(1e3), None, None).len();
     for &(p, front) in receivers {
         let ip = scene.inside_mask(p);
@@ -58,19 +60,47 @@ fn check(
             if front.is_some_and(|n| n.dot(h.p - p) <= 0.0) {
                 continue;
             }
-            let occ = lists
-                .entry(h.surface)
-                .or_insert_with(|| scene.occluders(p, front, scene.surface_bounds(h.surface)));
+            // (As the receiver lists keep them: without a flat shape in
+            // the surface's own support plane.)
+            let occ = lists.entry(h.surface).or_insert_with(|| {
+                let support = scene.support_plane(h.surface).map(|(pl, _)| pl);
+                scene
+                    .occluders(p, front, scene.surface_bounds(h.surface))
+                    .into_iter()
+                    .filter(|o| !support.is_some_and(|pl| scene.flat_in_plane(o, pl)))
+                    .collect::<Vec<_>>()
+            });
             let from = Some((h.surface, h.prim));
             let inside = scene.inside_mask(h.p) & ip;
             let want = scene.blocked_by_shapes(h.p, from, p, inside);
-            let got =
-                scene.blocked_by_occluders(h.p, from, p, inside, occ, (h.p - p).length_squared());
+            let l2 = (h.p - p).length_squared();
+            let got = scene.blocked_by_occluders(h.p, from, p, inside, occ, l2);
             assert_eq!(
                 got, want,
                 "receiver {p} (front {front:?}), collision {} on surface {}",
                 h.p, h.surface
             );
+            // A visibility cell round the collision: a random part of the
+            // surface's box holding it, from a point to the whole box.
+            let (rlo, rhi) = scene.surface_bounds(h.surface).unwrap();
+            let (u, v) = (rng.next_2d(), rng.next_2d());
+            let f = |a: f64| a * a * 0.4;
+            let cell = (
+                (h.p - (rhi - rlo) * DVec3::new(f(u[0]), f(u[1]), f(v[0]))).max(rlo),
+                (h.p + (rhi - rlo) * DVec3::new(f(v[1]), f(u[0]), f(u[1]))).min(rhi),
+            );
+            let mask = scene.cell_visibility(p, occ, cell);
+            let in_cell = scene.blocked_in_cell(h.p, from, p, inside, occ, mask, l2);
+            assert_eq!(
+                in_cell, want,
+                "receiver {p} (front {front:?}), collision {} on surface {}, cell {cell:?}, mask {mask:x}",
+                h.p, h.surface
+            );
+            if mask == lumest::scene::world::CELL_DARK {
+                dark += 1;
+            } else if mask == 0 {
+                clear += 1;
+            }
             pairs += 1;
             blocked += want as usize;
             kept += occ.len();
@@ -79,7 +109,13 @@ fn check(
     }
     // The check means something: many pairs, a good share shadowed, and
     // the lists much shorter than the shape count.
-    eprintln!("{pairs} pairs, {blocked} shadowed, occluders kept {kept} of {all}");
+    eprintln!(
+        "{pairs} pairs, {blocked} shadowed, occluders kept {kept} of {all}; cells: {dark} dark, {clear} without a test"
+    );
+    // Cells prove both ways often: a share of the shadowed pairs dark, and
+    // a good share of pairs without a test.
+    assert!(dark * 20 > blocked, "{dark} dark of {blocked} shadowed");
+    assert!(clear * 4 > pairs, "{clear} of {pairs} without a test");
     assert!(pairs > 20_000, "{pairs}");
     assert!(blocked * 20 > pairs, "{blocked} of {pairs}");
     assert!(kept * 2 < all, "{kept} of {all}");

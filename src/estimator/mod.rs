@@ -38,6 +38,7 @@ mod occluded_kernel;
 mod open_kernel;
 pub mod pane_images;
 pub mod solid;
+mod visibility_cells;
 
 use open_kernel::score_open;
 pub use open_kernel::{Kernel, active_kernel, arith_touch, set_kernel, stream_touch};
@@ -399,6 +400,11 @@ struct ReceiverList {
     /// then tested).
     occ_start: Vec<u32>,
     occ: Vec<crate::scene::world::Occluder>,
+    /// The list's region cut into cells, with per (cell, entry) the
+    /// occluders that can shadow the entry from there
+    /// ([`visibility_cells`]); `None` without occluder lists or past
+    /// [`MAX_CELL_MASKS`].
+    cells: Option<visibility_cells::VisibilityCells>,
     /// The list's surfaces are flat (an infinite plane or a flat shape's
     /// support plane): every entry lies strictly in front of it, so a
     /// positive unnormalised cosine at the collision is the BRDF's front.
@@ -408,6 +414,10 @@ struct ReceiverList {
 /// Most occluders kept over all receiver lists (136 bytes each, 96 more
 /// for a rectangle's); past it a list tests every shape.
 const MAX_OCCLUDERS: usize = 2_000_000;
+
+/// Most visibility-cell masks kept over all receiver lists (8 bytes each);
+/// a list whose cells would pass it takes coarser cells, or none.
+const MAX_CELL_MASKS: usize = 8_000_000;
 
 /// Receivers compiled against a scene.
 #[derive(Clone, Debug)]
@@ -753,15 +763,26 @@ impl Receivers {
                     _ => None,
                 });
             }
+            // Per list, the support plane of its surfaces (flat lists).
+            let mut support = vec![None; lists.len()];
+            for (s, &k) in list_of.iter().enumerate().rev() {
+                support[k as usize] = scene.support_plane(s as u32).map(|(pl, _)| pl);
+            }
             let mut total = 0;
-            for (list, region) in lists.iter_mut().zip(region) {
+            for ((list, region), support) in lists.iter_mut().zip(&region).zip(support) {
                 let region = region.flatten();
                 let mut start = vec![0u32];
                 let mut occ = Vec::new();
                 for &j in &list.idx {
                     let rec = &receivers[j as usize];
                     let front = rec.solid_kind().is_none().then_some(rec.n);
-                    occ.extend(scene.occluders(rec.p, front, region));
+                    // (A flat shape in the list's own plane never blocks.)
+                    occ.extend(
+                        scene
+                            .occluders(rec.p, front, region)
+                            .into_iter()
+                            .filter(|o| !support.is_some_and(|pl| scene.flat_in_plane(o, pl))),
+                    );
                     start.push(occ.len() as u32);
                     if total + occ.len() > MAX_OCCLUDERS {
                         break;
@@ -773,6 +794,48 @@ impl Receivers {
                     list.occ = occ;
                 }
             }
+            // Visibility cells over each bounded region whose list tests
+            // occluders, as fine as the budget allows (in list order).
+            let mut masks = 0;
+            let plans: Vec<Option<((DVec3, DVec3), usize)>> = lists
+                .iter()
+                .zip(&region)
+                .map(|(list, region)| {
+                    let region = (*region).flatten()?;
+                    if list.occ.is_empty() {
+                        return None;
+                    }
+                    let mut side = visibility_cells::VisibilityCells::per_side();
+                    loop {
+                        let size =
+                            visibility_cells::VisibilityCells::size(region, list.idx.len(), side);
+                        if masks + size <= MAX_CELL_MASKS {
+                            masks += size;
+                            return Some((region, side));
+                        }
+                        if side == 1 {
+                            return None;
+                        }
+                        side /= 2;
+                    }
+                })
+                .collect();
+            use rayon::prelude::*;
+            lists.par_iter_mut().zip(plans).for_each(|(list, plan)| {
+                if let Some((region, side)) = plan {
+                    let points: Vec<DVec3> = (0..list.idx.len())
+                        .map(|k| DVec3::new(list.px[k], list.py[k], list.pz[k]))
+                        .collect();
+                    list.cells = Some(visibility_cells::VisibilityCells::build(
+                        scene,
+                        region,
+                        &points,
+                        &list.occ_start,
+                        &list.occ,
+                        side,
+                    ));
+                }
+            });
         }
         // With glass panes, one more stretch of the accumulators holds
         // every receiver once: the scores reflected to it by a pane
@@ -1078,10 +1141,12 @@ impl Receivers {
                     && c.n.dot(c.wi) > 0.0 =>
             {
                 let from = Some((c.surface, c.prim));
+                let cell = list.cells.as_ref().map(|g| g.row(x));
                 if counting {
                     occluded_kernel::score_occluded::<true>(
                         scene,
                         list,
+                        cell,
                         x,
                         n,
                         from,
@@ -1094,6 +1159,7 @@ impl Receivers {
                     occluded_kernel::score_occluded::<false>(
                         scene,
                         list,
+                        cell,
                         x,
                         n,
                         from,
@@ -1195,6 +1261,7 @@ impl Receivers {
         let wi = frame.to_local(c.wi);
         let planes_only = scene.planes_only();
         let from = Some((c.surface, c.prim));
+        let cell = list.cells.as_ref().map(|g| g.row(c.p));
         for k in range {
             if !xm.sees(list.masks[k]) {
                 continue;
@@ -1216,7 +1283,12 @@ impl Receivers {
                     } else {
                         let occ =
                             &list.occ[list.occ_start[k] as usize..list.occ_start[k + 1] as usize];
-                        scene.blocked_by_occluders(c.p, from, p, inside, occ, d2)
+                        match cell {
+                            Some(row) => {
+                                scene.blocked_in_cell(c.p, from, p, inside, occ, row[k], d2)
+                            }
+                            None => scene.blocked_by_occluders(c.p, from, p, inside, occ, d2),
+                        }
                     }
                 })
             {

@@ -19,12 +19,14 @@ use glam::DVec3;
 /// Score a collision at `x` (front normal `n`, on `from`, inside the
 /// spheres and boxes `x_inside`; weight `q`, BRDF `f`) into the
 /// constant-response entries of `list` (`acc`, `near` their stretches),
-/// with no plane in the way and occluder lists built; count it in `near`
-/// where it scores from within the watched radius.
+/// with no plane in the way and occluder lists built (and `cell`, the
+/// masks of the visibility cell holding `x`, where the list has cells);
+/// count it in `near` where it scores from within the watched radius.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn score_occluded<const COUNT: bool>(
     scene: &Scene,
     list: &ReceiverList,
+    cell: Option<&[u64]>,
     x: DVec3,
     n: DVec3,
     from: Option<(u32, u32)>,
@@ -36,10 +38,12 @@ pub(super) fn score_occluded<const COUNT: bool>(
     #[cfg(target_arch = "x86_64")]
     if super::open_kernel::active_kernel() == super::open_kernel::Kernel::Avx2 {
         // SAFETY: the CPU has AVX2 and FMA (checked by `active_kernel`).
-        unsafe { score_occluded_avx2::<COUNT>(scene, list, x, n, from, x_inside, qf, acc, near) };
+        unsafe {
+            score_occluded_avx2::<COUNT>(scene, list, cell, x, n, from, x_inside, qf, acc, near)
+        };
         return;
     }
-    score_occluded_body::<COUNT>(scene, list, x, n, from, x_inside, qf, acc, near);
+    score_occluded_body::<COUNT>(scene, list, cell, x, n, from, x_inside, qf, acc, near);
 }
 
 /// [`score_occluded_body`] compiled for AVX2 and FMA (the same bits: Rust
@@ -50,6 +54,7 @@ pub(super) fn score_occluded<const COUNT: bool>(
 unsafe fn score_occluded_avx2<const COUNT: bool>(
     scene: &Scene,
     list: &ReceiverList,
+    cell: Option<&[u64]>,
     x: DVec3,
     n: DVec3,
     from: Option<(u32, u32)>,
@@ -58,7 +63,7 @@ unsafe fn score_occluded_avx2<const COUNT: bool>(
     acc: &mut [f64],
     near: &mut [f64],
 ) {
-    score_occluded_body::<COUNT>(scene, list, x, n, from, x_inside, qf, acc, near);
+    score_occluded_body::<COUNT>(scene, list, cell, x, n, from, x_inside, qf, acc, near);
 }
 
 #[inline(always)]
@@ -66,6 +71,7 @@ unsafe fn score_occluded_avx2<const COUNT: bool>(
 fn score_occluded_body<const COUNT: bool>(
     scene: &Scene,
     list: &ReceiverList,
+    cell: Option<&[u64]>,
     x: DVec3,
     n: DVec3,
     from: Option<(u32, u32)>,
@@ -117,9 +123,16 @@ fn score_occluded_body<const COUNT: bool>(
             }
             let p = DVec3::new(list.px[k], list.py[k], list.pz[k]);
             let occ = &list.occ[list.occ_start[k] as usize..list.occ_start[k + 1] as usize];
-            if !occ.is_empty()
-                && scene.blocked_by_occluders(x, from, p, x_inside & list.inside[k], occ, d2[i])
-            {
+            let inside = x_inside & list.inside[k];
+            let blocked = match cell {
+                Some(row) => {
+                    row[k] != 0 && scene.blocked_in_cell(x, from, p, inside, occ, row[k], d2[i])
+                }
+                None => {
+                    !occ.is_empty() && scene.blocked_by_occluders(x, from, p, inside, occ, d2[i])
+                }
+            };
+            if blocked {
                 continue;
             }
             // On a curved surface the general loop's BRDF is 0 where the

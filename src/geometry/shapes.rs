@@ -270,6 +270,12 @@ impl AaBox {
         ON_REL * (self.hi - self.lo).max_element()
     }
 
+    /// The distance [m] within which a point counts as on the surface
+    /// ([`Self::classify`]); [`Self::crosses`] tests the box shrunk by it.
+    pub fn tolerance(&self) -> f64 {
+        self.tol()
+    }
+
     /// Where `p` lies.
     pub fn classify(&self, p: DVec3) -> Inside {
         let tol = self.tol();

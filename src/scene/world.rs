@@ -24,7 +24,7 @@ mod occluders;
 mod panes;
 mod shape_tree;
 
-pub use occluders::Occluder;
+pub use occluders::{CELL_DARK, CELL_REST, Occluder};
 pub use panes::{Pane, PaneHit, PaneShape};
 
 pub use shape_tree::{AUTO_MIN_SHAPES, Accel};

@@ -345,6 +345,143 @@ impl Scene {
         false
     }
 
+    /// Whether `o` is a rectangle or disc whose plane is `support` (the
+    /// same normal and offset, either way round; a receiver list's support
+    /// plane): it never blocks a segment from a collision on that list's
+    /// surfaces, which lie on its plane (its test needs the ends strictly
+    /// on opposite sides).
+    pub fn flat_in_plane(&self, o: &Occluder, support: crate::geometry::Plane) -> bool {
+        let pl = match o.prim {
+            Prim::Rect(i) => self.rects[i as usize].0.plane,
+            Prim::Disc(i) => self.discs[i as usize].0.plane,
+            _ => return false,
+        };
+        (pl.n == support.n && pl.c == support.c) || (pl.n == -support.n && pl.c == -support.c)
+    }
+
+    /// [`Self::blocked_by_occluders`] for a collision in a visibility cell
+    /// ([`Self::cell_visibility`]): only the occluders whose bits `mask`
+    /// sets (bit [`CELL_REST`] for every occluder from that index on), and
+    /// blocked outright for [`CELL_DARK`]. The same answer as the whole
+    /// list for collisions in the cell.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn blocked_in_cell(
+        &self,
+        a: DVec3,
+        from: Option<(u32, u32)>,
+        b: DVec3,
+        inside_both: u64,
+        occ: &[Occluder],
+        mask: u64,
+        l2: f64,
+    ) -> bool {
+        if mask == CELL_DARK {
+            return true;
+        }
+        let mut m = mask;
+        while m != 0 {
+            let i = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let some = if i == CELL_REST as usize {
+                &occ[i.min(occ.len())..]
+            } else {
+                &occ[i..i + 1]
+            };
+            if self.blocked_by_occluders(a, from, b, inside_both, some, l2) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Which of `occ` (the occluders of a receiver at `p`, from
+    /// [`Self::occluders`]) can shadow a segment from a point of the box
+    /// `cell` to `p`: bit `i` for occluder `i` (`i <` [`CELL_REST`]), bit
+    /// `CELL_REST` for any from that index on, set when the occluder's
+    /// grown box meets the hull of the grown cell and `p` and it is not a
+    /// box or sphere holding both (the region tests of [`Self::occluders`]
+    /// on a smaller region) nor a box the cell lies on the face plane of
+    /// ([`Self::box_face_holds_cell`]); [`CELL_DARK`] when a
+    /// solid box provably blocks every such segment
+    /// ([`Self::box_shadows_cell`]).
+    pub fn cell_visibility(&self, p: DVec3, occ: &[Occluder], (clo, chi): (DVec3, DVec3)) -> u64 {
+        let mut mask = 0u64;
+        for (i, o) in occ.iter().enumerate() {
+            let (lo, hi) = padded(prim_bounds(self, o.prim));
+            let scale = p
+                .abs()
+                .max(lo.abs())
+                .max(hi.abs())
+                .max(clo.abs())
+                .max(chi.abs())
+                .max_element();
+            let g = DVec3::splat(SLACK_REL * scale);
+            if !hull_meets_box(p, clo - g, chi + g, lo - g, hi + g)
+                || self.holds_both(o.prim, p, Some((clo - g, chi + g)))
+            {
+                continue;
+            }
+            if let Prim::Box(b) = o.prim
+                && self.box_face_holds_cell(b, p, (clo, chi))
+            {
+                continue;
+            }
+            if let Prim::Box(b) = o.prim
+                && self.box_shadows_cell(b, p, (clo - g, chi + g), scale)
+            {
+                return CELL_DARK;
+            }
+            mask |= 1 << (i as u32).min(CELL_REST);
+        }
+        mask
+    }
+
+    /// Whether the box `b` never crosses a segment from a point of the
+    /// (ungrown) `cell` to `p` because the cell lies on the plane of one of
+    /// its faces, or beyond it, to within a quarter of the box's own
+    /// tolerance, and `p` on or beyond that plane (collisions on the box's
+    /// own face, or on a face in the same plane, such as the other desk
+    /// top): every point of such a segment lies outside the box shrunk by
+    /// its tolerance along that axis, so its test (an `On` or `Out` end,
+    /// then the slab test of the shrunk box) finds no crossing.
+    fn box_face_holds_cell(&self, b: u32, p: DVec3, (clo, chi): (DVec3, DVec3)) -> bool {
+        let bx = &self.boxes[b as usize].0;
+        let q = 0.25 * bx.tolerance();
+        (0..3).any(|a| {
+            (clo[a] >= bx.hi[a] - q && p[a] >= bx.hi[a])
+                || (chi[a] <= bx.lo[a] + q && p[a] <= bx.lo[a])
+        })
+    }
+
+    /// Whether the solid box `b` crosses every segment from a point of the
+    /// box `cell` to `p`, with a margin `m = 1e-7 scale` far above the
+    /// rounding of [`crate::geometry::shapes::AaBox::crosses`]: `p` and the
+    /// cell lie outside the box grown by `m` (both ends classify `Out`, so
+    /// the box test is its slab test), and the segment from `p` to each of
+    /// the cell's eight corners meets the box shrunk by `m`, `S`. The set
+    /// of points `q` whose segment from `p` meets a convex `S` is convex
+    /// (with `b_i = p + s_i (q_i - p)` in `S`, `s_i` in `[0, 1]`, the
+    /// segment to a convex combination `sum l_i q_i` passes through
+    /// `sum l_i t / s_i b_i`, `t = 1 / sum (l_i / s_i)` in `(0, 1]`), so it
+    /// holds the cell, the corners' hull: every segment from the cell
+    /// passes through a point at least `m` inside the box.
+    fn box_shadows_cell(&self, b: u32, p: DVec3, (clo, chi): (DVec3, DVec3), scale: f64) -> bool {
+        let bx = &self.boxes[b as usize].0;
+        let m = 1e-7 * scale;
+        let (slo, shi) = (bx.lo + DVec3::splat(m), bx.hi - DVec3::splat(m));
+        if (shi - slo).min_element() <= 0.0 {
+            return false;
+        }
+        let p_out = (bx.lo - p).max(p - bx.hi).max_element() > m;
+        let cell_out = (bx.lo - chi).max(clo - bx.hi).max_element() > m;
+        p_out
+            && cell_out
+            && corners(clo, chi)
+                .iter()
+                .all(|&c| segment_meets_box(p, c, slo, shi))
+    }
+
     /// The shape's own test of the open segment `a b` (out of line; the
     /// segment's direction and length computed only for the shapes whose
     /// tests take them, meshes and SH objects).
@@ -368,6 +505,33 @@ impl Scene {
             }
         }
     }
+}
+
+/// The mask of [`Scene::cell_visibility`] for a cell that one solid box
+/// shadows wholly from the receiver.
+pub const CELL_DARK: u64 = u64::MAX;
+
+/// The bit of [`Scene::cell_visibility`]'s mask that stands for every
+/// occluder from this index on.
+pub const CELL_REST: u32 = 62;
+
+/// Whether the closed segment from `a` to `b` meets the box `[lo, hi]`
+/// (the slab test over `t` in `[0, 1]`).
+fn segment_meets_box(a: DVec3, b: DVec3, lo: DVec3, hi: DVec3) -> bool {
+    let d = b - a;
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for k in 0..3 {
+        if d[k] == 0.0 {
+            if a[k] < lo[k] || a[k] > hi[k] {
+                return false;
+            }
+            continue;
+        }
+        let (ta, tb) = ((lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]);
+        t0 = t0.max(ta.min(tb));
+        t1 = t1.min(ta.max(tb));
+    }
+    t0 <= t1
 }
 
 /// The eight corners of the box `[lo, hi]`.

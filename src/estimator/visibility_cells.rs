@@ -1,0 +1,130 @@
+//! Visibility cells (issue 15, fast rooms): one receiver list's region cut
+//! into a grid of boxes, and per (cell, entry) which of the entry's
+//! occluders can shadow a segment from the cell to it
+//! ([`Scene::cell_visibility`]): most pairs then need no shadow test at all
+//! (no occluder meets the hull of the cell and the receiver), and a cell
+//! behind a cabinet from a wall point needs none either (a solid box
+//! shadows all of it, [`crate::scene::world::CELL_DARK`]). The answers are
+//! those of the entry's whole occluder list, pair by pair, so scores do not
+//! depend on whether cells were built.
+
+use crate::scene::Scene;
+use crate::scene::world::Occluder;
+use glam::DVec3;
+
+/// Most cells along a region's longest side.
+const CELLS_PER_SIDE: usize = 12;
+
+/// One list's cells and their masks.
+#[derive(Clone, Debug)]
+pub(super) struct VisibilityCells {
+    /// The region's low corner [m] and cells per metre along each axis.
+    lo: DVec3,
+    inv: DVec3,
+    n: [usize; 3],
+    /// Entries of the list.
+    len: usize,
+    /// Per cell (x fastest), per entry: the mask of
+    /// [`Scene::cell_visibility`].
+    vis: Vec<u64>,
+}
+
+impl VisibilityCells {
+    /// The cell counts along each axis for a region of extents `e` [m]
+    /// with at most `per_side` cells along its longest side (1 along a
+    /// side under a thousandth of a cell).
+    fn counts(e: DVec3, per_side: usize) -> [usize; 3] {
+        let side = e.max_element() / per_side as f64;
+        std::array::from_fn(|a| {
+            if side > 0.0 && e[a] > 1e-3 * side {
+                ((e[a] / side).ceil() as usize).clamp(1, per_side)
+            } else {
+                1
+            }
+        })
+    }
+
+    /// Number of masks the cells of a region would take for `len`
+    /// entries, at most `per_side` cells along the longest side.
+    pub(super) fn size(region: (DVec3, DVec3), len: usize, per_side: usize) -> usize {
+        let n = Self::counts(region.1 - region.0, per_side);
+        n[0] * n[1] * n[2] * len
+    }
+
+    /// The cells of `region` [m] for entries at `points` whose occluders
+    /// are `occ[start[k]..start[k + 1]]`, at most `per_side` cells along
+    /// the longest side (default [`CELLS_PER_SIDE`] through
+    /// [`Self::per_side`]).
+    pub(super) fn build(
+        scene: &Scene,
+        region: (DVec3, DVec3),
+        points: &[DVec3],
+        start: &[u32],
+        occ: &[Occluder],
+        per_side: usize,
+    ) -> Self {
+        let (lo, hi) = region;
+        let e = hi - lo;
+        let n = Self::counts(e, per_side);
+        let step = e / DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64);
+        let inv = DVec3::new(
+            if e.x > 0.0 { n[0] as f64 / e.x } else { 0.0 },
+            if e.y > 0.0 { n[1] as f64 / e.y } else { 0.0 },
+            if e.z > 0.0 { n[2] as f64 / e.z } else { 0.0 },
+        );
+        let len = points.len();
+        let mut vis = Vec::with_capacity(n[0] * n[1] * n[2] * len);
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for i in 0..n[0] {
+                    let idx = [i, j, k];
+                    // The cell's box; the last along an axis ends at the
+                    // region's own bound.
+                    let c0 =
+                        DVec3::from_array(std::array::from_fn(|a| lo[a] + step[a] * idx[a] as f64));
+                    let c1 = DVec3::from_array(std::array::from_fn(|a| {
+                        if idx[a] + 1 == n[a] {
+                            hi[a]
+                        } else {
+                            lo[a] + step[a] * (idx[a] + 1) as f64
+                        }
+                    }));
+                    for (e, p) in points.iter().enumerate() {
+                        let o = &occ[start[e] as usize..start[e + 1] as usize];
+                        vis.push(if o.is_empty() {
+                            0
+                        } else {
+                            scene.cell_visibility(*p, o, (c0, c1))
+                        });
+                    }
+                }
+            }
+        }
+        Self {
+            lo,
+            inv,
+            n,
+            len,
+            vis,
+        }
+    }
+
+    /// The default most cells along a region's longest side.
+    pub(super) fn per_side() -> usize {
+        CELLS_PER_SIDE
+    }
+
+    /// The masks of the cell holding `x` [m] (a point of the region; one
+    /// outside by rounding is taken to the nearest cell, whose box the
+    /// masks were made for grown by the occluder lists' margin).
+    #[inline(always)]
+    pub(super) fn row(&self, x: DVec3) -> &[u64] {
+        let r = (x - self.lo) * self.inv;
+        // `as` saturates: negative (and NaN) to 0.
+        let i = (r.x as usize).min(self.n[0] - 1);
+        let j = (r.y as usize).min(self.n[1] - 1);
+        let k = (r.z as usize).min(self.n[2] - 1);
+        let c = (k * self.n[1] + j) * self.n[0] + i;
+        &self.vis[c * self.len..(c + 1) * self.len]
+    }
+}
