@@ -69,6 +69,13 @@ impl Rect {
     pub fn area(&self) -> f64 {
         self.e1.cross(self.e2).length()
     }
+
+    /// The coordinates `(u, v)` of a point of the plane (`p = o + u e1 +
+    /// v e2`; the shape is `u, v` in `[0, 1]`).
+    pub fn uv(&self, p: DVec3) -> (f64, f64) {
+        let q = p - self.o;
+        (self.b1.dot(q), self.b2.dot(q))
+    }
 }
 
 impl Flat for Rect {

@@ -427,14 +427,68 @@ impl Scene {
             {
                 continue;
             }
-            if let Prim::Box(b) = o.prim
-                && self.box_shadows_cell(b, p, (clo - g, chi + g), scale)
-            {
+            let grown = (clo - g, chi + g);
+            let dark = match o.prim {
+                Prim::Box(b) => self.box_shadows_cell(b, p, grown, scale),
+                Prim::Rect(_) | Prim::Disc(_) => self.flat_shadows_cell(o.prim, p, grown, scale),
+                _ => false,
+            };
+            if dark {
                 return CELL_DARK;
             }
             mask |= 1 << (i as u32).min(CELL_REST);
         }
         mask
+    }
+
+    /// Whether the rectangle or disc `prim` crosses every segment from a
+    /// point of the box `cell` to `p`, with the margin `m = 1e-7 scale` of
+    /// [`Self::box_shadows_cell`]: `p` lies more than `m` from its plane,
+    /// the cell's eight corners more than `m` on the other side, and the
+    /// segment from `p` to each corner crosses the plane inside the shape
+    /// shrunk by a relative `1e-7` (`u, v` of a rectangle in `[1e-7,
+    /// 1 - 1e-7]`, a disc's radius times `1 - 1e-7`). The same convexity
+    /// argument gives every segment from the cell a point of the shrunk
+    /// shape, its one crossing of the plane; the shape's test (ends
+    /// strictly on opposite sides, the crossing point inside, both far
+    /// beyond its tolerances) then finds it.
+    fn flat_shadows_cell(
+        &self,
+        prim: Prim,
+        p: DVec3,
+        (clo, chi): (DVec3, DVec3),
+        scale: f64,
+    ) -> bool {
+        const SHRINK: f64 = 1e-7;
+        let m = 1e-7 * scale;
+        let pl = match prim {
+            Prim::Rect(i) => self.rects[i as usize].0.plane,
+            Prim::Disc(i) => self.discs[i as usize].0.plane,
+            _ => return false,
+        };
+        let sp = pl.signed_distance(p);
+        if sp.abs() <= m {
+            return false;
+        }
+        corners(clo, chi).iter().all(|&c| {
+            let sc = pl.signed_distance(c);
+            if sc * sp.signum() >= -m {
+                return false;
+            }
+            let y = p + (c - p) * (sp / (sp - sc));
+            match prim {
+                Prim::Rect(i) => {
+                    let (u, v) = self.rects[i as usize].0.uv(y);
+                    (SHRINK..=1.0 - SHRINK).contains(&u) && (SHRINK..=1.0 - SHRINK).contains(&v)
+                }
+                Prim::Disc(i) => {
+                    let d = &self.discs[i as usize].0;
+                    let r = d.r * (1.0 - SHRINK);
+                    (y - d.plane.p).length_squared() <= r * r
+                }
+                _ => false,
+            }
+        })
     }
 
     /// Whether the box `b` never crosses a segment from a point of the
