@@ -273,8 +273,14 @@ impl AaBox {
         Plane::new(p, Self::outward_normal(f))
     }
 
+    /// [`ON_REL`] of the largest extent, and at least 64 ulps of the
+    /// largest coordinate: a small box far from the origin would otherwise
+    /// have a tolerance below the rounding of its own coordinates (its
+    /// shrunk box in [`Self::crosses`] rounding back to the box, so that a
+    /// segment along a face plane would count as crossing it).
     fn tol(&self) -> f64 {
-        ON_REL * (self.hi - self.lo).max_element()
+        let ulps = 64.0 * f64::EPSILON * self.lo.abs().max(self.hi.abs()).max_element();
+        (ON_REL * (self.hi - self.lo).max_element()).max(ulps)
     }
 
     /// The distance [m] within which a point counts as on the surface

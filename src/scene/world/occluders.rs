@@ -626,7 +626,17 @@ fn rect_pyramid(r: &crate::geometry::shapes::Rect, p: DVec3, slack: f64) -> [DVe
     let o = r.o - r.e1 * g1 - r.e2 * g2;
     let (a, b) = (r.e1 * (1.0 + 2.0 * g1), r.e2 * (1.0 + 2.0 * g2));
     let c = [o, o + a, o + a + b, o + b];
-    if r.plane.signed_distance(p).abs() <= slack {
+    // A receiver (almost) in the rectangle's plane: no pyramid (zero
+    // normals skip nothing; the box test takes over). The planes' normals
+    // are cross products of nearly parallel vectors of length up to `L`
+    // there, rounded by about `eps L^2 / edge` against a margin of `slack
+    // s / L` (`s` the receiver's distance from the plane), so the pyramid
+    // is kept only with a thousandfold safety, `s slack edge >= 1e3 eps
+    // L^3`.
+    let s = r.plane.signed_distance(p).abs();
+    // (Finite corners and receiver, checked at load: the fold drops no NaN.)
+    let l = c.iter().map(|&q| (q - p).length()).fold(0.0, f64::max);
+    if s <= slack || s * slack * l1.min(l2) < 1e3 * f64::EPSILON * l * l * l {
         return [DVec3::ZERO; 4];
     }
     let centre = o + 0.5 * (a + b);
