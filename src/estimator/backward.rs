@@ -598,6 +598,7 @@ fn next_event(
         wo,
         hm: scene.side_mask(h.p),
         from: Some((h.surface, h.prim)),
+        seen: std::cell::Cell::new(None),
     };
     let (mut nee, mut p_b) = (0.0, 0.0);
     match scene.vertex_light_array() {
@@ -636,17 +637,28 @@ struct VertexLight<'a> {
     /// The vertex's side mask.
     hm: crate::geometry::SideMask,
     from: Option<(u32, u32)>,
+    /// The last light whose centre was tested, and the answer.
+    seen: std::cell::Cell<Option<(usize, bool)>>,
 }
 
 impl VertexLight<'_> {
     /// Whether light `k`'s centre sees the vertex: the photons of strategy
     /// B leave from there, and a point source is lit through it.
+    /// (Kept for the last light asked: next-event estimation and strategy
+    /// B's density ask for the same light in turn.)
     fn center_seen(&self, k: usize) -> bool {
+        if let Some((last, seen)) = self.seen.get()
+            && last == k
+        {
+            return seen;
+        }
         let (scene, l) = (self.scene, &self.scene.lights[k]);
-        scene.side_mask(l.position()).sees(self.hm)
+        let seen = scene.side_mask(l.position()).sees(self.hm)
             && !scene.behind_light_surface(k, self.h.p)
             && (scene.planes_only()
-                || !scene.blocked_by_shapes(self.h.p, self.from, l.position(), 0))
+                || !scene.blocked_by_shapes(self.h.p, self.from, l.position(), 0));
+        self.seen.set(Some((k, seen)));
+        seen
     }
 
     /// Strategy B's density [1/m^2] at the vertex due to light `k` (see
@@ -660,17 +672,23 @@ impl VertexLight<'_> {
         let dist2 = to_c.length_squared();
         let dist = dist2.sqrt();
         let cos_l = h.n.dot(to_c) / dist;
-        if !(cos_l > 0.0 && self.center_seen(k)) {
+        if !(cos_l > 0.0) {
             return 0.0;
         }
         let total = scene.total_power();
-        match l {
+        let density = match l {
             // The photon's direction density towards `h`, per solid angle.
             Light::Gonio { .. } | Light::Spot(_) => {
                 l.power() / total * l.photon_pdf(-to_c / dist) * cos_l / dist2
             }
             _ => l.power() / total * cos_l / (4.0 * PI * dist2),
+        };
+        // (The shadow test only where it matters: a zero density is zero
+        // either way.)
+        if density == 0.0 || !self.center_seen(k) {
+            return 0.0;
         }
+        density
     }
 
     /// Next-event estimate from light `k` alone (per unit path weight).
@@ -761,11 +779,10 @@ impl VertexLight<'_> {
         let dist = to_c.length();
         match *l {
             Light::Point { .. } | Light::Gonio { .. } | Light::Spot(_) => {
-                if !self.center_seen(k) {
-                    return 0.0;
-                }
+                // (The shadow test only for light that arrives: a source
+                // that sends nothing this way, the back of the vertex.)
                 let e = l.direct_illuminance(h.p, h.n);
-                if e > 0.0 {
+                if e > 0.0 && self.center_seen(k) {
                     return m.eval(f_frame.to_local(to_c / dist), wo) * e;
                 }
                 0.0
