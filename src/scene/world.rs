@@ -281,6 +281,10 @@ pub struct Scene {
     panes: Vec<Pane>,
     /// The top-level BVH over the finite shapes, when built ([`Accel`]).
     tree: Option<ShapeTree>,
+    /// Without the tree: the finite shapes in the order of
+    /// [`Self::finite_prims`], each with its padded box (the tree's leaf
+    /// boxes, which hold everything the shape's test can report).
+    loop_prims: Vec<(Prim, DVec3, DVec3)>,
     /// Light sources.
     pub lights: Vec<Light>,
     /// The lights' names, for messages and summaries (the scene file's
@@ -457,6 +461,7 @@ impl Scene {
             shs: Vec::new(),
             panes: Vec::new(),
             tree: None,
+            loop_prims: Vec::new(),
             lights: Vec::new(),
             light_names: Vec::new(),
             notes: Vec::new(),
@@ -1276,6 +1281,17 @@ impl Scene {
             Accel::Auto => n >= AUTO_MIN_SHAPES,
         };
         self.tree = if build { ShapeTree::build(&self) } else { None };
+        self.loop_prims = if build {
+            Vec::new()
+        } else {
+            self.finite_prims()
+                .into_iter()
+                .map(|p| {
+                    let (lo, hi) = shape_tree::padded(shape_tree::prim_bounds(&self, p));
+                    (p, lo, hi)
+                })
+                .collect()
+        };
         self
     }
 
@@ -1342,14 +1358,14 @@ impl Scene {
                 let q = RayQuery::new(a, b - a);
                 tree.bvh.any(&q, 0.0, 1.0, |pos| blocks(tree.prims[pos]))
             }
+            // Each shape whose padded box the segment's box meets (exact
+            // comparisons: a shape it does not meet cannot report a
+            // crossing), in the fixed order.
             None => {
-                let n = |k: usize| 0..k as u32;
-                n(self.rects.len()).any(|i| blocks(Prim::Rect(i)))
-                    || n(self.discs.len()).any(|i| blocks(Prim::Disc(i)))
-                    || n(self.spheres.len()).any(|i| blocks(Prim::Sphere(i)))
-                    || n(self.boxes.len()).any(|i| blocks(Prim::Box(i)))
-                    || n(self.meshes.len()).any(|i| blocks(Prim::Mesh(i)))
-                    || n(self.shs.len()).any(|i| blocks(Prim::Sh(i)))
+                let (lo, hi) = (a.min(b), a.max(b));
+                self.loop_prims
+                    .iter()
+                    .any(|&(p, plo, phi)| lo.cmple(phi).all() && hi.cmpge(plo).all() && blocks(p))
             }
         }
     }
