@@ -672,7 +672,7 @@ impl VertexLight<'_> {
         let dist2 = to_c.length_squared();
         let dist = dist2.sqrt();
         let cos_l = h.n.dot(to_c) / dist;
-        if !(cos_l > 0.0) {
+        if cos_l.is_nan() || cos_l <= 0.0 {
             return 0.0;
         }
         let total = scene.total_power();
