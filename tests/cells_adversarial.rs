@@ -106,6 +106,33 @@ fn check_cell(
     (pairs, (mask == CELL_DARK) as usize)
 }
 
+/// Print one offset's mismatches by kind, and the first.
+fn report_offset(o: DVec3, mism: &[String]) {
+    let kinds = |k: &str| mism.iter().filter(|m| m.starts_with(k)).count();
+    let dark_wrong = mism.iter().filter(|m| m.contains("cell true")).count();
+    eprintln!(
+        "offset {o}: {} mismatches ({} cell only, {} list too, {} cell says blocked)",
+        mism.len(),
+        kinds("CELL-ONLY"),
+        kinds("LIST-TOO"),
+        dark_wrong
+    );
+    if let Some(m) = mism.first() {
+        eprintln!("  first: {m}");
+    }
+}
+
+/// Print the totals and the first mismatches.
+fn report_total(pairs: usize, dark: usize, mism: &[String]) {
+    eprintln!(
+        "{pairs} pairs, {dark} dark cells, {} mismatches",
+        mism.len()
+    );
+    for m in mism.iter().take(10) {
+        eprintln!("{m}");
+    }
+}
+
 /// A tilted rectangle, a small box, a tilted disc, far from the origin
 /// (offset `o`), plus a light.
 fn far_scene(o: DVec3, name: &str) -> Scene {
@@ -212,29 +239,9 @@ fn behind_small_shapes(offsets: &[DVec3], grazing: bool) -> Vec<String> {
             pairs += k;
             dark += d;
         }
-        let kinds = |k: &str| mism[before..].iter().filter(|m| m.starts_with(k)).count();
-        let dark_wrong = mism[before..]
-            .iter()
-            .filter(|m| m.contains("cell true"))
-            .count();
-        eprintln!(
-            "offset {o}: {} mismatches ({} cell only, {} list too, {} cell says blocked)",
-            mism.len() - before,
-            kinds("CELL-ONLY"),
-            kinds("LIST-TOO"),
-            dark_wrong
-        );
-        if mism.len() > before {
-            eprintln!("  first: {}", mism[before]);
-        }
+        report_offset(o, &mism[before..]);
     }
-    eprintln!(
-        "{pairs} pairs, {dark} dark cells, {} mismatches",
-        mism.len()
-    );
-    for m in mism.iter().take(10) {
-        eprintln!("{m}");
-    }
+    report_total(pairs, dark, &mism);
     assert!(dark > 500, "{dark}");
     mism
 }
@@ -330,30 +337,9 @@ fn on_box_face_planes(offsets: &[DVec3]) -> Vec<String> {
             pairs += k;
             dark += d;
         }
-        let kinds = |k: &str| mism[before..].iter().filter(|m| m.starts_with(k)).count();
-        let dark_wrong = mism[before..]
-            .iter()
-            .filter(|m| m.contains("cell true"))
-            .count();
-        eprintln!(
-            "offset {o}: {} mismatches ({} cell only, {} list too, {} cell says blocked)",
-            mism.len() - before,
-            kinds("CELL-ONLY"),
-            kinds("LIST-TOO"),
-            dark_wrong
-        );
-        if mism.len() > before {
-            eprintln!("  first: {}", mism[before]);
-        }
+        report_offset(o, &mism[before..]);
     }
-    eprintln!(
-        "{pairs} pairs, {dark} dark cells, {} mismatches",
-        mism.len()
-    );
-    for m in mism.iter().take(10) {
-        eprintln!("{m}");
-    }
-    let _ = dark;
+    report_total(pairs, dark, &mism);
     mism
 }
 

@@ -186,11 +186,7 @@ impl Scene {
             };
             // A flat shape never blocks a receiver in its plane (the exact
             // test needs the end points strictly on opposite sides).
-            let flat = match prim {
-                Prim::Rect(i) => Some(self.rects[i as usize].0.plane),
-                Prim::Disc(i) => Some(self.discs[i as usize].0.plane),
-                _ => None,
-            };
+            let flat = self.flat_plane(prim);
             if flat.is_some_and(|pl| pl.side(p) == 0) {
                 continue;
             }
@@ -258,11 +254,7 @@ impl Scene {
         // A flat shape: its own plane, from the receiver's side (a segment
         // that stays on one side never crosses it), unless the receiver
         // lies within the margin of that plane.
-        let flat = match prim {
-            Prim::Rect(i) => Some(self.rects[i as usize].0.plane),
-            Prim::Disc(i) => Some(self.discs[i as usize].0.plane),
-            _ => None,
-        };
+        let flat = self.flat_plane(prim);
         if let Some(pl) = flat {
             let s = pl.signed_distance(p);
             if s.abs() > slack {
@@ -345,16 +337,23 @@ impl Scene {
         false
     }
 
+    /// The supporting plane of a rectangle or disc; `None` for other shapes.
+    fn flat_plane(&self, prim: Prim) -> Option<crate::geometry::Plane> {
+        match prim {
+            Prim::Rect(i) => Some(self.rects[i as usize].0.plane),
+            Prim::Disc(i) => Some(self.discs[i as usize].0.plane),
+            _ => None,
+        }
+    }
+
     /// Whether `o` is a rectangle or disc whose plane is `support` (the
     /// same normal and offset, either way round; a receiver list's support
     /// plane): it never blocks a segment from a collision on that list's
     /// surfaces, which lie on its plane (its test needs the ends strictly
     /// on opposite sides).
     pub fn flat_in_plane(&self, o: &Occluder, support: crate::geometry::Plane) -> bool {
-        let pl = match o.prim {
-            Prim::Rect(i) => self.rects[i as usize].0.plane,
-            Prim::Disc(i) => self.discs[i as usize].0.plane,
-            _ => return false,
+        let Some(pl) = self.flat_plane(o.prim) else {
+            return false;
         };
         (pl.n == support.n && pl.c == support.c) || (pl.n == -support.n && pl.c == -support.c)
     }
@@ -461,10 +460,8 @@ impl Scene {
     ) -> bool {
         const SHRINK: f64 = 1e-7;
         let m = 1e-7 * scale;
-        let pl = match prim {
-            Prim::Rect(i) => self.rects[i as usize].0.plane,
-            Prim::Disc(i) => self.discs[i as usize].0.plane,
-            _ => return false,
+        let Some(pl) = self.flat_plane(prim) else {
+            return false;
         };
         let sp = pl.signed_distance(p);
         if sp.abs() <= m {
