@@ -1,6 +1,7 @@
 //! `mpirun -np 2 lumest illuminance ... --mpi` gives the single process's
 //! CSV byte for byte (issue 15 item 5b), also with `--rel-error` planned
-//! across ranks. Built and run only with `--features mpi` (`.ci/run`
+//! across ranks and with `--rms-error` planned on the run's own first
+//! batches. Built and run only with `--features mpi` (`.ci/run`
 //! installs OpenMPI and runs it).
 #![cfg(feature = "mpi")]
 
@@ -14,16 +15,43 @@ fn data(f: &str) -> String {
 fn mpirun_two_ranks_give_the_single_process_bytes() {
     let dir = tempfile::tempdir().unwrap();
     let bin = env!("CARGO_BIN_EXE_lumest");
-    for (stop, value) in [("--chains", "60000"), ("--rel-error", "4e-3")] {
+    // A 20 x 20 grid on the Sobolev plane: enough effective points for an
+    // RMS target to be planned on the run's own first 32 batches, which
+    // every rank runs to plan alike.
+    let grid = dir.path().join("grid.csv");
+    let mut text = String::from("x,y,z,nx,ny,nz\n");
+    for i in 0..20 {
+        for j in 0..20 {
+            let (x, y) = (-3.0 + 0.3 * (i as f64 + 0.5), -3.0 + 0.3 * (j as f64 + 0.5));
+            text += &format!("{x},{y},0,0,0,1\n");
+        }
+    }
+    std::fs::write(&grid, text).unwrap();
+    let grid = grid.to_string_lossy().into_owned();
+    for (scene, points, stop, value) in [
+        (
+            data("office.toml"),
+            data("office_grid.csv"),
+            "--chains",
+            "60000",
+        ),
+        (
+            data("office.toml"),
+            data("office_grid.csv"),
+            "--rel-error",
+            "4e-3",
+        ),
+        (data("sobolev.toml"), grid.clone(), "--rms-error", "3e-3"),
+    ] {
         let one = dir.path().join("one.csv");
         let two = dir.path().join("two.csv");
         let base = |out: &std::path::Path| {
             vec![
                 "illuminance".to_string(),
                 "--scene".into(),
-                data("office.toml"),
+                scene.clone(),
                 "--points".into(),
-                data("office_grid.csv"),
+                points.clone(),
                 stop.into(),
                 value.into(),
                 "--seed".into(),
@@ -34,7 +62,11 @@ fn mpirun_two_ranks_give_the_single_process_bytes() {
             ]
         };
         let o = Command::new(bin).args(base(&one)).output().unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        if stop == "--rms-error" {
+            assert!(err.contains("the run's first 32 batches"), "{err}");
+        }
         let mut args = vec![
             "--allow-run-as-root".to_string(),
             "--oversubscribe".into(),

@@ -113,3 +113,66 @@ fn planned_batch_size_is_reproducible() {
     let (_, again) = sobolev_run(p, 4, 1.0, &fixed);
     assert_eq!(bits(&one), bits(&again));
 }
+
+/// An `--rms-error` run over many points plans from its own first 32
+/// batches: it plans alike on any thread count, its result is that of a
+/// `--chains` run of the planned batches at the planned size, and its
+/// shards (each runs the first 32 batches to plan, and keeps its own)
+/// fold to the same result.
+#[test]
+fn calibrated_rms_plan_is_reproducible_and_shards_alike() {
+    let p = (0.5, 0.5, 0.5, 0.5);
+    let cfg = |t| RunConfig {
+        seed: 13,
+        threads: t,
+        stop: Stop {
+            rel_error: Some(1e-3),
+            rms: true,
+            time: Some(120.0),
+            ..Stop::default()
+        },
+        ..RunConfig::default()
+    };
+    let n = 60;
+    let (case, one) = sobolev_run(p, n, 3.0, &cfg(1));
+    let (_, three) = sobolev_run(p, n, 3.0, &cfg(3));
+    assert_eq!(one.reason, lumest::run::StopReason::RelError);
+    let pilot = one.pilot.expect("a pilot");
+    assert_eq!(pilot.calibration, 32, "{pilot:?}");
+    assert!(pilot.planned > 32, "{pilot:?}");
+    assert_eq!(one.tallies.batches(), pilot.planned);
+    assert!(one.tallies.rms_rel_error(&one.direct) <= 1e-3);
+    assert_eq!(bits(&one), bits(&three));
+    let fixed = RunConfig {
+        batch_size: Some(one.batch_size),
+        ..chains_cfg(one.chains, 13, 2)
+    };
+    let (_, again) = sobolev_run(p, n, 3.0, &fixed);
+    assert_eq!(bits(&one), bits(&again));
+    // Three shards, folded in batch order.
+    let rec = lumest::estimator::Receivers::new(&case.scene, &case.points).unwrap();
+    let mut batches = Vec::new();
+    let mut checks = None;
+    for i in 0..3 {
+        let shard = RunConfig {
+            shard: Some((i, 3)),
+            stop: Stop {
+                time: None,
+                ..cfg(2).stop
+            },
+            ..cfg(2)
+        };
+        let r = lumest::estimator::local::run(&case.scene, &rec, &shard, &mut |_| true);
+        assert_eq!(r.total_batches, pilot.planned);
+        batches.extend(r.batches);
+        checks.get_or_insert(r.tallies);
+    }
+    batches.sort_by_key(|b| b.index);
+    assert_eq!(batches.len() as u64, pilot.planned);
+    let folded = lumest::run::fold_batches(checks.unwrap(), &one.direct, one.batch_size, &batches);
+    assert_eq!(folded.estimated.len(), one.tallies.estimated.len());
+    for (a, b) in folded.estimated.iter().zip(&one.tallies.estimated) {
+        assert_eq!(a.mean().to_bits(), b.mean().to_bits());
+        assert_eq!(a.std_error().to_bits(), b.std_error().to_bits());
+    }
+}

@@ -7,10 +7,11 @@
 //! on a regular grid 0.5 m below the ceiling, turned by 0..359 degrees;
 //! 10,000 illuminance points (100 x 100) on the work plane 0.75 m above
 //! the floor. For each mode the local estimator runs to an RMS relative
-//! standard error of 1 % (`--rms-error 0.01`: a pilot, then fresh
-//! batches), and the table gives the set-up time (compiling the receivers:
-//! the exact direct light is summed there), the run's wall time, their sum
-//! (time to 1 % RMS), chains, chains/s, the RMS relative error reached,
+//! standard error of 1 % (`--rms-error 0.01`: a pilot, then a count
+//! planned on the run's own first 32 batches, [`crate::run`]), and the
+//! table gives the set-up time (compiling the receivers: the exact direct
+//! light is summed there), the run's wall time, their sum (time to 1 %
+//! RMS), chains, chains/s, the RMS relative error reached,
 //! FOM = 1/(R^2 T) over the total time and the process's peak resident
 //! memory after the mode (`VmHWM`: a high-water mark, so it never falls
 //! from one row to the next). A run that stops at the cap (`--time`,

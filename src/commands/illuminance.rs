@@ -379,28 +379,48 @@ pub fn summary(r: &RunResult) -> String {
         } else {
             ("--rel-error", "max", max)
         };
+        let measured = if p.calibration > 0 {
+            format!(
+                "\n{flag} {target:.3e}: the run's first {} batches of {} chains (sized by a pilot of \
+                 {} chains on their own streams, {:.3} s) gave {what} R {:.3e} (margin {:.3} for {:.0} \
+                 degrees of freedom), so {} batches were planned in all, those {} included",
+                p.calibration,
+                p.batch_size,
+                format_number(p.pilot_chains as f64),
+                p.wall,
+                p.rel_error,
+                crate::run::variance_margin(p.dof),
+                p.dof,
+                format_number(p.planned as f64),
+                p.calibration,
+            )
+        } else {
+            format!(
+                "\n{flag} {target:.3e}: a pilot of {} batches of {} chains ({:.3} s, own streams{}) \
+                 gave {what} R {:.3e} per batch of {} (margin {:.3} for {:.0} degrees of freedom), so \
+                 {} fresh batches were planned",
+                p.batches,
+                p.batch_size,
+                p.wall,
+                if p.stages > 1 {
+                    format!(
+                        ", after a first stage of batches of {} chains that sized it; variance per \
+                         chain taken to fall like batch size^-{:.3}",
+                        crate::run::MIN_TIMED_BATCH,
+                        p.fall
+                    )
+                } else {
+                    String::new()
+                },
+                p.rel_error,
+                r.batch_size,
+                crate::run::variance_margin(p.dof),
+                p.dof,
+                format_number(p.planned as f64),
+            )
+        };
         text += &format!(
-            "\n{flag} {target:.3e}: a pilot of {} batches of {} chains ({:.3} s, own streams{}) \
-             gave {what} R {:.3e} per batch of {} (margin {:.3} for {:.0} degrees of freedom), so {} \
-             fresh batches were planned; achieved {what} R {max:.3e}{}",
-            p.batches,
-            p.batch_size,
-            p.wall,
-            if p.stages > 1 {
-                format!(
-                    ", after a first stage of batches of {} chains that sized it; variance per \
-                     chain taken to fall like batch size^-{:.3}",
-                    crate::run::MIN_TIMED_BATCH,
-                    p.fall
-                )
-            } else {
-                String::new()
-            },
-            p.rel_error,
-            r.batch_size,
-            crate::run::variance_margin(p.dof),
-            p.dof,
-            format_number(p.planned as f64),
+            "{measured}; achieved {what} R {max:.3e}{}",
             if max <= target {
                 " (target met)".to_string()
             } else if r.reason == crate::run::StopReason::Time {

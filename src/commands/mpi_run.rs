@@ -1,7 +1,8 @@
 //! `mpirun -np R lumest illuminance ... --mpi`: the batches of a run over R
 //! MPI ranks. Rank r runs shard r/R ([`super::merge::shard_state`]: batches
 //! r, r + R, ...; with `--rel-error` every rank runs the same deterministic
-//! pilot and plans alike), sends its state to rank 0, which folds all the
+//! pilot and plans alike, and with an `--rms-error` planned on the run's
+//! own first 32 batches every rank runs those, [`crate::run`]), sends its state to rank 0, which folds all the
 //! batches in index order ([`super::merge::merge_states`]) and writes
 //! `--out`: byte for byte what one process writes. Built only with the
 //! cargo feature `mpi` (the `mpi` crate over the system's MPI library).

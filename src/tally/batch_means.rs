@@ -52,6 +52,23 @@ impl BatchMeans {
         }
     }
 
+    /// Keep only receivers `0 .. receivers` (no change when that is not
+    /// fewer): the store a run that kept those from the start would hold.
+    pub fn truncate(&mut self, receivers: usize) {
+        if receivers >= self.receivers {
+            return;
+        }
+        let batches = self.batches();
+        let mut kept = Vec::with_capacity(batches * receivers);
+        for b in 0..batches {
+            kept.extend_from_slice(&self.batch(b)[..receivers]);
+        }
+        *self = Self {
+            receivers,
+            values: kept,
+        };
+    }
+
     /// Batch `b`'s means, one per kept receiver.
     pub fn batch(&self, b: usize) -> &[f64] {
         &self.values[b * self.receivers..(b + 1) * self.receivers]
@@ -75,5 +92,26 @@ mod tests {
         let mut none = BatchMeans::new(0);
         none.record(0, 1.0);
         assert_eq!(none.batches(), 0);
+    }
+
+    /// Truncated to fewer receivers, the store equals one that kept those
+    /// receivers from the start; to more or as many, it is unchanged.
+    #[test]
+    fn truncate_keeps_the_first_receivers() {
+        let rows = [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]];
+        let mut all = BatchMeans::new(3);
+        let mut one = BatchMeans::new(1);
+        for row in rows {
+            for (j, x) in row.into_iter().enumerate() {
+                all.record(j, x);
+                one.record(j, x);
+            }
+        }
+        let before = all.clone();
+        all.truncate(3);
+        assert_eq!(all, before);
+        all.truncate(1);
+        assert_eq!(all, one);
+        assert_eq!(all.batch(1), &[4.0]);
     }
 }
