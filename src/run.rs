@@ -110,9 +110,12 @@
 //! hardly moves with any one receiver's mean, and measured on skewed
 //! batch means (`tests/rel_error_rule.rs`) the means stay unbiased and
 //! the intervals cover as a fixed count's do. The result is still
-//! bit-identical to `--chains B * bs --batch-size bs`. Every shard runs the
-//! 32 calibrating batches itself, so that all plan alike, and keeps its own
-//! among them: a shard costs `32 + (B - 32) / M` batches, not `B / M`. On
+//! bit-identical to `--chains B * bs --batch-size bs`. A shard run alone
+//! (`--shard`) traces the 32 calibrating batches itself, so that all plan
+//! alike, and keeps its own among them: it costs `32 + (B - 32) / M`
+//! batches, not `B / M`. Shards that run at once (MPI ranks) share them out
+//! instead ([`RunConfig::share`]): each traces its own and they exchange
+//! them. On
 //! the grid: about 15 effective receivers, `q` about 1.09, and 1.1-1.2
 //! times the least chains with the pilot (`tests/batch_plan.rs`).
 //!
@@ -215,6 +218,23 @@ pub struct RunConfig {
     /// What the `rel_error` rule's pilot measures, in place of the largest
     /// (or RMS) relative error; `None`: that error.
     pub pilot_measure: Option<PilotMeasure>,
+    /// With `shard`: how the shards share the batches an RMS plan is
+    /// measured on (module docs), each tracing its own among them; `None`:
+    /// every shard traces them all.
+    pub share: Option<Share>,
+}
+
+/// How shards that run at once (MPI ranks) share the batches an RMS plan
+/// is measured on: given this shard's own batches among them, the
+/// function returns every shard's (in any order). It is called once, on
+/// the thread that called [`drive`], by every shard alike.
+#[derive(Clone)]
+pub struct Share(pub std::sync::Arc<dyn Fn(Vec<Batch>) -> Vec<Batch> + Send + Sync>);
+
+impl std::fmt::Debug for Share {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Share(..)")
+    }
 }
 
 /// A caller's measure of a pilot run's precision for the two-stage
@@ -255,6 +275,7 @@ impl Default for RunConfig {
             resume: None,
             keep_batch_means: 0,
             pilot_measure: None,
+            share: None,
         }
     }
 }
@@ -538,6 +559,9 @@ pub struct Pilot {
     /// `batches`, `batch_size`, `rel_error` and `dof` are then theirs, and
     /// `planned` counts them. 0: the plan came from the pilot alone.
     pub calibration: u64,
+    /// Of those, the batches this process traced: all of them, or a
+    /// shard's own where the shards share them ([`RunConfig::share`]).
+    pub calibration_traced: u64,
 }
 
 /// Batches of the run proper that an RMS target's plan is measured on
@@ -959,6 +983,7 @@ pub fn drive(
         stages,
         pilot_chains,
         calibration: 0,
+        calibration_traced: 0,
     };
     if calibrate {
         return calibrated_run(work, &capped, bs, by_chains, start, observe, plan);
@@ -993,9 +1018,10 @@ pub fn drive(
 /// (module docs): its first [`CALIBRATION_BATCHES`] batches of `bs` chains
 /// measure the RMS relative error and its degrees of freedom at the run's
 /// own batch size, and the plan `B = max(32, ceil(32 (R_c / target)^2
-/// q))` counts them; the estimate keeps them. Every shard runs the
+/// q))` counts them; the estimate keeps them. Every shard traces the
 /// calibrating batches itself (so that all plan alike) and keeps its own
-/// among them. `plan` holds what the pilot measured; it is completed here.
+/// among them, or, with [`RunConfig::share`], traces its own and receives
+/// the others'. `plan` holds what the pilot measured; it is completed here.
 fn calibrated_run(
     work: &dyn BatchWork,
     capped: &RunConfig,
@@ -1015,18 +1041,43 @@ fn calibrated_run(
         r
     };
     // The calibrating batches: folded with every receiver's batch means
-    // (a whole run), or unfolded, all of them (a shard).
+    // (a whole run), or unfolded (a shard): all of them, or the shard's
+    // own where the shards share them.
+    let shared = capped.shard.and(capped.share.clone());
     let cal_cfg = RunConfig {
         keep_batch_means: n.max(keep),
-        shard: capped.shard.map(|_| (0, 1)),
+        shard: capped
+            .shard
+            .map(|s| if shared.is_some() { s } else { (0, 1) }),
         ..capped.clone()
     };
-    let first = drive_batches(work, &cal_cfg, bs, cal, start, observe, None);
+    let mut first = drive_batches(work, &cal_cfg, bs, cal, start, observe, None);
+    plan.calibration_traced = first.batches.len() as u64;
+    if capped.shard.is_none() {
+        plan.calibration_traced = first.tallies.batches();
+    }
+    let mut everyone = Vec::new();
+    if let Some(share) = shared
+        .as_ref()
+        .filter(|_| first.reason == StopReason::Chains)
+    {
+        everyone = (share.0)(first.batches.clone());
+        everyone.sort_by_key(|b| b.index);
+        assert!(
+            everyone.iter().map(|b| b.index).eq(0..cal),
+            "the shards shared batches other than 0 .. {cal}"
+        );
+    }
     let folded;
     let measured = if capped.shard.is_some() {
         let mut t = Tallies::new(n, capped.orders);
         t.batch_means = crate::tally::BatchMeans::new(n);
-        folded = fold_batches(t, direct, bs, &first.batches);
+        let all = if shared.is_some() {
+            &everyone
+        } else {
+            &first.batches
+        };
+        folded = fold_batches(t, direct, bs, all);
         &folded
     } else {
         &first.tallies
@@ -1054,8 +1105,7 @@ fn calibrated_run(
             batches: Vec::new(),
         },
         Some((i, m)) => {
-            let own: Vec<Batch> = first
-                .batches
+            let own: Vec<Batch> = std::mem::take(&mut first.batches)
                 .into_iter()
                 .filter(|b| b.index % m == i)
                 .collect();

@@ -17,7 +17,7 @@ fn mpirun_two_ranks_give_the_single_process_bytes() {
     let bin = env!("CARGO_BIN_EXE_lumest");
     // A 20 x 20 grid on the Sobolev plane: enough effective points for an
     // RMS target to be planned on the run's own first 32 batches, which
-    // every rank runs to plan alike.
+    // the ranks share out and exchange to plan alike.
     let grid = dir.path().join("grid.csv");
     let mut text = String::from("x,y,z,nx,ny,nz\n");
     for i in 0..20 {
@@ -83,6 +83,14 @@ fn mpirun_two_ranks_give_the_single_process_bytes() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success(), "{err}");
         assert!(err.contains("2 MPI rank(s)"), "{err}");
+        if stop == "--rms-error" {
+            // The ranks shared the planning batches: each traced half.
+            assert_eq!(
+                err.matches("traced 16 of the 32 batches").count(),
+                2,
+                "{err}"
+            );
+        }
         let (a, b) = (std::fs::read(&one).unwrap(), std::fs::read(&two).unwrap());
         assert!(
             a.len() > 1000 && a == b,

@@ -117,8 +117,8 @@ fn planned_batch_size_is_reproducible() {
 /// An `--rms-error` run over many points plans from its own first 32
 /// batches: it plans alike on any thread count, its result is that of a
 /// `--chains` run of the planned batches at the planned size, and its
-/// shards (each runs the first 32 batches to plan, and keeps its own)
-/// fold to the same result.
+/// shards (each runs the first 32 batches to plan, and keeps its own, or
+/// they share those out) fold to the same result.
 #[test]
 fn calibrated_rms_plan_is_reproducible_and_shards_alike() {
     let p = (0.5, 0.5, 0.5, 0.5);
@@ -164,14 +164,67 @@ fn calibrated_rms_plan_is_reproducible_and_shards_alike() {
         };
         let r = lumest::estimator::local::run(&case.scene, &rec, &shard, &mut |_| true);
         assert_eq!(r.total_batches, pilot.planned);
+        assert_eq!(r.pilot.as_ref().map(|p| p.calibration_traced), Some(32));
         batches.extend(r.batches);
         checks.get_or_insert(r.tallies);
     }
     batches.sort_by_key(|b| b.index);
     assert_eq!(batches.len() as u64, pilot.planned);
-    let folded = lumest::run::fold_batches(checks.unwrap(), &one.direct, one.batch_size, &batches);
+    let folded = lumest::run::fold_batches(
+        checks.clone().unwrap(),
+        &one.direct,
+        one.batch_size,
+        &batches,
+    );
     assert_eq!(folded.estimated.len(), one.tallies.estimated.len());
     for (a, b) in folded.estimated.iter().zip(&one.tallies.estimated) {
+        assert_eq!(a.mean().to_bits(), b.mean().to_bits());
+        assert_eq!(a.std_error().to_bits(), b.std_error().to_bits());
+    }
+    // Three shards at once that share the planning batches (as MPI ranks
+    // do, here through memory): each traces its own 10 or 11 of the 32,
+    // and the fold is the same again.
+    let pool = std::sync::Arc::new((
+        std::sync::Mutex::new(Vec::new()),
+        std::sync::Barrier::new(3),
+    ));
+    let share = {
+        let pool = pool.clone();
+        lumest::run::Share(std::sync::Arc::new(move |own| {
+            pool.0.lock().unwrap().extend(own);
+            pool.1.wait();
+            let all = pool.0.lock().unwrap().clone();
+            pool.1.wait();
+            all
+        }))
+    };
+    let shared: Vec<lumest::run::RunResult> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..3)
+            .map(|i| {
+                let shard = RunConfig {
+                    shard: Some((i, 3)),
+                    share: Some(share.clone()),
+                    stop: Stop {
+                        time: None,
+                        ..cfg(1).stop
+                    },
+                    ..cfg(1)
+                };
+                let (scene, rec) = (&case.scene, &rec);
+                s.spawn(move || lumest::estimator::local::run(scene, rec, &shard, &mut |_| true))
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let mut batches = Vec::new();
+    for (i, r) in shared.into_iter().enumerate() {
+        let p = r.pilot.expect("a pilot");
+        assert_eq!(p.calibration_traced, if i < 2 { 11 } else { 10 }, "{p:?}");
+        batches.extend(r.batches);
+    }
+    batches.sort_by_key(|b| b.index);
+    let again = lumest::run::fold_batches(checks.unwrap(), &one.direct, one.batch_size, &batches);
+    for (a, b) in again.estimated.iter().zip(&one.tallies.estimated) {
         assert_eq!(a.mean().to_bits(), b.mean().to_bits());
         assert_eq!(a.std_error().to_bits(), b.std_error().to_bits());
     }

@@ -48,7 +48,7 @@ pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
         &[a.scene.as_path(), Path::new(&a.points)],
         &[("--out", Path::new(&a.out))],
     )?;
-    let state = shard_state(a, i, m)?;
+    let state = shard_state(a, i, m, None)?;
     write_atomic_with(&a.out, |w| state.write(w)).with_context(|| format!("writing {}", a.out))?;
     eprintln!(
         "lumest: shard {i}/{m}: {} of {} batches ({} chains each), {:.3} s; state written to {}",
@@ -64,8 +64,15 @@ pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
 /// The state of shard `i` of `m` of the run `a` describes (batches `i, i +
 /// m, ...` of a `--chains` run; with `--rel-error`, every shard runs the
 /// same pilot, which is deterministic, and then its share of the planned
-/// batches).
-pub fn shard_state(a: &IlluminanceArgs, i: u64, m: u64) -> anyhow::Result<ShardState> {
+/// batches). `share`: how shards running at once share the batches an RMS
+/// plan is measured on ([`crate::run::RunConfig::share`]); `None`: this
+/// shard traces them all.
+pub fn shard_state(
+    a: &IlluminanceArgs,
+    i: u64,
+    m: u64,
+    share: Option<crate::run::Share>,
+) -> anyhow::Result<ShardState> {
     anyhow::ensure!(
         a.points != "-",
         "--shard reads the points from a file (every shard must read the same one), not standard input"
@@ -92,12 +99,20 @@ pub fn shard_state(a: &IlluminanceArgs, i: u64, m: u64) -> anyhow::Result<ShardS
     let table = job.points.as_ref().context("no points")?;
     super::illuminance::reserved_point_columns(table, cfg.orders, &a.points)?;
     cfg.shard = Some((i, m));
+    cfg.share = share;
     eprintln!("lumest: scene {}: {}", a.scene.display(), scene.summary());
     let r = run_job(&scene, &job, &cfg, a.estimator, a.run.quiet, None);
     anyhow::ensure!(
         !crate::io::interrupt::interrupted(),
         "interrupted: a shard is written whole or not at all (run it again)"
     );
+    if let Some(p) = r.pilot.as_ref().filter(|p| p.calibration > 0) {
+        eprintln!(
+            "lumest: shard {i}/{m}: traced {} of the {} batches the --rms-error plan was measured on \
+             ({} batches planned)",
+            p.calibration_traced, p.calibration, p.planned
+        );
+    }
     Ok(ShardState {
         run: RunIdentity {
             batches: r.total_batches,

@@ -276,6 +276,7 @@ impl RunArgs {
             resume: None,
             keep_batch_means: 0,
             pilot_measure: None,
+            share: None,
         })
     }
 }

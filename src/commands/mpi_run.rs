@@ -2,7 +2,8 @@
 //! MPI ranks. Rank r runs shard r/R ([`super::merge::shard_state`]: batches
 //! r, r + R, ...; with `--rel-error` every rank runs the same deterministic
 //! pilot and plans alike, and with an `--rms-error` planned on the run's
-//! own first 32 batches every rank runs those, [`crate::run`]), sends its state to rank 0, which folds all the
+//! own first 32 batches the ranks trace their shares of those and exchange
+//! them, [`crate::run::RunConfig::share`]), sends its state to rank 0, which folds all the
 //! batches in index order ([`super::merge::merge_states`]) and writes
 //! `--out`: byte for byte what one process writes. Built only with the
 //! cargo feature `mpi` (the `mpi` crate over the system's MPI library).
@@ -29,7 +30,33 @@ pub fn run(a: &IlluminanceArgs) -> anyhow::Result<()> {
     let t = std::time::Instant::now();
     // A rank that fails still takes part in the gather (with an empty state),
     // so that no rank waits forever; rank 0 then reports it.
-    let (bytes, failure) = match super::merge::shard_state(a, rank as u64, size as u64) {
+    // An RMS plan measured on the run's first batches: each rank traces
+    // its own among them and all ranks exchange them (called on this
+    // thread, by every rank alike).
+    let share = crate::run::Share(std::sync::Arc::new(move |own: Vec<crate::run::Batch>| {
+        let world = mpi::topology::SimpleCommunicator::world();
+        let mut bytes = Vec::new();
+        crate::tally::shard::write_batches(&mut bytes, &own).expect("writing to memory");
+        let mut lens = vec![0u64; size as usize];
+        world.all_gather_into(&(bytes.len() as u64), &mut lens[..]);
+        let counts: Vec<i32> = lens.iter().map(|&l| l as i32).collect();
+        let displs = displacements(&counts);
+        let mut all = vec![0u8; lens.iter().sum::<u64>() as usize];
+        {
+            let mut partition = PartitionMut::new(&mut all[..], counts.clone(), &displs[..]);
+            world.all_gather_varcount_into(&bytes[..], &mut partition);
+        }
+        let mut batches = Vec::new();
+        for (&d, &c) in displs.iter().zip(&counts) {
+            let mut r = &all[d as usize..(d + c) as usize];
+            batches.extend(
+                crate::tally::shard::read_batches(&mut r).expect("batches a rank wrote just now"),
+            );
+        }
+        batches
+    }));
+    let (bytes, failure) = match super::merge::shard_state(a, rank as u64, size as u64, Some(share))
+    {
         Ok(state) => {
             let mut b = Vec::new();
             state.write(&mut b)?;
@@ -49,14 +76,7 @@ pub fn run(a: &IlluminanceArgs) -> anyhow::Result<()> {
     let mut lens = vec![0u64; size as usize];
     root.gather_into_root(&len, &mut lens[..]);
     let counts: Vec<i32> = lens.iter().map(|&l| l as i32).collect();
-    let displs: Vec<i32> = counts
-        .iter()
-        .scan(0i32, |acc, &c| {
-            let d = *acc;
-            *acc += c;
-            Some(d)
-        })
-        .collect();
+    let displs = displacements(&counts);
     let mut all = vec![0u8; lens.iter().sum::<u64>() as usize];
     {
         let mut partition = PartitionMut::new(&mut all[..], counts.clone(), &displs[..]);
@@ -81,6 +101,19 @@ pub fn run(a: &IlluminanceArgs) -> anyhow::Result<()> {
         t.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// Where each rank's bytes start in a gather of `counts` bytes per rank.
+#[cfg(feature = "mpi")]
+fn displacements(counts: &[i32]) -> Vec<i32> {
+    counts
+        .iter()
+        .scan(0i32, |acc, &c| {
+            let d = *acc;
+            *acc += c;
+            Some(d)
+        })
+        .collect()
 }
 
 /// Without the `mpi` feature: a clear error.

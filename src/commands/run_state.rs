@@ -45,6 +45,7 @@ pub fn identity(
         shard: None,
         resume: None,
         batch_size: None,
+        share: None,
         ..cfg.clone()
     };
     RunIdentity {

@@ -89,15 +89,7 @@ impl ShardState {
             put_strings(&mut w, row)?;
         }
         put_u64(&mut w, self.comment_lines)?;
-        put_u64(&mut w, self.batches.len() as u64)?;
-        for b in &self.batches {
-            for x in [b.index, b.chains, b.collisions, b.scores] {
-                put_u64(&mut w, x)?;
-            }
-            put_f64v(&mut w, &b.sums)?;
-            put_f64v(&mut w, &b.direct_sums)?;
-            put_u64v(&mut w, &b.near_hits)?;
-        }
+        write_batches(&mut w, &self.batches)?;
         finish(w)
     }
 
@@ -119,21 +111,7 @@ impl ShardState {
             .map(|_| get_strings(r))
             .collect::<Result<Vec<_>, _>>()?;
         let comment_lines = get_u64(r)?;
-        let nb = get_len(r)?;
-        let mut batches = Vec::with_capacity(nb);
-        for _ in 0..nb {
-            let (index, chains, collisions, scores) =
-                (get_u64(r)?, get_u64(r)?, get_u64(r)?, get_u64(r)?);
-            batches.push(Batch {
-                index,
-                chains,
-                sums: get_f64v(r)?,
-                collisions,
-                scores,
-                direct_sums: get_f64v(r)?,
-                near_hits: get_u64v(r)?,
-            });
-        }
+        let batches = read_batches(r)?;
         if !body.is_empty() {
             return Err(StateError::Damaged(format!(
                 "{} bytes after the last batch",
@@ -152,6 +130,41 @@ impl ShardState {
             batches,
         })
     }
+}
+
+/// Write batches as a state holds them: their count, then each batch's
+/// index, chains, collisions, scores, sums, direct sums and near hits.
+pub fn write_batches<W: Write>(w: &mut W, batches: &[Batch]) -> io::Result<()> {
+    put_u64(w, batches.len() as u64)?;
+    for b in batches {
+        for x in [b.index, b.chains, b.collisions, b.scores] {
+            put_u64(w, x)?;
+        }
+        put_f64v(w, &b.sums)?;
+        put_f64v(w, &b.direct_sums)?;
+        put_u64v(w, &b.near_hits)?;
+    }
+    Ok(())
+}
+
+/// Read batches written by [`write_batches`] from the front of `r`.
+pub fn read_batches(r: &mut &[u8]) -> Result<Vec<Batch>, StateError> {
+    let nb = get_len(r)?;
+    let mut batches = Vec::with_capacity(nb);
+    for _ in 0..nb {
+        let (index, chains, collisions, scores) =
+            (get_u64(r)?, get_u64(r)?, get_u64(r)?, get_u64(r)?);
+        batches.push(Batch {
+            index,
+            chains,
+            sums: get_f64v(r)?,
+            collisions,
+            scores,
+            direct_sums: get_f64v(r)?,
+            near_hits: get_u64v(r)?,
+        });
+    }
+    Ok(batches)
 }
 
 #[cfg(test)]
