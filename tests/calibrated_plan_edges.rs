@@ -249,7 +249,6 @@ fn a_time_capped_calibrated_run_is_consistent() {
 /// near the whole calibration's plan, not the count of 32 batches at the
 /// error of `k` (about 32 / k times too many).
 #[test]
-#[ignore = "bug: the plan of an interrupted calibration counts 32 batches at the error of k"]
 fn an_interrupted_calibration_reports_the_plan_its_batches_give() {
     let whole = run(&rms_cfg(13, 1)).pilot.unwrap();
     for k in [8u64, 16] {
