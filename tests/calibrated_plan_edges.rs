@@ -277,7 +277,6 @@ fn an_interrupted_calibration_reports_the_plan_its_batches_give() {
 /// it runs for every shard) returns only its own batches, with their
 /// chains, as a shard stopped later does.
 #[test]
-#[ignore = "bug: an interrupted calibrating shard returns every shard's batches"]
 fn an_interrupted_calibrating_shard_returns_only_its_own_batches() {
     for stop_after in [10u64, 40] {
         let mut calls = 0u64;
