@@ -1088,10 +1088,26 @@ fn calibrated_run(
     plan.rel_error = r_c;
     plan.dof = rms_dof(measured, direct);
     plan.calibration = measured.batches();
-    plan.planned = planned_batches_with(cal, r_c, plan.target, variance_margin(plan.dof));
+    // From the batches measured: all `cal` of them, unless the observer
+    // stopped the run first.
+    plan.planned = planned_batches_with(
+        plan.calibration,
+        r_c,
+        plan.target,
+        variance_margin(plan.dof),
+    );
     let per_chain = (first.wall - plan.wall) / first.chains.max(1) as f64;
     plan.estimated_time = per_chain * plan.planned as f64 * bs as f64;
     if first.reason != StopReason::Chains {
+        // Stopped early (by the observer), a shard still returns only its
+        // own batches.
+        let mut first = first;
+        if let Some((i, m)) = capped.shard {
+            first.batches.retain(|b| b.index % m == i);
+            first.chains = first.batches.iter().map(|b| b.chains).sum();
+            first.collisions = first.batches.iter().map(|b| b.collisions).sum();
+            first.scores = first.batches.iter().map(|b| b.scores).sum();
+        }
         return finish(first, plan);
     }
     let mut prior = match capped.shard {
