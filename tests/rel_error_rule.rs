@@ -348,11 +348,12 @@ impl BatchWork for SkewedMany {
 /// the batches it keeps. With 256 skewed receivers (lognormal batch means,
 /// skewness 2.3, a tenth of the log-variance shared) the tails cut the
 /// effective receivers, so the pilot lets most runs but not all calibrate
-/// (at least 80 %). Over the calibrated runs the means stay unbiased within
-/// 3.5 standard errors (the error of each run's mean over its receivers,
-/// over 1,500 runs), the 95 % intervals cover 95 +- 2.5 % of the
-/// receivers and within 0.5 % of what runs of a fixed count cover, and
-/// most runs meet the target.
+/// (at least 80 %). Over the calibrated runs the mean error is within 3.5
+/// standard errors of 0 (the error of each run's mean over its receivers,
+/// over 1,500 runs: a bias of about 1/m of one receiver's 0.66 %, below
+/// what this test resolves, is expected; see `lumest::run`), the 95 %
+/// intervals cover 95 +- 2.5 % of the receivers and within 0.5 % of what
+/// runs of a fixed count cover, and most runs meet the target.
 #[test]
 fn calibrated_rms_rule_is_unbiased_and_calibrated_on_skewed_batch_means() {
     const CAL_RUNS: u64 = 1500;
