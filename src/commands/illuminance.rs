@@ -426,13 +426,18 @@ pub fn summary(r: &RunResult) -> String {
             } else if r.reason == crate::run::StopReason::Time {
                 format!(
                     " (target MISSED: stopped by {}; the {} planned batches need about {:.3e} s at \
-                     the pilot's pace; the estimate and its error bar are unbiased)",
+                     the pace of {}; the estimate and its error bar hold)",
                     p.default_cap.map_or_else(
                         || "--time".to_string(),
                         |c| format!("the default time limit of {c:.0} s (no --time was given)")
                     ),
                     format_number(p.planned as f64),
-                    p.estimated_time
+                    p.estimated_time,
+                    if p.calibration > 0 {
+                        "the run's first batches"
+                    } else {
+                        "the pilot"
+                    }
                 )
             } else {
                 format!(
