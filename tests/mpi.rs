@@ -98,3 +98,47 @@ fn mpirun_two_ranks_give_the_single_process_bytes() {
         );
     }
 }
+
+/// An output that rank 0 refuses (here the points file itself) stops every
+/// rank with rank 0's message, rather than leaving the others waiting in
+/// the gather (`timeout` ends a hang with status 124).
+#[test]
+fn a_refused_output_stops_every_rank() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("points.csv");
+    std::fs::copy(data("office_grid.csv"), &points).unwrap();
+    let before = std::fs::read(&points).unwrap();
+    let points = points.to_string_lossy().into_owned();
+    let o = Command::new("timeout")
+        .args([
+            "120",
+            "mpirun",
+            "--allow-run-as-root",
+            "--oversubscribe",
+            "-np",
+            "2",
+            env!("CARGO_BIN_EXE_lumest"),
+            "illuminance",
+            "--scene",
+            &data("office.toml"),
+            "--points",
+            &points,
+            "--chains",
+            "10000",
+            "--quiet",
+            "--out",
+            &points,
+            "--mpi",
+        ])
+        .output()
+        .expect("timeout and mpirun on the PATH");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_ne!(o.status.code(), Some(124), "the ranks hung: {err}");
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("--out"), "{err}");
+    assert_eq!(
+        std::fs::read(&points).unwrap(),
+        before,
+        "the input was overwritten"
+    );
+}

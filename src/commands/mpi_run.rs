@@ -21,11 +21,21 @@ pub fn run(a: &IlluminanceArgs) -> anyhow::Result<()> {
     let world = universe.world();
     let (rank, size) = (world.rank(), world.size());
     let root = world.process_at_rank(0);
-    if rank == 0 {
+    // Rank 0 checks the output (it alone writes it) and tells the others,
+    // so that a refused output stops every rank rather than leaving them
+    // waiting in the gather.
+    let check = if rank == 0 {
         super::outputs::check_outputs(
             &[a.scene.as_path(), std::path::Path::new(&a.points)],
             &[("--out", std::path::Path::new(&a.out))],
-        )?;
+        )
+    } else {
+        Ok(())
+    };
+    let mut refused = u8::from(check.is_err());
+    root.broadcast_into(&mut refused);
+    if refused != 0 {
+        return check;
     }
     let t = std::time::Instant::now();
     // A rank that fails still takes part in the gather (with an empty state),
