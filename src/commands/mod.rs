@@ -66,8 +66,10 @@ pub struct RunArgs {
         conflicts_with = "rms_error"
     )]
     pub rel_error: Option<f64>,
-    /// Stop when the root mean square of the points' relative standard
-    /// errors is below this (the same pilot rule as `--rel-error`).
+    /// Aim at a root mean square of the points' relative standard errors
+    /// below this: over several effective points, a count planned on the
+    /// run's own first 32 batches (kept); otherwise the pilot rule of
+    /// `--rel-error` (see `lumest::run`).
     #[arg(long = "rms-error", allow_negative_numbers = true)]
     pub rms_error: Option<f64>,
     /// Seed of the random streams.
