@@ -1056,10 +1056,10 @@ fn calibrated_run(
         ..capped.clone()
     };
     let mut first = drive_batches(work, &cal_cfg, bs, cal, start, observe, None);
-    plan.calibration_traced = first.batches.len() as u64;
-    if capped.shard.is_none() {
-        plan.calibration_traced = first.tallies.batches();
-    }
+    plan.calibration_traced = match capped.shard {
+        Some(_) => first.batches.len() as u64,
+        None => first.tallies.batches(),
+    };
     let mut everyone = Vec::new();
     if let Some(share) = shared
         .as_ref()
@@ -1102,46 +1102,29 @@ fn calibrated_run(
     );
     let per_chain = (first.wall - plan.wall) / first.chains.max(1) as f64;
     plan.estimated_time = per_chain * plan.planned as f64 * bs as f64;
+    // A shard keeps only its own among the calibrating batches, with their
+    // counts (a no-op where the shards shared them out).
+    if let Some((i, m)) = capped.shard {
+        first.batches.retain(|b| b.index % m == i);
+        first.chains = first.batches.iter().map(|b| b.chains).sum();
+        first.collisions = first.batches.iter().map(|b| b.collisions).sum();
+        first.scores = first.batches.iter().map(|b| b.scores).sum();
+    }
+    // Stopped early (by the observer): what was done is the result.
     if first.reason != StopReason::Chains {
-        // Stopped early (by the observer), a shard still returns only its
-        // own batches.
-        if let Some((i, m)) = capped.shard {
-            first.batches.retain(|b| b.index % m == i);
-            first.chains = first.batches.iter().map(|b| b.chains).sum();
-            first.collisions = first.batches.iter().map(|b| b.collisions).sum();
-            first.scores = first.batches.iter().map(|b| b.scores).sum();
-        }
         return finish(first, plan);
     }
-    let mut prior = match capped.shard {
-        None => Prior {
-            folded: first.tallies.batches(),
-            chains: first.chains,
-            collisions: first.collisions,
-            scores: first.scores,
-            wall: 0.0,
-            tallies: Some(first.tallies),
-            batches: Vec::new(),
-        },
-        Some((i, m)) => {
-            let own: Vec<Batch> = std::mem::take(&mut first.batches)
-                .into_iter()
-                .filter(|b| b.index % m == i)
-                .collect();
-            Prior {
-                folded: cal,
-                chains: own.iter().map(|b| b.chains).sum(),
-                collisions: own.iter().map(|b| b.collisions).sum(),
-                scores: own.iter().map(|b| b.scores).sum(),
-                wall: 0.0,
-                tallies: None,
-                batches: own,
-            }
-        }
+    let mut tallies = first.tallies;
+    tallies.batch_means.truncate(keep);
+    let prior = Prior {
+        folded: cal,
+        chains: first.chains,
+        collisions: first.collisions,
+        scores: first.scores,
+        wall: 0.0,
+        tallies: capped.shard.is_none().then_some(tallies),
+        batches: first.batches,
     };
-    if let Some(t) = prior.tallies.as_mut() {
-        t.batch_means.truncate(keep);
-    }
     let total = plan.planned.min(by_chains);
     let mut result = drive_batches(work, capped, bs, total, start, observe, Some(prior));
     if result.reason == StopReason::Chains && plan.planned <= by_chains {

@@ -19,13 +19,20 @@ const SIGMA: f64 = 0.6;
 const TARGET: f64 = 0.08;
 const RUNS: u64 = 4000;
 
+/// A standard normal draw from `rng` (Box-Muller; 1 - u1 lies in (0, 1]).
+fn normal(rng: &mut Philox4x32) -> f64 {
+    let [u1, u2] = rng.next_2d();
+    (-2.0 * (1.0 - u1).ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// The lognormal batch mean (mean exactly 1) of the standard normal `z`.
+fn lognormal_of(z: f64) -> f64 {
+    (SIGMA * z - 0.5 * SIGMA * SIGMA).exp()
+}
+
 /// Lognormal batch mean of batch `b` on the stream of `seed`: mean 1.
 fn lognormal(seed: u64, b: u64) -> f64 {
-    let mut rng = Philox4x32::new(seed, b);
-    let [u1, u2] = rng.next_2d();
-    // Box-Muller; 1 - u1 lies in (0, 1].
-    let z = (-2.0 * (1.0 - u1).ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
-    (SIGMA * z - 0.5 * SIGMA * SIGMA).exp()
+    lognormal_of(normal(&mut Philox4x32::new(seed, b)))
 }
 
 /// One receiver with lognormal batch means and no exact part.
@@ -319,15 +326,11 @@ impl BatchWork for SkewedMany {
     }
     fn run_batch(&self, cfg: &RunConfig, b: u64, bs: u64, _k: usize, _s: &mut [f64]) -> Batch {
         let mut rng = Philox4x32::new(cfg.seed, b);
-        let mut normal = || {
-            let [u1, u2] = rng.next_2d();
-            (-2.0 * (1.0 - u1).ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-        };
-        let common = normal();
+        let common = normal(&mut rng);
         let sums = (0..MANY)
             .map(|_| {
-                let z = SHARED.sqrt() * common + (1.0 - SHARED).sqrt() * normal();
-                bs as f64 * (SIGMA * z - 0.5 * SIGMA * SIGMA).exp()
+                let z = SHARED.sqrt() * common + (1.0 - SHARED).sqrt() * normal(&mut rng);
+                bs as f64 * lognormal_of(z)
             })
             .collect();
         Batch {
