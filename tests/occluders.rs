@@ -267,7 +267,7 @@ fn every_shape_kind_agrees_with_the_full_test() {
 /// Runs `scene` with its shapes on loops (occluder lists) and in the shape
 /// tree (every shape tested) at `points`: the same chains, scores and bits
 /// of every point's estimate and standard error, and light at every point
-/// (the comparison is not of zeros).
+/// and the same near-hit counts (the comparison is not of zeros).
 fn assert_lists_match_tree(scene: Scene, points: &[(DVec3, DVec3)], chains: u64, seed: u64) {
     let lists = scene.clone().with_accel(Accel::Never);
     let tree = scene.with_accel(Accel::Always);
@@ -289,6 +289,8 @@ fn assert_lists_match_tree(scene: Scene, points: &[(DVec3, DVec3)], chains: u64,
     };
     assert_eq!((a.chains, a.scores), (b.chains, b.scores));
     assert_eq!(bits(&a), bits(&b));
+    // The counted chains' near hits too (the kernels' `COUNT` paths).
+    assert_eq!(a.tallies.near_hits, b.tallies.near_hits);
     assert!((0..points.len()).all(|j| a.tallies.estimated[j].mean() > 0.0));
 }
 

@@ -806,9 +806,14 @@ impl Receivers {
                         return None;
                     }
                     let mut side = visibility_cells::VisibilityCells::per_side();
+                    let split = if list.flat { list.n_const } else { 0 };
                     loop {
-                        let size =
-                            visibility_cells::VisibilityCells::size(region, list.idx.len(), side);
+                        let size = visibility_cells::VisibilityCells::size(
+                            region,
+                            list.idx.len(),
+                            split,
+                            side,
+                        );
                         if masks + size <= MAX_CELL_MASKS {
                             masks += size;
                             return Some((region, side));
@@ -833,6 +838,7 @@ impl Receivers {
                         &list.occ_start,
                         &list.occ,
                         side,
+                        list.flat.then_some(&list.w[..list.n_const]),
                     ));
                 }
             });
@@ -1141,7 +1147,7 @@ impl Receivers {
                     && c.n.dot(c.wi) > 0.0 =>
             {
                 let from = Some((c.surface, c.prim));
-                let cell = list.cells.as_ref().map(|g| g.row(x));
+                let cell = list.cells.as_ref();
                 if counting {
                     occluded_kernel::score_occluded::<true>(
                         scene,

@@ -12,6 +12,7 @@
 // one call, after the run-time check.
 #![allow(unsafe_code)]
 
+use super::visibility_cells::VisibilityCells;
 use super::{ReceiverList, kernel_parts};
 use crate::scene::Scene;
 use glam::DVec3;
@@ -19,14 +20,14 @@ use glam::DVec3;
 /// Score a collision at `x` (front normal `n`, on `from`, inside the
 /// spheres and boxes `x_inside`; weight `q`, BRDF `f`) into the
 /// constant-response entries of `list` (`acc`, `near` their stretches),
-/// with no plane in the way and occluder lists built (and `cell`, the
-/// masks of the visibility cell holding `x`, where the list has cells);
+/// with no plane in the way and occluder lists built (and `cells`, the
+/// list's visibility cells, where it has them);
 /// count it in `near` where it scores from within the watched radius.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn score_occluded<const COUNT: bool>(
     scene: &Scene,
     list: &ReceiverList,
-    cell: Option<&[u64]>,
+    cells: Option<&VisibilityCells>,
     x: DVec3,
     n: DVec3,
     from: Option<(u32, u32)>,
@@ -39,11 +40,11 @@ pub(super) fn score_occluded<const COUNT: bool>(
     if super::open_kernel::active_kernel() == super::open_kernel::Kernel::Avx2 {
         // SAFETY: the CPU has AVX2 and FMA (checked by `active_kernel`).
         unsafe {
-            score_occluded_avx2::<COUNT>(scene, list, cell, x, n, from, x_inside, qf, acc, near)
+            score_occluded_avx2::<COUNT>(scene, list, cells, x, n, from, x_inside, qf, acc, near)
         };
         return;
     }
-    score_occluded_body::<COUNT>(scene, list, cell, x, n, from, x_inside, qf, acc, near);
+    score_occluded_body::<COUNT>(scene, list, cells, x, n, from, x_inside, qf, acc, near);
 }
 
 /// [`score_occluded_body`] compiled for AVX2 and FMA (the same bits: Rust
@@ -54,7 +55,7 @@ pub(super) fn score_occluded<const COUNT: bool>(
 unsafe fn score_occluded_avx2<const COUNT: bool>(
     scene: &Scene,
     list: &ReceiverList,
-    cell: Option<&[u64]>,
+    cells: Option<&VisibilityCells>,
     x: DVec3,
     n: DVec3,
     from: Option<(u32, u32)>,
@@ -63,7 +64,7 @@ unsafe fn score_occluded_avx2<const COUNT: bool>(
     acc: &mut [f64],
     near: &mut [f64],
 ) {
-    score_occluded_body::<COUNT>(scene, list, cell, x, n, from, x_inside, qf, acc, near);
+    score_occluded_body::<COUNT>(scene, list, cells, x, n, from, x_inside, qf, acc, near);
 }
 
 #[inline(always)]
@@ -71,7 +72,7 @@ unsafe fn score_occluded_avx2<const COUNT: bool>(
 fn score_occluded_body<const COUNT: bool>(
     scene: &Scene,
     list: &ReceiverList,
-    cell: Option<&[u64]>,
+    cells: Option<&VisibilityCells>,
     x: DVec3,
     n: DVec3,
     from: Option<(u32, u32)>,
@@ -80,6 +81,21 @@ fn score_occluded_body<const COUNT: bool>(
     acc: &mut [f64],
     near: &mut [f64],
 ) {
+    if let Some((open_w, tests, row)) = cells.and_then(|c| c.split(x)) {
+        return score_split::<COUNT>(
+            scene,
+            list,
+            (open_w, tests, row),
+            x,
+            n,
+            from,
+            x_inside,
+            (q, f),
+            acc,
+            near,
+        );
+    }
+    let cell = cells.map(|c| c.row(x));
     // Two passes per block of entries: the kernels (straight-line code over
     // the structure of arrays, which the compiler vectorises), then the
     // shadow tests of the pairs that score.
@@ -149,5 +165,101 @@ fn score_occluded_body<const COUNT: bool>(
             }
         }
         start = end;
+    }
+}
+
+/// [`score_occluded_body`] on a flat list whose cells were split
+/// ([`VisibilityCells::split`]): the pairs no occluder can shadow from the
+/// collision's cell score in one straight-line pass over the structure of
+/// arrays (`open_w`: their responses, 0 for the rest), and only the pairs
+/// in `tests` take a shadow test. Each entry gets the same term as the
+/// per-pair loop, `q f g w`, or nothing (a dark pair, or a test that finds
+/// a shadow), so the sums are the same bits. A counted chain (`COUNT`)
+/// takes the open pairs from the cell's masks (`row`, 0 where open), so
+/// that an open entry of response 0 is counted as the per-pair loop does.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn score_split<const COUNT: bool>(
+    scene: &Scene,
+    list: &ReceiverList,
+    (open_w, tests, row): (&[f64], &[(u32, u64)], &[u64]),
+    x: DVec3,
+    n: DVec3,
+    from: Option<(u32, u32)>,
+    x_inside: u64,
+    (q, f): (f64, f64),
+    acc: &mut [f64],
+    near: &mut [f64],
+) {
+    let qf = q * f;
+    let len = acc.len();
+    let it = acc
+        .iter_mut()
+        .zip(open_w)
+        .zip(
+            list.px[..len]
+                .iter()
+                .zip(&list.py[..len])
+                .zip(&list.pz[..len]),
+        )
+        .zip(
+            list.nx[..len]
+                .iter()
+                .zip(&list.ny[..len])
+                .zip(&list.nz[..len]),
+        );
+    if COUNT {
+        let it = it
+            .zip(list.eps2[..len].iter().zip(&list.watch2[..len]))
+            .zip(near.iter_mut().zip(row));
+        for (((((a, w), ((px, py), pz)), ((nx, ny), nz)), (e2, w2)), (c, m)) in it {
+            let [cx, cp, dd] = kernel_parts(x, n, [*px, *py, *pz], [*nx, *ny, *nz]);
+            let g = if cx > 0.0 && cp > 0.0 {
+                cx * cp / (dd * dd)
+            } else {
+                0.0
+            };
+            if *m == 0 && g != 0.0 && dd >= *e2 {
+                *a += qf * g * w;
+                if dd < *w2 {
+                    *c += 1.0;
+                }
+            }
+        }
+    } else {
+        for ((((a, w), ((px, py), pz)), ((nx, ny), nz)), e2) in it.zip(&list.eps2[..len]) {
+            let [cx, cp, dd] = kernel_parts(x, n, [*px, *py, *pz], [*nx, *ny, *nz]);
+            let g = if cx > 0.0 && cp > 0.0 {
+                cx * cp / (dd * dd)
+            } else {
+                0.0
+            };
+            *a += if g != 0.0 && dd >= *e2 {
+                qf * g * w
+            } else {
+                0.0
+            };
+        }
+    }
+    for &(k, mask) in tests {
+        let k = k as usize;
+        let p = [list.px[k], list.py[k], list.pz[k]];
+        let [cx, cp, dd] = kernel_parts(x, n, p, [list.nx[k], list.ny[k], list.nz[k]]);
+        if !(cx > 0.0 && cp > 0.0) || dd < list.eps2[k] {
+            continue;
+        }
+        let g = cx * cp / (dd * dd);
+        if g == 0.0 {
+            continue;
+        }
+        let occ = &list.occ[list.occ_start[k] as usize..list.occ_start[k + 1] as usize];
+        let inside = x_inside & list.inside[k];
+        if scene.blocked_in_cell(x, from, DVec3::from_array(p), inside, occ, mask, dd) {
+            continue;
+        }
+        acc[k] += qf * g * list.w[k];
+        if COUNT && dd < list.watch2[k] {
+            near[k] += 1.0;
+        }
     }
 }

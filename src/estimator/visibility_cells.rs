@@ -27,6 +27,18 @@ pub(super) struct VisibilityCells {
     /// Per cell (x fastest), per entry: the mask of
     /// [`Scene::cell_visibility`].
     vis: Vec<u64>,
+    /// The constant-response entries' masks split for the two-pass kernel
+    /// (flat lists only, else empty): per cell, the response `w` of each
+    /// of the first `n_const` entries where no occluder can shadow it from
+    /// the cell (mask 0) and 0 elsewhere, so that the open pairs score in
+    /// straight-line code ...
+    open_w: Vec<f64>,
+    n_const: usize,
+    /// ... and the entries left to a shadow test, with their masks:
+    /// `tests[test_start[c]..test_start[c + 1]]` for cell `c` (a dark
+    /// entry is in neither).
+    test_start: Vec<u32>,
+    tests: Vec<(u32, u64)>,
 }
 
 impl VisibilityCells {
@@ -44,17 +56,21 @@ impl VisibilityCells {
         })
     }
 
-    /// Number of masks the cells of a region would take for `len`
-    /// entries, at most `per_side` cells along the longest side.
-    pub(super) fn size(region: (DVec3, DVec3), len: usize, per_side: usize) -> usize {
+    /// Number of 8-byte words the cells of a region would take for `len`
+    /// entries (`split` of them also split for the two-pass kernel, see
+    /// [`Self::build`]), at most `per_side` cells along the longest side;
+    /// the split's test lists not counted.
+    pub(super) fn size(region: (DVec3, DVec3), len: usize, split: usize, per_side: usize) -> usize {
         let n = Self::counts(region.1 - region.0, per_side);
-        n[0] * n[1] * n[2] * len
+        n[0] * n[1] * n[2] * (len + split)
     }
 
     /// The cells of `region` [m] for entries at `points` whose occluders
     /// are `occ[start[k]..start[k + 1]]`, at most `per_side` cells along
     /// the longest side (default [`CELLS_PER_SIDE`] through
-    /// [`Self::per_side`]).
+    /// [`Self::per_side`]); with `split = Some(w)`, the first `w.len()`
+    /// entries (of constant response `w`) are also split into open and
+    /// tested pairs per cell ([`Self::split`]).
     pub(super) fn build(
         scene: &Scene,
         region: (DVec3, DVec3),
@@ -62,6 +78,7 @@ impl VisibilityCells {
         start: &[u32],
         occ: &[Occluder],
         per_side: usize,
+        split: Option<&[f64]>,
     ) -> Self {
         let (lo, hi) = region;
         let e = hi - lo;
@@ -100,13 +117,48 @@ impl VisibilityCells {
                 }
             }
         }
+        let (mut open_w, mut test_start, mut tests) = (Vec::new(), Vec::new(), Vec::new());
+        if let Some(w) = split {
+            test_start.push(0);
+            for row in vis.chunks_exact(len.max(1)).take(n[0] * n[1] * n[2]) {
+                for (k, (&m, &w)) in row.iter().zip(w).enumerate() {
+                    open_w.push(if m == 0 { w } else { 0.0 });
+                    if m != 0 && m != crate::scene::world::CELL_DARK {
+                        tests.push((k as u32, m));
+                    }
+                }
+                test_start.push(tests.len() as u32);
+            }
+        }
         Self {
             lo,
             inv,
             n,
             len,
             vis,
+            open_w,
+            n_const: split.map_or(0, <[f64]>::len),
+            test_start,
+            tests,
         }
+    }
+
+    /// For a collision at `x` [m] (as [`Self::row`]): the open responses of
+    /// the constant-response entries, the pairs left to a shadow test
+    /// (entry, mask) and the cell's masks ([`Self::row`]); `None` unless
+    /// the cells were built split.
+    #[inline(always)]
+    pub(super) fn split(&self, x: DVec3) -> Option<(&[f64], &[(u32, u64)], &[u64])> {
+        if self.test_start.is_empty() {
+            return None;
+        }
+        let c = self.cell(x);
+        let t = self.test_start[c] as usize..self.test_start[c + 1] as usize;
+        Some((
+            &self.open_w[c * self.n_const..(c + 1) * self.n_const],
+            &self.tests[t],
+            &self.vis[c * self.len..(c + 1) * self.len],
+        ))
     }
 
     /// The default most cells along a region's longest side.
@@ -119,12 +171,18 @@ impl VisibilityCells {
     /// masks were made for grown by the occluder lists' margin).
     #[inline(always)]
     pub(super) fn row(&self, x: DVec3) -> &[u64] {
+        let c = self.cell(x);
+        &self.vis[c * self.len..(c + 1) * self.len]
+    }
+
+    /// The index of the cell holding `x` (see [`Self::row`]).
+    #[inline(always)]
+    fn cell(&self, x: DVec3) -> usize {
         let r = (x - self.lo) * self.inv;
         // `as` saturates: negative (and NaN) to 0.
         let i = (r.x as usize).min(self.n[0] - 1);
         let j = (r.y as usize).min(self.n[1] - 1);
         let k = (r.z as usize).min(self.n[2] - 1);
-        let c = (k * self.n[1] + j) * self.n[0] + i;
-        &self.vis[c * self.len..(c + 1) * self.len]
+        (k * self.n[1] + j) * self.n[0] + i
     }
 }
