@@ -12,7 +12,7 @@
 // one call, after the run-time check.
 #![allow(unsafe_code)]
 
-use super::visibility_cells::VisibilityCells;
+use super::visibility_cells::{CellSplit, VisibilityCells};
 use super::{ReceiverList, kernel_parts};
 use crate::scene::Scene;
 use glam::DVec3;
@@ -182,7 +182,7 @@ fn score_occluded_body<const COUNT: bool>(
 fn score_split<const COUNT: bool>(
     scene: &Scene,
     list: &ReceiverList,
-    (open_w, tests, row): (&[f64], &[(u32, u64)], &[u64]),
+    (open_w, tests, row): CellSplit<'_>,
     x: DVec3,
     n: DVec3,
     from: Option<(u32, u32)>,

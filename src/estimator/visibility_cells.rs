@@ -12,6 +12,10 @@ use crate::scene::Scene;
 use crate::scene::world::Occluder;
 use glam::DVec3;
 
+/// One cell's split ([`VisibilityCells::split`]): the open responses, the
+/// pairs left to a test with their masks, and the cell's masks.
+pub(super) type CellSplit<'a> = (&'a [f64], &'a [(u32, u64)], &'a [u64]);
+
 /// Most cells along a region's longest side.
 const CELLS_PER_SIDE: usize = 12;
 
@@ -148,7 +152,7 @@ impl VisibilityCells {
     /// (entry, mask) and the cell's masks ([`Self::row`]); `None` unless
     /// the cells were built split.
     #[inline(always)]
-    pub(super) fn split(&self, x: DVec3) -> Option<(&[f64], &[(u32, u64)], &[u64])> {
+    pub(super) fn split(&self, x: DVec3) -> Option<CellSplit<'_>> {
         if self.test_start.is_empty() {
             return None;
         }
