@@ -219,12 +219,10 @@ fn score_split<const COUNT: bool>(
             } else {
                 0.0
             };
-            if *m == 0 && g != 0.0 && dd >= *e2 {
-                *a += qf * g * w;
-                if dd < *w2 {
-                    *c += 1.0;
-                }
-            }
+            // (Selects, not branches, so that the loop vectorises.)
+            let open = *m == 0 && g != 0.0 && dd >= *e2;
+            *a += if open { qf * g * w } else { 0.0 };
+            *c += if open && dd < *w2 { 1.0 } else { 0.0 };
         }
     } else {
         for ((((a, w), ((px, py), pz)), ((nx, ny), nz)), e2) in it.zip(&list.eps2[..len]) {
