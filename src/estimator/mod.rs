@@ -805,7 +805,7 @@ impl Receivers {
                     if list.occ.is_empty() {
                         return None;
                     }
-                    let mut side = visibility_cells::VisibilityCells::per_side();
+                    let mut side = visibility_cells::VisibilityCells::per_side(region);
                     let split = if list.flat { list.n_const } else { 0 };
                     loop {
                         let size = visibility_cells::VisibilityCells::size(
