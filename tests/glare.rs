@@ -273,3 +273,53 @@ fn standard_room_against_the_tabular_method() {
         num("UGR_stderr")
     );
 }
+
+/// The luminous area's visible part: the isotropic luminaire above at
+/// (0, 0, 3), seen from the eye at (-3, 0, 1.2) looking along +x, with a
+/// screen 0.1 mm below its opening. A screen over `y >= 0` hides the half
+/// of the opening on that side (every sight line to it stays at `y > 0`,
+/// the eye being at `y = 0`): the term keeps its luminance and halves its
+/// solid angle. A screen over the whole opening hides it: no term. Without
+/// a screen the whole area counts.
+#[test]
+fn a_partly_hidden_luminaire_counts_the_part_the_eye_sees() {
+    use glam::DVec3;
+    use lumest::glare::{Observer, glare_term, luminous_area};
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("lum.ies"), IES).unwrap();
+    let light =
+        "[[light]]\ntype = \"ies\"\nname = \"lum\"\nfile = \"lum.ies\"\nposition = [0, 0, 3]\n";
+    let screen = |y0: f64| {
+        format!(
+            "[[surface]]\ntype = \"rectangle\"\ncorner = [-1, {y0}, 2.9999]\nedge1 = [2, 0, 0]\n\
+             edge2 = [0, {}, 0]\nsides = \"both\"\nmaterial = {{ type = \"lambertian\", reflectance = 0.5 }}\n",
+            1.0 - y0
+        )
+    };
+    let term = |extra: &str| {
+        let path = dir.path().join("s.toml");
+        std::fs::write(&path, format!("{extra}\n{light}")).unwrap();
+        let scene = lumest::scene::load(&path).unwrap();
+        let area = luminous_area(&scene.lights[0]).unwrap().unwrap();
+        let obs = Observer::new(DVec3::new(-3.0, 0.0, 1.2), DVec3::X).unwrap();
+        glare_term(&scene, 0, &area, &obs)
+    };
+    // A far-off screen, so that every scene has a surface.
+    let open = term(&screen(50.0).replace("2.9999", "-40")).unwrap();
+    let half = term(&screen(0.0)).unwrap();
+    assert_eq!(open.seen, 1.0);
+    // The hand geometry: a 0.3 m x 0.3 m opening at d from the eye.
+    let (r, h) = (3.0f64, 1.8f64);
+    let d = (r * r + h * h).sqrt();
+    let omega = 0.09 * (h / d) / (d * d);
+    assert!(
+        (open.omega / omega - 1.0).abs() < 1e-12,
+        "{} vs {omega}",
+        open.omega
+    );
+    assert_eq!(half.seen, 0.5);
+    assert_eq!(half.l, open.l);
+    assert!((half.omega / open.omega - 0.5).abs() < 1e-12);
+    assert!((half.value() / open.value() - 0.5).abs() < 1e-12);
+    assert!(term(&screen(-1.0)).is_none());
+}

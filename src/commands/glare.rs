@@ -31,7 +31,7 @@ pub struct GlareArgs {
     /// Output CSV, one row per observer (`-`: standard output).
     #[arg(long)]
     pub out: String,
-    /// Also write each luminaire's share per observer (L, omega, p) to this CSV.
+    /// Also write each luminaire's share per observer (L, omega, the seen fraction of its luminous area, p) to this CSV.
     #[arg(long = "terms-out")]
     pub terms_out: Option<String>,
     /// A UGR limit (EN 12464-1: 19 for offices): adds a `UGR_verdict`
@@ -273,9 +273,11 @@ pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
         a.out.as_str(),
     )];
     if let Some(path) = &a.terms_out {
-        let h: Vec<String> = ["observer", "light", "L", "omega", "p", "distance", "term"]
-            .map(String::from)
-            .to_vec();
+        let h: Vec<String> = [
+            "observer", "light", "L", "omega", "seen", "p", "distance", "term",
+        ]
+        .map(String::from)
+        .to_vec();
         let rows = glare.iter().enumerate().flat_map(|(j, g)| {
             let scene = &scene;
             g.terms.iter().map(move |x| {
@@ -284,6 +286,7 @@ pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
                     scene.light_names[x.light].clone(),
                     format_number(x.l),
                     format_number(x.omega),
+                    format_number(x.seen),
                     format_number(x.p),
                     format_number(x.d),
                     format_number(x.value()),

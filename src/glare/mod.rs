@@ -22,8 +22,10 @@
 //! Which luminaires count: those in front of the observer (`R > 0` along
 //! the line of sight) and at or above it (`H >= 0` along the observer's up
 //! direction: the position index is defined for the upper field; CIE 117
-//! leaves luminaires below the line of sight out), whose centre the eye
-//! sees (no surface of the scene in between).
+//! leaves luminaires below the line of sight out), of which the eye sees
+//! some part: a luminaire partly hidden (behind a screen, a beam) counts
+//! with the solid angle of the part it sees ([`visible_part`]), its
+//! luminance unchanged.
 //!
 //! Luminous areas: a goniometric luminaire's from its file (LM-63 width,
 //! length and height of the luminous sides; EULUMDAT the same fields): the
@@ -36,6 +38,7 @@
 //! are not luminaires here; their reflected light is part of `E_ind`.
 
 pub mod tabular;
+pub mod visible_part;
 
 use crate::light::{Light, LuminousOpening};
 use crate::scene::Scene;
@@ -252,8 +255,13 @@ pub struct GlareTerm {
     pub light: usize,
     /// Luminance of its luminous parts towards the eye [cd/m^2].
     pub l: f64,
-    /// Solid angle from the eye [sr].
+    /// Solid angle of its luminous parts that the eye sees [sr]: `seen`
+    /// times that of the whole parts.
     pub omega: f64,
+    /// The fraction of the luminous parts' projected area that the eye
+    /// sees ([`visible_part::visible_fraction`]; 1 when nothing is in the
+    /// way).
+    pub seen: f64,
     /// Guth's position index.
     pub p: f64,
     /// Distance from the eye to its centre [m].
@@ -286,7 +294,7 @@ fn centre_and_intensity(
 
 /// The glare term of light `k` (luminous parts `area`) for `obs`; `None`
 /// when it does not count: behind the observer or below the line of
-/// sight, hidden from the eye, dark towards it, or seen edge-on.
+/// sight, wholly hidden from the eye, dark towards it, or seen edge-on.
 pub fn glare_term(
     scene: &Scene,
     k: usize,
@@ -305,7 +313,11 @@ pub fn glare_term(
     let w = -v / d;
     let (_, i, frame) = centre_and_intensity(light, w)?;
     let a_p = area.projected(w, &frame);
-    if a_p <= 0.0 || !scene.visible(obs.eye, None, c) {
+    if a_p <= 0.0 {
+        return None;
+    }
+    let seen = visible_part::visible_fraction(scene, light, area, (c, &frame), obs.eye, w);
+    if seen <= 0.0 {
         return None;
     }
     let l = match area {
@@ -318,9 +330,10 @@ pub fn glare_term(
     Some(GlareTerm {
         light: k,
         l,
-        omega: a_p / (d * d),
+        omega: seen * a_p / (d * d),
         p: position_index(r, t, h),
         d,
+        seen,
     })
 }
 
