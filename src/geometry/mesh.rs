@@ -118,6 +118,9 @@ pub struct Mesh {
     /// the bounds: the ball there of this radius holds every triangle.
     reach: f64,
     bvh: TriangleBvh,
+    /// The box inside a closed mesh ([`super::mesh_core`]), found on first
+    /// use.
+    core: std::sync::OnceLock<Option<super::mesh_core::Core>>,
 }
 
 impl std::fmt::Debug for Mesh {
@@ -307,7 +310,23 @@ impl Mesh {
             dropped,
             reach,
             bvh,
+            core: std::sync::OnceLock::new(),
         })
+    }
+
+    /// The core of a closed mesh: a box inside the solid, whose crossing by
+    /// a shadow segment proves it blocked ([`super::mesh_core`]); `None`
+    /// for an open mesh. Found on the first call (a few passes over the
+    /// triangles).
+    pub fn core(&self) -> Option<&super::mesh_core::Core> {
+        self.core
+            .get_or_init(|| {
+                let corners: Vec<[DVec3; 3]> = (0..self.triangles.len() as u32)
+                    .map(|k| self.corners(k))
+                    .collect();
+                super::mesh_core::Core::find(&corners, &self.triangles, (self.lo, self.hi))
+            })
+            .as_ref()
     }
 
     /// The mesh moved by `x -> translate + scale * rotation * x`, BVH rebuilt.

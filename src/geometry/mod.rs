@@ -7,6 +7,7 @@
 
 pub mod bvh;
 pub mod mesh;
+pub mod mesh_core;
 pub mod sh;
 pub mod shapes;
 
@@ -134,6 +135,25 @@ impl SideMask {
     pub fn sees(self, other: SideMask) -> bool {
         (self.front & other.back) | (self.back & other.front) == 0
     }
+}
+
+/// Whether the closed segment from `a` to `b` meets the box `[lo, hi]`
+/// (the slab test over `t` in `[0, 1]`).
+pub fn segment_meets_box(a: DVec3, b: DVec3, lo: DVec3, hi: DVec3) -> bool {
+    let d = b - a;
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for k in 0..3 {
+        if d[k] == 0.0 {
+            if a[k] < lo[k] || a[k] > hi[k] {
+                return false;
+            }
+            continue;
+        }
+        let (ta, tb) = ((lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]);
+        t0 = t0.max(ta.min(tb));
+        t1 = t1.min(ta.max(tb));
+    }
+    t0 <= t1
 }
 
 #[cfg(test)]

@@ -1231,6 +1231,13 @@ impl Scene {
             // skipping the triangle `a` is on.
             Prim::Mesh(i) => {
                 let (m, s) = &self.meshes[i as usize];
+                // Through the core of a closed mesh from outside its
+                // bounds: a crossing the BVH would find (`mesh_core`).
+                if m.core()
+                    .is_some_and(|c| c.blocks(m.bounds(), a, b, MESH_REL * len))
+                {
+                    return true;
+                }
                 let skip = from.filter(|f| f.0 == *s).map(|f| f.1);
                 m.occluded(a, d, MESH_REL * len, (1.0 - MESH_REL) * len, skip)
             }

@@ -33,6 +33,7 @@
 
 use super::shape_tree::{padded, prim_bounds};
 use super::{Prim, Scene, ShapeRef, segment};
+use crate::geometry::segment_meets_box;
 use crate::geometry::shapes::EDGE_REL;
 use glam::DVec3;
 
@@ -430,6 +431,7 @@ impl Scene {
             let dark = match o.prim {
                 Prim::Box(b) => self.box_shadows_cell(b, p, grown, scale),
                 Prim::Rect(_) | Prim::Disc(_) => self.flat_shadows_cell(o.prim, p, grown, scale),
+                Prim::Mesh(i) => self.core_shadows_cell(i, p, grown, scale),
                 _ => false,
             };
             if dark {
@@ -533,6 +535,32 @@ impl Scene {
                 .all(|&c| segment_meets_box(p, c, slo, shi))
     }
 
+    /// Whether mesh `i`'s core ([`crate::geometry::mesh_core`]) proves
+    /// every segment from a point of the box `cell` to `p` blocked by the
+    /// mesh, as its shape test ([`Self::blocks`]) finds pair by pair: `p`
+    /// outside the mesh's bounds by more than the core's gap, the shadow
+    /// ray's end margin (`MESH_REL` of the longest such segment, which ends
+    /// at a corner) below the gap, and every such segment through the core
+    /// shrunk by `m = 1e-7 scale` (the corners decide, as in
+    /// [`Self::box_shadows_cell`]).
+    fn core_shadows_cell(&self, i: u32, p: DVec3, (clo, chi): (DVec3, DVec3), scale: f64) -> bool {
+        let mesh = &self.meshes[i as usize].0;
+        let Some(core) = mesh.core() else {
+            return false;
+        };
+        let (lo, hi) = mesh.bounds();
+        let m = 1e-7 * scale;
+        let (slo, shi) = (core.lo + DVec3::splat(m), core.hi - DVec3::splat(m));
+        if (shi - slo).min_element() <= 0.0 {
+            return false;
+        }
+        let cs = corners(clo, chi);
+        let far = cs.iter().map(|c| (*c - p).length()).fold(0.0, f64::max);
+        (lo - p).max(p - hi).max_element() > core.gap
+            && super::MESH_REL * far < core.gap
+            && cs.iter().all(|&c| segment_meets_box(p, c, slo, shi))
+    }
+
     /// The shape's own test of the open segment `a b` (out of line; the
     /// segment's direction and length computed only for the shapes whose
     /// tests take them, meshes and SH objects).
@@ -565,25 +593,6 @@ pub const CELL_DARK: u64 = u64::MAX;
 /// The bit of [`Scene::cell_visibility`]'s mask that stands for every
 /// occluder from this index on.
 pub const CELL_REST: u32 = 62;
-
-/// Whether the closed segment from `a` to `b` meets the box `[lo, hi]`
-/// (the slab test over `t` in `[0, 1]`).
-fn segment_meets_box(a: DVec3, b: DVec3, lo: DVec3, hi: DVec3) -> bool {
-    let d = b - a;
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for k in 0..3 {
-        if d[k] == 0.0 {
-            if a[k] < lo[k] || a[k] > hi[k] {
-                return false;
-            }
-            continue;
-        }
-        let (ta, tb) = ((lo[k] - a[k]) / d[k], (hi[k] - a[k]) / d[k]);
-        t0 = t0.max(ta.min(tb));
-        t1 = t1.min(ta.max(tb));
-    }
-    t0 <= t1
-}
 
 /// The eight corners of the box `[lo, hi]`.
 fn corners(lo: DVec3, hi: DVec3) -> [DVec3; 8] {
