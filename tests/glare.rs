@@ -323,3 +323,81 @@ fn a_partly_hidden_luminaire_counts_the_part_the_eye_sees() {
     assert!((half.value() / open.value() - 0.5).abs() < 1e-12);
     assert!(term(&screen(-1.0)).is_none());
 }
+
+/// The scene file's `[[observer]]` tables rate as the same observers given
+/// by CSV: the office's three, every result column the same text (the
+/// same chains; the eye columns are written from the numbers, `3` for the
+/// CSV's `3.0`). A vertical line of sight is refused with the file, line
+/// and field; a scene without observers and without `--observers` says
+/// how to give them.
+#[test]
+fn scene_observers_rate_as_the_csv_observers() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let run = |extra: &[&str], out: &std::path::Path| {
+        lumest()
+            .args(["glare", "--quiet", "--chains", "16384", "--scene"])
+            .arg(root.join("data/office.toml"))
+            .args(extra)
+            .arg("--out")
+            .arg(out)
+            .assert()
+            .success();
+        std::fs::read_to_string(out).unwrap()
+    };
+    let csv = root.join("data/office_observers.csv");
+    let a = run(&[], &dir.path().join("a.csv"));
+    let b = run(
+        &["--observers", csv.to_str().unwrap()],
+        &dir.path().join("b.csv"),
+    );
+    let rows = |t: &str| -> Vec<Vec<String>> {
+        t.lines()
+            .map(|l| l.split(',').map(String::from).collect())
+            .collect()
+    };
+    let (ra, rb) = (rows(&a), rows(&b));
+    assert_eq!(ra.len(), 4);
+    assert_eq!(ra[0], rb[0]);
+    for (x, y) in ra.iter().zip(&rb).skip(1) {
+        assert_eq!(x[0], y[0]);
+        for c in 1..7 {
+            assert_eq!(x[c].parse::<f64>().unwrap(), y[c].parse::<f64>().unwrap());
+        }
+        assert_eq!(x[7..], y[7..]);
+    }
+    // A vertical line of sight (the sphere scene above, and an observer).
+    std::fs::write(dir.path().join("lum.ies"), IES).unwrap();
+    let bad = dir.path().join("bad.toml");
+    let text = format!("{SCENE}\n[[observer]]\neye = [0, 0, -1]\nview = [0, 0, -1]\n");
+    let line = text.lines().position(|l| l.starts_with("view")).unwrap() + 1;
+    std::fs::write(&bad, &text).unwrap();
+    let out = lumest()
+        .args(["glare", "--quiet", "--scene"])
+        .arg(&bad)
+        .arg("--out")
+        .arg(dir.path().join("c.csv"))
+        .assert()
+        .failure();
+    let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(
+        err.contains(&format!("bad.toml:{line}"))
+            && err.contains("view")
+            && err.contains("vertical"),
+        "{err}"
+    );
+    // No observers anywhere.
+    std::fs::write(&bad, SCENE).unwrap();
+    let out = lumest()
+        .args(["glare", "--quiet", "--scene"])
+        .arg(&bad)
+        .arg("--out")
+        .arg(dir.path().join("c.csv"))
+        .assert()
+        .failure();
+    let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(
+        err.contains("[[observer]]") && err.contains("--observers"),
+        "{err}"
+    );
+}

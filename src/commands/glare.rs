@@ -26,8 +26,10 @@ pub struct GlareArgs {
     pub scene: std::path::PathBuf,
     /// Observers CSV: eye position `x,y,z` [m] and line of sight
     /// `dx,dy,dz` (not vertical), optionally a `name` column (`-`: stdin).
+    /// Without it, the scene file's `[[observer]]` tables (`name`, `eye`,
+    /// `view`).
     #[arg(long)]
-    pub observers: String,
+    pub observers: Option<String>,
     /// Output CSV, one row per observer (`-`: standard output).
     #[arg(long)]
     pub out: String,
@@ -183,7 +185,10 @@ pub fn ugr_verdict(g: &ObserverGlare, limit: f64) -> &'static str {
 /// Run `lumest glare`.
 pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
     let referenced = scene::referenced_files(&a.scene);
-    let mut inputs = vec![a.scene.as_path(), Path::new(&a.observers)];
+    let mut inputs = vec![a.scene.as_path()];
+    if let Some(o) = &a.observers {
+        inputs.push(Path::new(o));
+    }
     inputs.extend(referenced.iter().map(|p| p.as_path()));
     let mut outputs = vec![("--out", Path::new(&a.out))];
     if let Some(t) = &a.terms_out {
@@ -212,12 +217,22 @@ pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
         "{}: the scene has no luminaire (only lights at infinity): no glare rating",
         a.scene.display()
     );
-    let table = read_views(&a.observers)?;
-    anyhow::ensure!(!table.views.is_empty(), "{}: no observers", a.observers);
-    let name = if a.observers == "-" {
-        "<stdin>"
-    } else {
-        a.observers.as_str()
+    let scene_name = a.scene.display().to_string();
+    let (table, name) = match &a.observers {
+        Some(o) => {
+            let table = read_views(o)?;
+            anyhow::ensure!(!table.views.is_empty(), "{o}: no observers");
+            (table, if o == "-" { "<stdin>" } else { o.as_str() })
+        }
+        None => {
+            let table = crate::glare::scene_observers::scene_observers(&a.scene)?;
+            anyhow::ensure!(
+                !table.views.is_empty(),
+                "{scene_name}: no observers: give --observers O.csv or [[observer]] tables \
+                 (eye, view) in the scene file"
+            );
+            (table, scene_name.as_str())
+        }
     };
     let mut observers = Vec::with_capacity(table.views.len());
     for (&(o, d), &line) in table.views.iter().zip(&table.lines) {

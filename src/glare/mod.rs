@@ -37,6 +37,7 @@
 //! calculation refuses them. Lights at infinity (sky, sun, environment)
 //! are not luminaires here; their reflected light is part of `E_ind`.
 
+pub mod scene_observers;
 pub mod tabular;
 pub mod visible_part;
 

@@ -44,6 +44,23 @@ pub struct SceneDesc {
     /// distant, environment, sky and sun lights enters.
     #[serde(default)]
     pub portal: Vec<Spanned<PortalDesc>>,
+    /// Glare observers, `[[observer]]` tables (read by `lumest glare` when
+    /// no `--observers` CSV is given; the compiled scene ignores them).
+    #[serde(default)]
+    pub observer: Vec<Spanned<ObserverDesc>>,
+}
+
+/// One `[[observer]]` table: an eye and its line of sight, for `lumest
+/// glare` (see [`crate::glare::scene_observers`]).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObserverDesc {
+    /// A name, written to the `name` column; default `observer N`.
+    pub name: Option<Spanned<String>>,
+    /// Eye position [m].
+    pub eye: Spanned<[f64; 3]>,
+    /// Line of sight (any length > 0, not vertical).
+    pub view: Spanned<[f64; 3]>,
 }
 
 /// One `[[portal]]` table: a parallelogram whose normal `edge1 x edge2`
