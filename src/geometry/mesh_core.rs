@@ -7,7 +7,9 @@
 //! the bounds), so a shadow test that meets the core needs no BVH
 //! traversal ([`Core::blocks`]). Such a crossing lies at least `gap` from
 //! the core and from the outside end, so it falls inside the shadow ray's
-//! open range whenever the range's end margins are below `gap`, and it is
+//! open range whenever the range's end margins are below `gap` by more
+//! than the rounding of the ray's distances (half the gap, see
+//! [`Core::margin_fits`]), and it is
 //! never on a triangle an end lies on that the ray skips (that end would
 //! lie on the same flat triangle as the crossing, with the core, inside,
 //! between them).
@@ -37,6 +39,12 @@ pub struct Core {
 /// The fraction of the largest valid growth that the core keeps: the rest
 /// is its gap to the triangles.
 const KEEP: f64 = 0.95;
+
+/// The largest share of the gap a shadow ray's end margin may take for the
+/// core to answer ([`Core::margin_fits`]): the rest, half the gap, is far
+/// above the rounding of the ray's distances (a few ulp of a length at most
+/// `gap / MESH_REL`, some 1e-7 of the gap).
+pub const MARGIN_SHARE: f64 = 0.5;
 
 impl Core {
     /// The core of the closed mesh of triangles `corners` [m] (indices
@@ -68,13 +76,24 @@ impl Core {
 
     /// Whether the segment from `a` to `b` provably crosses the mesh of
     /// bounds `[lo, hi]` whose core this is, for a shadow ray that leaves
-    /// out `margin` [m] at each end: `margin` below the gap, an end outside
-    /// the bounds by more than the gap, and the segment through the core.
-    /// `false` says nothing (the BVH decides).
+    /// out `margin` [m] at each end: `margin` within [`Self::margin_fits`],
+    /// an end outside the bounds by more than the gap, and the segment
+    /// through the core. `false` says nothing (the BVH decides).
     #[inline]
     pub fn blocks(&self, (lo, hi): (DVec3, DVec3), a: DVec3, b: DVec3, margin: f64) -> bool {
         let out = |p: DVec3| (lo - p).max(p - hi).max_element() > self.gap;
-        margin < self.gap && (out(a) || out(b)) && segment_meets_box(a, b, self.lo, self.hi)
+        self.margin_fits(margin) && (out(a) || out(b)) && segment_meets_box(a, b, self.lo, self.hi)
+    }
+
+    /// Whether a shadow ray's end margin [m] leaves the crossing (at least
+    /// `gap` from either end) inside its range with room for the rounding
+    /// of the ray's distances: at most [`MARGIN_SHARE`] of the gap. (With
+    /// `margin` just below `gap`, a crossing `gap` from an end of a long
+    /// segment falls on either side of the range's end by a few ulp of the
+    /// length, and the BVH may miss what the core claims.)
+    #[inline]
+    pub fn margin_fits(&self, margin: f64) -> bool {
+        margin <= MARGIN_SHARE * self.gap
     }
 }
 
@@ -269,5 +288,183 @@ mod tests {
         assert!((0.5 * (c.lo + c.hi) - DVec3::splat(0.5)).length() < 1e-12);
         let open = Mesh::from_triangles(v, t[1..].to_vec()).unwrap();
         assert!(open.core().is_none());
+    }
+}
+
+/// Adversarial segments: the core never claims what the BVH's shadow ray
+/// (as `Scene::blocks` casts it) does not find.
+#[cfg(test)]
+mod adversarial_tests {
+    use super::*;
+    use crate::geometry::mesh::Mesh;
+    use crate::sampling::rng::Philox4x32;
+
+    const MESH_REL: f64 = 1e-9;
+
+    fn cube(s: f64, at: DVec3) -> Mesh {
+        let v: Vec<DVec3> = (0..8)
+            .map(|k| {
+                at + s * DVec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64)
+            })
+            .collect();
+        let t: Vec<[u32; 3]> = vec![
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ];
+        Mesh::from_triangles(v, t).unwrap()
+    }
+
+    /// As `Scene::blocks` asks: the core first, else the BVH; and the BVH
+    /// alone.
+    fn both(m: &Mesh, a: DVec3, b: DVec3, skip: Option<u32>) -> (bool, bool) {
+        let len = (b - a).length();
+        let d = (b - a) / len;
+        let core = m
+            .core()
+            .is_some_and(|c| c.blocks(m.bounds(), a, b, MESH_REL * len));
+        let bvh = m.occluded(a, d, MESH_REL * len, (1.0 - MESH_REL) * len, skip);
+        (core, bvh)
+    }
+
+    /// Long segments whose end margin `MESH_REL len` lies just below the
+    /// gap, from far off to a point in the core about `gap` from a face.
+    #[test]
+    fn margins_just_below_the_gap() {
+        let mut rng = Philox4x32::new(3, 3);
+        let mut bad = Vec::new();
+        let mut n_core = 0;
+        for &s in &[1e-3, 1.0, 0.37] {
+            let m = cube(s, DVec3::new(0.3, -0.2, 0.1));
+            let c = *m.core().unwrap();
+            for i in 0..4000 {
+                // In the core, on its face nearest the bottom of the cube.
+                let mut b = c.lo + (c.hi - c.lo) * DVec3::new(rng.next_f64(), rng.next_f64(), 0.0);
+                b.z = c.lo.z + (rng.next_f64() - 0.5) * 1e-12 * s;
+                // From far below: MESH_REL len just under the gap.
+                // (Every other one well below the gap, so that the core
+                // has something to answer whatever its rule.)
+                let f = if i % 2 == 0 {
+                    1.0 - 1e-6 * rng.next_f64()
+                } else {
+                    0.1 + 0.3 * rng.next_f64()
+                };
+                let len = c.gap / MESH_REL * f;
+                let dir = DVec3::new(
+                    1e-3 * (rng.next_f64() - 0.5),
+                    1e-3 * (rng.next_f64() - 0.5),
+                    -1.0,
+                )
+                .normalize();
+                let a = b + dir * len;
+                for (p, q) in [(a, b), (b, a)] {
+                    let (core, bvh) = both(&m, p, q, None);
+                    n_core += core as usize;
+                    if core && !bvh {
+                        bad.push((s, i, p, q));
+                    }
+                }
+            }
+        }
+        assert!(n_core > 1000, "{n_core}");
+        assert!(
+            bad.is_empty(),
+            "{} misses, first {:?}",
+            bad.len(),
+            bad.first()
+        );
+    }
+
+    /// Adversarial segments on a non-convex blob and a cube: from a
+    /// vertex or an edge's midpoint of the mesh (skipping a triangle
+    /// there), from a corner or edge of the core (grazing it), to points
+    /// just beyond the bounds by the gap, and the same with the ends
+    /// swapped.
+    #[test]
+    fn adversarial_segments_agree_with_the_bvh() {
+        let blob = crate::geometry::mesh::star_blob(12, 24, |t, p| {
+            0.3 * (1.0 + 0.3 * (3.0 * t).sin() * (2.0 * p).cos())
+        })
+        .unwrap()
+        .transformed(DVec3::new(1.0, 2.0, 0.5), glam::DMat3::IDENTITY, 1.0);
+        let mut rng = Philox4x32::new(9, 1);
+        let mut bad = Vec::new();
+        let mut n_core = 0;
+        for m in [cube(1.0, DVec3::ZERO), cube(0.01, DVec3::splat(5.0)), blob] {
+            let c = *m.core().unwrap();
+            let (lo, hi) = m.bounds();
+            let cc: Vec<DVec3> = (0..8)
+                .map(|k| {
+                    DVec3::new(
+                        if k & 1 == 0 { c.lo.x } else { c.hi.x },
+                        if k & 2 == 0 { c.lo.y } else { c.hi.y },
+                        if k & 4 == 0 { c.lo.z } else { c.hi.z },
+                    )
+                })
+                .collect();
+            for i in 0..20_000 {
+                // The first end: on the mesh (a vertex or an edge's
+                // midpoint, skipping one triangle there), or a corner of
+                // the core, or a point in the core.
+                let k = (rng.next_f64() * m.triangle_count() as f64) as u32;
+                let t = m.corners(k);
+                let (a, skip) = match i % 4 {
+                    0 => (t[i % 3], Some(k)),
+                    1 => (0.5 * (t[0] + t[1]), Some(k)),
+                    2 => (cc[i % 8], None),
+                    _ => (
+                        c.lo + (c.hi - c.lo)
+                            * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()),
+                        None,
+                    ),
+                };
+                // The other: just beyond the bounds by the gap on one
+                // axis, aimed through the core (or a corner of it).
+                let axis = i % 3;
+                let target = if i % 2 == 0 {
+                    cc[(i / 3) % 8]
+                } else {
+                    c.lo + (c.hi - c.lo)
+                        * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64())
+                };
+                let dir = (target - a).normalize_or_zero();
+                if dir == DVec3::ZERO {
+                    continue;
+                }
+                let mut b = if dir[axis] > 0.0 { hi } else { lo };
+                let sign = if dir[axis] > 0.0 { 1.0 } else { -1.0 };
+                b[axis] += sign * c.gap * (1.0 + 1e-12 * rng.next_f64());
+                // On the line from `a` through `target`, at that plane.
+                if dir[axis].abs() < 1e-6 {
+                    continue;
+                }
+                let tt = (b[axis] - a[axis]) / dir[axis];
+                let mut q = a + dir * tt;
+                q[axis] = b[axis];
+                for (p, r, sk) in [(a, q, skip), (q, a, None)] {
+                    let (core, bvh) = both(&m, p, r, sk);
+                    n_core += core as usize;
+                    if core && !bvh {
+                        bad.push((i, p, r, sk));
+                    }
+                }
+            }
+        }
+        assert!(n_core > 10_000, "{n_core}");
+        assert!(
+            bad.is_empty(),
+            "{} misses, first {:?}",
+            bad.len(),
+            bad.first()
+        );
     }
 }

@@ -540,7 +540,8 @@ impl Scene {
     /// mesh, as its shape test ([`Self::blocks`]) finds pair by pair: `p`
     /// outside the mesh's bounds by more than the core's gap, the shadow
     /// ray's end margin (`MESH_REL` of the longest such segment, which ends
-    /// at a corner) below the gap, and every such segment through the core
+    /// at a corner) within the core's rule for it (`Core::margin_fits`,
+    /// the one [`Self::blocks`] applies), and every such segment through the core
     /// shrunk by `m = 1e-7 scale` (the corners decide, as in
     /// [`Self::box_shadows_cell`]).
     fn core_shadows_cell(&self, i: u32, p: DVec3, (clo, chi): (DVec3, DVec3), scale: f64) -> bool {
@@ -557,7 +558,7 @@ impl Scene {
         let cs = corners(clo, chi);
         let far = cs.iter().map(|c| (*c - p).length()).fold(0.0, f64::max);
         (lo - p).max(p - hi).max_element() > core.gap
-            && super::MESH_REL * far < core.gap
+            && core.margin_fits(super::MESH_REL * far)
             && cs.iter().all(|&c| segment_meets_box(p, c, slo, shi))
     }
 
