@@ -232,7 +232,8 @@ fn score_split<const COUNT: bool>(
             } else {
                 0.0
             };
-            *a += if g != 0.0 && dd >= *e2 {
+            // (`w == 0`: not open here, or no response; never `inf * 0`.)
+            *a += if g != 0.0 && dd >= *e2 && *w != 0.0 {
                 qf * g * w
             } else {
                 0.0
