@@ -232,8 +232,11 @@ fn score_split<const COUNT: bool>(
             } else {
                 0.0
             };
-            // (`w == 0`: not open here, or no response; never `inf * 0`.)
-            *a += if g != 0.0 && dd >= *e2 && *w != 0.0 {
+            // (`w == 0` where the pair is not open: it adds `qf g 0 = 0`,
+            // NaN only if `qf g` overflowed, for a collision within about
+            // 1e-150 m of the point. Testing `w != 0` here as well cost 6 %
+            // of the office's run time, so it is not.)
+            *a += if g != 0.0 && dd >= *e2 {
                 qf * g * w
             } else {
                 0.0
