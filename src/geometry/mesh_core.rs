@@ -193,6 +193,33 @@ fn ray_hits(q: DVec3, d: DVec3, t: &[DVec3; 3]) -> bool {
     e2.dot(qv) * inv > 0.0
 }
 
+/// The cube `at + s [0, 1]^3` as a closed mesh: outward, counter-clockwise
+/// faces (the tests' simplest closed solid).
+#[cfg(test)]
+fn test_cube(s: f64, at: DVec3) -> crate::geometry::mesh::Mesh {
+    let v: Vec<DVec3> = (0..8)
+        .map(|k| at + s * DVec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64))
+        .collect();
+    crate::geometry::mesh::Mesh::from_triangles(v, TEST_CUBE_FACES.to_vec()).unwrap()
+}
+
+/// The faces of [`test_cube`].
+#[cfg(test)]
+const TEST_CUBE_FACES: [[u32; 3]; 12] = [
+    [0, 2, 1],
+    [1, 2, 3],
+    [4, 5, 6],
+    [5, 7, 6],
+    [0, 1, 4],
+    [1, 5, 4],
+    [2, 6, 3],
+    [3, 6, 7],
+    [0, 4, 2],
+    [2, 4, 6],
+    [1, 3, 5],
+    [3, 7, 5],
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -264,29 +291,12 @@ mod tests {
     /// one, centred, with a positive gap.
     #[test]
     fn open_meshes_have_no_core() {
-        let v: Vec<DVec3> = (0..8)
-            .map(|k| DVec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64))
-            .collect();
-        // Outward, counter-clockwise faces of the unit cube.
-        let t: Vec<[u32; 3]> = vec![
-            [0, 2, 1],
-            [1, 2, 3],
-            [4, 5, 6],
-            [5, 7, 6],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ];
-        let cube = Mesh::from_triangles(v.clone(), t.clone()).unwrap();
+        let cube = test_cube(1.0, DVec3::ZERO);
         let c = cube.core().expect("a closed cube has a core");
         assert!(c.gap > 0.0);
         assert!((0.5 * (c.lo + c.hi) - DVec3::splat(0.5)).length() < 1e-12);
-        let open = Mesh::from_triangles(v, t[1..].to_vec()).unwrap();
+        let v = cube.vertices().to_vec();
+        let open = Mesh::from_triangles(v, TEST_CUBE_FACES[1..].to_vec()).unwrap();
         assert!(open.core().is_none());
     }
 }
@@ -300,29 +310,6 @@ mod adversarial_tests {
     use crate::sampling::rng::Philox4x32;
 
     const MESH_REL: f64 = 1e-9;
-
-    fn cube(s: f64, at: DVec3) -> Mesh {
-        let v: Vec<DVec3> = (0..8)
-            .map(|k| {
-                at + s * DVec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64)
-            })
-            .collect();
-        let t: Vec<[u32; 3]> = vec![
-            [0, 2, 1],
-            [1, 2, 3],
-            [4, 5, 6],
-            [5, 7, 6],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ];
-        Mesh::from_triangles(v, t).unwrap()
-    }
 
     /// As `Scene::blocks` asks: the core first, else the BVH; and the BVH
     /// alone.
@@ -344,7 +331,7 @@ mod adversarial_tests {
         let mut bad = Vec::new();
         let mut n_core = 0;
         for &s in &[1e-3, 1.0, 0.37] {
-            let m = cube(s, DVec3::new(0.3, -0.2, 0.1));
+            let m = test_cube(s, DVec3::new(0.3, -0.2, 0.1));
             let c = *m.core().unwrap();
             for i in 0..4000 {
                 // In the core, on its face nearest the bottom of the cube.
@@ -399,7 +386,11 @@ mod adversarial_tests {
         let mut rng = Philox4x32::new(9, 1);
         let mut bad = Vec::new();
         let mut n_core = 0;
-        for m in [cube(1.0, DVec3::ZERO), cube(0.01, DVec3::splat(5.0)), blob] {
+        for m in [
+            test_cube(1.0, DVec3::ZERO),
+            test_cube(0.01, DVec3::splat(5.0)),
+            blob,
+        ] {
             let c = *m.core().unwrap();
             let (lo, hi) = m.bounds();
             let cc: Vec<DVec3> = (0..8)

@@ -556,7 +556,11 @@ impl Scene {
             return false;
         }
         let cs = corners(clo, chi);
-        let far = cs.iter().map(|c| (*c - p).length()).fold(0.0, f64::max);
+        // (NaN-propagating, so that a NaN corner never passes.)
+        let far = cs
+            .iter()
+            .map(|c| (*c - p).length())
+            .fold(0.0, |m: f64, d| if d.is_nan() || d > m { d } else { m });
         (lo - p).max(p - hi).max_element() > core.gap
             && core.margin_fits(super::MESH_REL * far)
             && cs.iter().all(|&c| segment_meets_box(p, c, slo, shi))
