@@ -11,11 +11,11 @@
 //! they become the rows of a view table with the columns `name, x, y, z,
 //! dx, dy, dz`, each row's line its table's line in the scene file.
 
+use crate::grid::invalid;
 use crate::io::csvio::ViewTable;
 use crate::io::format_number;
 use crate::scene::SceneError;
 use crate::scene::compile::SourceCtx;
-use crate::scene::desc::SceneDesc;
 use glam::DVec3;
 use std::path::Path;
 
@@ -32,25 +32,8 @@ pub fn scene_observers(path: &Path) -> Result<ViewTable, SceneError> {
         src: &src,
         file: path,
     };
-    let desc: SceneDesc = toml::from_str(&src).map_err(|e| {
-        let (line, column) = ctx.line_col(e.span().map_or(0, |s| s.start));
-        SceneError::Syntax {
-            file: path.to_path_buf(),
-            line,
-            column,
-            message: e.message().trim().to_string(),
-        }
-    })?;
-    let invalid = |span: std::ops::Range<usize>, field: &str, message: &str| {
-        let (line, column) = ctx.line_col(span.start);
-        SceneError::Invalid {
-            file: path.to_path_buf(),
-            line,
-            column,
-            field: field.to_string(),
-            message: message.to_string(),
-        }
-    };
+    let desc = crate::scene::parse_desc(&src, path)?;
+    let invalid = |span, field: &str, message: &str| invalid(&ctx, span, field, message);
     let mut table = ViewTable {
         headers: ["name", "x", "y", "z", "dx", "dy", "dz"]
             .map(String::from)

@@ -89,15 +89,7 @@ pub fn load(path: &Path) -> Result<Vec<Grid>, SceneError> {
 /// The `[[grid]]` tables of scene text `src` (`file` names it in messages).
 pub fn parse(src: &str, file: &Path) -> Result<Vec<Grid>, SceneError> {
     let ctx = SourceCtx { src, file };
-    let desc: SceneDesc = toml::from_str(src).map_err(|e| {
-        let (line, column) = ctx.line_col(e.span().map_or(0, |s| s.start));
-        SceneError::Syntax {
-            file: file.to_path_buf(),
-            line,
-            column,
-            message: e.message().trim().to_string(),
-        }
-    })?;
+    let desc = crate::scene::parse_desc(src, file)?;
     let mut grids: Vec<Grid> = Vec::new();
     for g in &desc.grid {
         let grid = compile(&desc, g.get_ref(), &ctx)?;

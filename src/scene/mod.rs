@@ -95,8 +95,16 @@ pub fn referenced_files(path: &Path) -> Vec<PathBuf> {
 
 /// Validate and compile a scene from TOML text; `file` is used in messages.
 pub fn parse(src: &str, file: &Path) -> Result<Scene, SceneError> {
+    let desc = parse_desc(src, file)?;
+    compile::compile(&desc, &compile::SourceCtx { src, file })
+}
+
+/// The tables of scene TOML text, not yet validated (`file` names it in
+/// messages): a syntax error or a value of the wrong type names the line,
+/// column and key.
+pub(crate) fn parse_desc(src: &str, file: &Path) -> Result<desc::SceneDesc, SceneError> {
     let ctx = compile::SourceCtx { src, file };
-    let desc: desc::SceneDesc = toml::from_str(src).map_err(|e| {
+    toml::from_str(src).map_err(|e| {
         let at = e.span().map_or(0, |s| s.start);
         let (line, column) = ctx.line_col(at);
         let message = e.message().trim();
@@ -124,6 +132,5 @@ pub fn parse(src: &str, file: &Path) -> Result<Scene, SceneError> {
             column,
             message,
         }
-    })?;
-    compile::compile(&desc, &ctx)
+    })
 }
