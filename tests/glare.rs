@@ -366,20 +366,24 @@ fn scene_observers_rate_as_the_csv_observers() {
         }
         assert_eq!(x[7..], y[7..]);
     }
-    // A vertical line of sight (the sphere scene above, and an observer).
+    // The error `lumest glare` gives for the scene `text` without --observers.
     std::fs::write(dir.path().join("lum.ies"), IES).unwrap();
     let bad = dir.path().join("bad.toml");
+    let error = |text: &str| {
+        std::fs::write(&bad, text).unwrap();
+        let out = lumest()
+            .args(["glare", "--quiet", "--scene"])
+            .arg(&bad)
+            .arg("--out")
+            .arg(dir.path().join("c.csv"))
+            .assert()
+            .failure();
+        String::from_utf8_lossy(&out.get_output().stderr).to_string()
+    };
+    // A vertical line of sight (the sphere scene above, and an observer).
     let text = format!("{SCENE}\n[[observer]]\neye = [0, 0, -1]\nview = [0, 0, -1]\n");
     let line = text.lines().position(|l| l.starts_with("view")).unwrap() + 1;
-    std::fs::write(&bad, &text).unwrap();
-    let out = lumest()
-        .args(["glare", "--quiet", "--scene"])
-        .arg(&bad)
-        .arg("--out")
-        .arg(dir.path().join("c.csv"))
-        .assert()
-        .failure();
-    let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    let err = error(&text);
     assert!(
         err.contains(&format!("bad.toml:{line}"))
             && err.contains("view")
@@ -387,15 +391,7 @@ fn scene_observers_rate_as_the_csv_observers() {
         "{err}"
     );
     // No observers anywhere.
-    std::fs::write(&bad, SCENE).unwrap();
-    let out = lumest()
-        .args(["glare", "--quiet", "--scene"])
-        .arg(&bad)
-        .arg("--out")
-        .arg(dir.path().join("c.csv"))
-        .assert()
-        .failure();
-    let err = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    let err = error(SCENE);
     assert!(
         err.contains("[[observer]]") && err.contains("--observers"),
         "{err}"
