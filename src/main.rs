@@ -2,7 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use lumest::commands::{
-    bench, glare, grid, illuminance, merge, photometry, render, shfit, sobolev, validate,
+    bench, glare, grid, illuminance, merge, photometry, render, shfit, sobolev, ugr_table, validate,
 };
 use std::process::ExitCode;
 
@@ -40,6 +40,9 @@ enum Command {
     Grid(grid::GridArgs),
     /// Unified Glare Rating (CIE 117) at observers (eye and line of sight).
     Glare(glare::GlareArgs),
+    /// A luminaire's UGR table (CIE 117 tabular method) from its IES or EULUMDAT file.
+    #[command(name = "ugr-table")]
+    UgrTable(ugr_table::UgrTableArgs),
 }
 
 fn main() -> ExitCode {
@@ -56,6 +59,7 @@ fn main() -> ExitCode {
         Command::Merge(a) => merge::merge(a),
         Command::Grid(a) => grid::grid(a),
         Command::Glare(a) => glare::glare(a),
+        Command::UgrTable(a) => ugr_table::ugr_table_command(a),
     };
     match res {
         Ok(()) => ExitCode::SUCCESS,

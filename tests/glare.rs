@@ -172,12 +172,35 @@ fn lumest() -> Command {
     Command::cargo_bin("lumest").unwrap()
 }
 
-/// The standard room of the tabular method (CIE 117 / CIE 190): 8 m x 8 m
-/// (4H x 4H, H = 2 m above the eye at 1.2 m), 16 x 16 luminaires at the
-/// standard spacing 0.25 H, reflectances 0.7 / 0.5 / 0.2, the observer at
-/// the middle of a wall looking across the room. The luminaire: a cosine
-/// (Lambertian) downlight of 100 cd on the nadir with a 0.3 m x 0.3 m opening.
-fn standard_room(dir: &std::path::Path) -> std::path::PathBuf {
+/// The standard room of the tabular method (CIE 117): 8 m x 8 m (4H x 4H,
+/// H = 2 m above the eye at 1.2 m), 16 x 16 luminaires at the spacing
+/// 0.25 H, reflectances 0.7 / 0.5 / 0.2, the observer at the middle of a
+/// wall looking across the room along `+x`. The luminaire `file` (in
+/// `dir`) turned by `rotate` [deg] about its nadir.
+fn standard_room(dir: &std::path::Path, file: &str, rotate: f64) -> std::path::PathBuf {
+    let mut s = String::from(
+        "[[surface]]\ntype = \"box\"\nname = \"room\"\nmin = [0, 0, 0]\nmax = [8, 8, 3.2]\n\
+         normals = \"inward\"\nmaterial = { type = \"lambertian\", reflectance = 0.5 }\n\
+         faces = { z_min = { type = \"lambertian\", reflectance = 0.2 }, \
+         z_max = { type = \"lambertian\", reflectance = 0.7 } }\n",
+    );
+    for i in 0..16 {
+        for j in 0..16 {
+            s += &format!(
+                "\n[[light]]\ntype = \"ies\"\nfile = \"{file}\"\nposition = [{}, {}, 3.2]\nrotate = {rotate}\n",
+                (f64::from(i) + 0.5) * 0.5,
+                (f64::from(j) + 0.5) * 0.5
+            );
+        }
+    }
+    let path = dir.join("room.toml");
+    std::fs::write(&path, s).unwrap();
+    path
+}
+
+/// A cosine (Lambertian) downlight of 100 cd on the nadir with a 0.3 m x
+/// 0.3 m opening, as an IES file in `dir`.
+fn cosine_ies(dir: &std::path::Path) {
     let mut v: Vec<String> = (0..=90).map(|g| g.to_string()).collect();
     v.push("180".into());
     let mut c: Vec<String> = (0..=90)
@@ -195,37 +218,17 @@ fn standard_room(dir: &std::path::Path) -> std::path::PathBuf {
         ),
     )
     .unwrap();
-    let mut s = String::from(
-        "[[surface]]\ntype = \"box\"\nname = \"room\"\nmin = [0, 0, 0]\nmax = [8, 8, 3.2]\n\
-         normals = \"inward\"\nmaterial = { type = \"lambertian\", reflectance = 0.5 }\n\
-         faces = { z_min = { type = \"lambertian\", reflectance = 0.2 }, \
-         z_max = { type = \"lambertian\", reflectance = 0.7 } }\n",
-    );
-    for i in 0..16 {
-        for j in 0..16 {
-            s += &format!(
-                "\n[[light]]\ntype = \"ies\"\nfile = \"cos.ies\"\nposition = [{}, {}, 3.2]\n",
-                (f64::from(i) + 0.5) * 0.5,
-                (f64::from(j) + 0.5) * 0.5
-            );
-        }
-    }
-    let path = dir.join("room.toml");
-    std::fs::write(&path, s).unwrap();
-    path
 }
 
-#[test]
-fn standard_room_against_the_tabular_method() {
-    use lumest::glare::tabular::StandardRoom;
-    let dir = tempfile::tempdir().unwrap();
-    let scene = standard_room(dir.path());
-    let obs = dir.path().join("obs.csv");
+/// `lumest glare` at the standard room's observer: the result row's
+/// columns by name.
+fn rate_standard_room(dir: &std::path::Path, scene: &std::path::Path) -> Vec<(String, String)> {
+    let obs = dir.join("obs.csv");
     std::fs::write(&obs, "name,x,y,z,dx,dy,dz\nwall,0.001,4,1.2,1,0,0\n").unwrap();
-    let out = dir.path().join("g.csv");
+    let out = dir.join("g.csv");
     lumest()
         .args(["glare", "--quiet", "--chains", "100000", "--scene"])
-        .arg(&scene)
+        .arg(scene)
         .arg("--observers")
         .arg(&obs)
         .arg("--out")
@@ -234,43 +237,124 @@ fn standard_room_against_the_tabular_method() {
         .success();
     let text = std::fs::read_to_string(&out).unwrap();
     let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let num = |name: &str| -> f64 { row[column(&header, name)].parse().unwrap() };
-    let room = StandardRoom {
-        x: 8.0,
-        y: 8.0,
-        eye: 1.2,
-        h: 2.0,
-        spacing: 0.5,
-        rho: [0.7, 0.5, 0.2],
-    };
-    let tab = room.rating(&|mu: f64| 100.0 * mu, 0.3, 200);
-    // The luminaire terms: the same geometry, lumest's through the IES
-    // table (cos interpolated linearly in 1-degree steps) and the scene.
-    assert!((num("glare_sum") / tab.sum - 1.0).abs() < 1e-3);
-    assert_eq!(row[column(&header, "luminaires")], "256");
+    let header = lines.next().unwrap().split(',').map(String::from);
+    let row = lines.next().unwrap().split(',').map(String::from);
+    header.zip(row).collect()
+}
+
+fn num(row: &[(String, String)], name: &str) -> f64 {
+    row.iter()
+        .find(|(h, _)| h == name)
+        .unwrap()
+        .1
+        .parse()
+        .unwrap()
+}
+
+const ROOM_4H: lumest::glare::tabular::StandardRoom = lumest::glare::tabular::StandardRoom {
+    across: 8.0,
+    along: 8.0,
+    eye: 1.2,
+    h: 2.0,
+    spacing: 0.5,
+    rho: [0.7, 0.5, 0.2],
+};
+
+/// The cosine downlight, as the tabular method sees it.
+struct Cosine;
+
+impl lumest::glare::tabular::TableLuminaire for Cosine {
+    fn intensity(&self, w: glam::DVec3) -> f64 {
+        100.0 * (-w.z).max(0.0)
+    }
+    fn projected_area(&self, w: glam::DVec3) -> f64 {
+        0.09 * (-w.z).max(0.0)
+    }
+}
+
+#[test]
+fn standard_room_against_the_tabular_method() {
+    let dir = tempfile::tempdir().unwrap();
+    cosine_ies(dir.path());
+    let scene = standard_room(dir.path(), "cos.ies", 0.0);
+    let row = rate_standard_room(dir.path(), &scene);
+    let tab = ROOM_4H.rating(&Cosine);
+    // The luminaire terms: the same geometry (but the scene's eye 1 mm off
+    // the wall), lumest's through the IES table (cos interpolated linearly
+    // in 1-degree steps) and the scene.
+    assert!((num(&row, "glare_sum") / tab.sum - 1.0).abs() < 1e-3);
+    assert_eq!(num(&row, "luminaires"), 256.0);
     // The background: the eye's indirect illuminance against the walls'
     // average, the tables' approximation (measured: 216.0 +- 0.5 lx against
     // 221.5 lx, UGR 17.01 against 16.92). A bound of 0.25 UGR units is
     // about 7 % in the background.
     assert!(
-        (num("UGR") - tab.ugr).abs() < 0.25,
+        (num(&row, "UGR") - tab.ugr).abs() < 0.25,
         "UGR {} against the tabular {}",
-        num("UGR"),
+        num(&row, "UGR"),
         tab.ugr
     );
-    assert!((num("E_ind") / tab.e_wall_ind - 1.0).abs() < 0.07);
+    assert!((num(&row, "E_ind") / tab.e_wall_ind - 1.0).abs() < 0.07);
     eprintln!(
         "tabular: sum {} E_W {} UGR {}; lumest glare: sum {} E_ind {} +- {} UGR {} +- {}",
         tab.sum,
         tab.e_wall_ind,
         tab.ugr,
-        num("glare_sum"),
-        num("E_ind"),
-        num("E_ind_stderr"),
-        num("UGR"),
-        num("UGR_stderr")
+        num(&row, "glare_sum"),
+        num(&row, "E_ind"),
+        num(&row, "E_ind_stderr"),
+        num(&row, "UGR"),
+        num(&row, "UGR_stderr")
+    );
+}
+
+/// A luminaire with a narrow beam in C90-C270 (`sym_quadrant.ies`: 43
+/// degrees there, 120 in C0-C180; a 0.2 m x 0.3 m opening), viewed
+/// crosswise (turned 90 degrees: C0 across the line of sight) and endwise,
+/// by `lumest glare` in the scene and by the UGR table's own code for the
+/// 4H x 4H room. The luminaire sums agree to the table interpolation; the
+/// ratings to the tables' background approximation; and the two views
+/// differ, so a table that swapped them would fail.
+#[test]
+fn standard_room_table_rows_viewed_crosswise_and_endwise() {
+    use lumest::glare::tabular::{FileLuminaire, View, hemisphere_fluxes};
+    let dir = tempfile::tempdir().unwrap();
+    let src =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/photometry/sym_quadrant.ies");
+    std::fs::copy(&src, dir.path().join("q.ies")).unwrap();
+    let p = lumest::io::photometry::read(&src).unwrap();
+    let g = lumest::light::Goniometric::new(&p, 1.0);
+    let area = lumest::glare::LuminousArea::of_file(&p.opening).unwrap();
+    let mut ugr = Vec::new();
+    for (view, rotate) in [(View::Crosswise, 90.0), (View::Endwise, 0.0)] {
+        let lum = FileLuminaire {
+            dist: &g,
+            area: &area,
+            frame: view.frame(),
+        };
+        let sum = ROOM_4H.glare_sum(&lum);
+        let e_w = ROOM_4H.wall_indirect(&ROOM_4H.direct_flux(&lum, hemisphere_fluxes(&lum)));
+        let tab = 8.0 * (0.25 * PI * sum / e_w).log10();
+        let scene = standard_room(dir.path(), "q.ies", rotate);
+        let row = rate_standard_room(dir.path(), &scene);
+        eprintln!(
+            "{view:?}: tabular sum {sum} E_W {e_w} UGR {tab}; lumest glare: sum {} E_ind {} +- {} UGR {}",
+            num(&row, "glare_sum"),
+            num(&row, "E_ind"),
+            num(&row, "E_ind_stderr"),
+            num(&row, "UGR")
+        );
+        // The scene's eye is 1 mm off the wall (0.1 mm of the sum here).
+        assert!(
+            (num(&row, "glare_sum") / sum - 1.0).abs() < 1e-3,
+            "{view:?}"
+        );
+        assert!((num(&row, "UGR") - tab).abs() < 0.25, "{view:?}");
+        ugr.push((tab, num(&row, "UGR")));
+    }
+    assert!(
+        (ugr[0].0 - ugr[1].0).abs() > 0.5 && (ugr[0].1 - ugr[1].1).abs() > 0.5,
+        "{ugr:?}"
     );
 }
 

@@ -20,6 +20,7 @@ pub mod report;
 pub mod run_state;
 pub mod shfit;
 pub mod sobolev;
+pub mod ugr_table;
 pub mod validate;
 
 use crate::chain::ChainParams;

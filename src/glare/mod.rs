@@ -152,6 +152,24 @@ pub enum LuminousArea {
 }
 
 impl LuminousArea {
+    /// The luminous parts a photometric file gives (its opening and the
+    /// height of its luminous sides); an error when it gives no opening.
+    pub fn of_file(o: &crate::io::photometry::Opening) -> Result<Self, GlareError> {
+        let opening = LuminousOpening::of(o).ok_or_else(|| {
+            GlareError::NoArea(
+                "its photometric file gives no luminous area (width and length 0): \
+                 UGR needs the luminance of the luminous parts"
+                    .to_string(),
+            )
+        })?;
+        let height = if o.height.is_finite() {
+            o.height.abs()
+        } else {
+            0.0
+        };
+        Ok(LuminousArea::Gonio { opening, height })
+    }
+
     /// Projected luminous area [m^2] seen along unit world direction `w`
     /// (from the luminaire towards the eye), for a luminaire with local
     /// axes `frame` (goniometric only).
@@ -211,22 +229,7 @@ impl std::fmt::Display for GlareError {
 /// luminaires (distant, environment: lights at infinity).
 pub fn luminous_area(light: &Light) -> Result<Option<LuminousArea>, GlareError> {
     match light {
-        Light::Gonio { dist, .. } => {
-            let o = dist.file_opening();
-            let opening = LuminousOpening::of(&o).ok_or_else(|| {
-                GlareError::NoArea(
-                    "its photometric file gives no luminous area (width and length 0): \
-                     UGR needs the luminance of the luminous parts"
-                        .to_string(),
-                )
-            })?;
-            let height = if o.height.is_finite() {
-                o.height.abs()
-            } else {
-                0.0
-            };
-            Ok(Some(LuminousArea::Gonio { opening, height }))
-        }
+        Light::Gonio { dist, .. } => LuminousArea::of_file(&dist.file_opening()).map(Some),
         Light::Area(a) => {
             let sides = if a.two_sided { 2.0 } else { 1.0 };
             Ok(Some(LuminousArea::Flat {

@@ -1,37 +1,106 @@
-//! The tabular method of CIE 117-1995 / CIE 190:2010 for one standard room,
-//! as an independent check of `lumest glare`.
+//! The tabular method of CIE 117-1995 for standard rooms: the rating of a
+//! luminaire in a regular array, as luminaire makers publish it (the UGR
+//! table, [`UgrTable`]), and an independent check of `lumest glare`.
 //!
-//! The standard room: floor `X x Y` [m], luminaires in a regular grid in
-//! the ceiling plane at height `H` above the eye (eye at 1.2 m; the
-//! standard `H = 2 m`, spacing `0.25 H`, the outer rows half a spacing from
-//! the walls), the observer at the middle of the wall `x = 0` looking along
-//! `+x`, reflectances of ceiling, walls and floor (the standard 0.7 / 0.5 /
-//! 0.2). The rating uses the same terms `L^2 omega / p^2` as
-//! [`crate::glare`] (no obstruction in an empty room), and the background
-//! of the tabular method: `L_b = E_W / pi` with `E_W` the **average
-//! indirect illuminance on the walls**, from the luminaires' direct flux
-//! onto floor, walls and ceiling and the inter-reflection of the three
-//! surfaces treated as uniform (the flux-transfer model of the tables;
-//! written here from the box's exact view factors, not from CIE 190's
-//! equations). The Monte Carlo estimate uses the indirect illuminance at
-//! the eye itself, so the two differ by how far the eye's background is
-//! from the walls' average: the tables' own approximation.
+//! The standard room: a floor `across x along` [m] (CIE 117's `X`, across
+//! the line of sight, and `Y`, along it), luminaires in a regular grid in
+//! the ceiling plane at height `H` above the eye (eye 1.2 m above the
+//! floor; the outer rows half a spacing from the walls), the observer at
+//! the middle of the wall `along = 0` looking horizontally into the room,
+//! reflectances of ceiling, walls and floor. The rating uses the same
+//! terms `L^2 omega / p^2` as [`crate::glare`] (the luminance and the
+//! projected luminous area of [`LuminousArea`], Guth's [`position_index`];
+//! no obstruction in an empty room) over every luminaire of the room, and
+//! the background of the tabular method: `L_b = E_W / pi` with `E_W` the
+//! **average indirect illuminance on the walls**. That comes from the
+//! luminaires' direct flux onto floor, walls and ceiling and the
+//! inter-reflection of the three surfaces, each treated as uniform (the
+//! flux-transfer model of the tables; written here from the box's exact
+//! view factors, not from CIE 190's equations, whose text was not used).
+//! The Monte Carlo estimate of `lumest glare` uses the indirect
+//! illuminance at the eye itself, so the two differ by how far the eye's
+//! background is from the walls' average: the tables' own approximation.
+//!
+//! The direct flux on the floor is exact up to quadrature for any
+//! intensity distribution: the sum over the luminaire grid of the integral
+//! over the floor is one integral over the offset `u` between a luminaire
+//! and a floor point, weighted by how many luminaire-floor pairs have that
+//! offset, which is `(n_x - |k|) (n_y - |l|)` on the spacing-sized cell
+//! `(k, l)` of offsets ([`StandardRoom::direct_flux`]).
 
-use super::position_index;
+use super::{LuminousArea, position_index};
+use crate::light::{Goniometric, LuminaireFrame};
+use crate::math::quadrature::CompensatedSum;
+use glam::DVec3;
 use std::f64::consts::PI;
+use std::sync::OnceLock;
+
+/// A luminaire as the tabular method needs it, in the room's frame: the
+/// line of sight along `+x`, across it `y`, up `+z`.
+pub trait TableLuminaire {
+    /// Intensity [cd] towards unit direction `w` (from the luminaire).
+    fn intensity(&self, w: DVec3) -> f64;
+    /// Its luminous area [m^2] projected on the plane normal to `w`.
+    fn projected_area(&self, w: DVec3) -> f64;
+}
+
+/// A luminaire from a photometric file, turned in the ceiling by `frame`.
+pub struct FileLuminaire<'a> {
+    /// The intensity distribution.
+    pub dist: &'a Goniometric,
+    /// Its luminous parts.
+    pub area: &'a LuminousArea,
+    /// Its axes in the room.
+    pub frame: LuminaireFrame,
+}
+
+impl TableLuminaire for FileLuminaire<'_> {
+    fn intensity(&self, w: DVec3) -> f64 {
+        self.dist.intensity_world(&self.frame, w)
+    }
+    fn projected_area(&self, w: DVec3) -> f64 {
+        self.area.projected(w, &self.frame)
+    }
+}
+
+/// How the observer looks at the luminaires.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    /// Across the luminaires: the line of sight at right angles to their
+    /// length, which photometric files put along C0-C180 (IES LM-63 and
+    /// EULUMDAT alike), so the line of sight runs along C90-C270.
+    Crosswise,
+    /// Along the luminaires: the line of sight along C0-C180.
+    Endwise,
+}
+
+impl View {
+    /// The luminaire's axes in the room's frame (line of sight `+x`).
+    pub fn frame(self) -> LuminaireFrame {
+        match self {
+            View::Endwise => LuminaireFrame::DEFAULT,
+            View::Crosswise => LuminaireFrame {
+                x: DVec3::Y,
+                y: DVec3::NEG_X,
+                z: DVec3::Z,
+            },
+        }
+    }
+}
 
 /// A standard room with a grid of identical ceiling luminaires.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StandardRoom {
-    /// Room length along the line of sight [m].
-    pub x: f64,
-    /// Room width across the line of sight [m].
-    pub y: f64,
+    /// Room dimension across the line of sight [m] (CIE 117's `X`).
+    pub across: f64,
+    /// Room dimension along the line of sight [m] (CIE 117's `Y`).
+    pub along: f64,
     /// Eye height above the floor [m].
     pub eye: f64,
     /// Height of the luminaire (ceiling) plane above the eye [m].
     pub h: f64,
-    /// Luminaire spacing in both directions [m].
+    /// Luminaire spacing [m] in both directions (rounded per direction to
+    /// a whole number of luminaires, at least one).
     pub spacing: f64,
     /// Reflectances of ceiling, walls and floor.
     pub rho: [f64; 3],
@@ -53,7 +122,7 @@ pub fn view_factor_parallel(a: f64, b: f64, c: f64) -> f64 {
 /// The result of the tabular method.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tabular {
-    /// `sum L^2 omega / p^2` over the luminaires in view [(cd/m^2)^2 sr].
+    /// `sum L^2 omega / p^2` over the room's luminaires [(cd/m^2)^2 sr].
     pub sum: f64,
     /// Average indirect illuminance on the walls [lx].
     pub e_wall_ind: f64,
@@ -61,76 +130,157 @@ pub struct Tabular {
     pub ugr: f64,
 }
 
+/// The luminaires' direct flux [lm] on the room's surfaces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectFlux {
+    /// On the ceiling: the upward flux (the luminaires are in its plane).
+    pub ceiling: f64,
+    /// On the walls: the downward flux that misses the floor.
+    pub walls: f64,
+    /// On the floor.
+    pub floor: f64,
+}
+
+/// Gauss-Legendre nodes and weights on [-1, 1], 8 points: each spacing
+/// cell of offsets is integrated by the 8 x 8 product rule.
+fn rule8() -> &'static [(f64, f64)] {
+    static RULE: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
+    RULE.get_or_init(|| {
+        let n = std::num::NonZeroUsize::new(8).expect("non-zero");
+        gauss_quad::legendre::GaussLegendre::new(n)
+            .as_node_weight_pairs()
+            .to_vec()
+    })
+}
+
+/// A luminaire's upward and downward flux [lm]: `int I dw` over each
+/// hemisphere by the midpoint rule in `gamma` (0.05 degree) and `C` (0.25
+/// degree), which the bilinear photometric table meets to about 1e-6.
+pub fn hemisphere_fluxes(lum: &dyn TableLuminaire) -> (f64, f64) {
+    let (ng, nc) = (3600, 1440);
+    let (dg, dc) = (PI / ng as f64, 2.0 * PI / nc as f64);
+    let (mut down, mut up) = (CompensatedSum::default(), CompensatedSum::default());
+    for a in 0..ng {
+        let g = (a as f64 + 0.5) * dg;
+        let (sg, cg) = g.sin_cos();
+        let mut ring = 0.0;
+        for b in 0..nc {
+            let (sc, cc) = ((b as f64 + 0.5) * dc).sin_cos();
+            ring += lum.intensity(DVec3::new(sg * cc, sg * sc, -cg));
+        }
+        let part = ring * sg * dg * dc;
+        if a < ng / 2 {
+            down.add(part);
+        } else {
+            up.add(part);
+        }
+    }
+    (up.total(), down.total())
+}
+
 impl StandardRoom {
-    /// Luminaire positions [m] (ceiling plane `z = eye + h`).
-    pub fn luminaires(&self) -> Vec<[f64; 3]> {
-        let nx = (self.x / self.spacing).round() as usize;
-        let ny = (self.y / self.spacing).round() as usize;
+    /// Luminaires along and across the line of sight.
+    fn counts(&self) -> (usize, usize) {
+        let n = |d: f64| ((d / self.spacing).round() as usize).max(1);
+        (n(self.along), n(self.across))
+    }
+
+    /// Luminaire positions [m]: `x` along the line of sight from the
+    /// observer's wall, `y` across from the side wall, `z` the ceiling
+    /// plane `eye + h` above the floor.
+    pub fn luminaires(&self) -> Vec<DVec3> {
+        let (na, nc) = self.counts();
         let z = self.eye + self.h;
-        let mut v = Vec::with_capacity(nx * ny);
-        for i in 0..nx {
-            for j in 0..ny {
-                v.push([
-                    (i as f64 + 0.5) * self.x / nx as f64,
-                    (j as f64 + 0.5) * self.y / ny as f64,
+        let mut v = Vec::with_capacity(na * nc);
+        for i in 0..na {
+            for j in 0..nc {
+                v.push(DVec3::new(
+                    (i as f64 + 0.5) * self.along / na as f64,
+                    (j as f64 + 0.5) * self.across / nc as f64,
                     z,
-                ]);
+                ));
             }
         }
         v
     }
 
-    /// The tabular rating for luminaires emitting only downwards with
-    /// intensity `i(cos gamma)` [cd] (rotationally symmetric) from a
-    /// square luminous opening of side `side` [m] facing down.
-    pub fn rating(&self, i: &dyn Fn(f64) -> f64, side: f64, quad: usize) -> Tabular {
-        let lum = self.luminaires();
-        let eye = [0.0, self.y / 2.0, self.eye];
-        let a = side * side;
-        let mut sum = 0.0;
-        for c in &lum {
-            let (r, t, hh) = (c[0] - eye[0], c[1] - eye[1], c[2] - eye[2]);
-            let d = (r * r + t * t + hh * hh).sqrt();
-            let cos_g = hh / d;
-            let a_p = a * cos_g;
-            let l = i(cos_g) / a_p;
-            let omega = a_p / (d * d);
-            let p = position_index(r, t, hh);
-            sum += l * l * omega / (p * p);
-        }
-        // Direct flux onto the floor by the midpoint rule; the rest of the
-        // downward flux lands on the walls (the ceiling gets none).
-        let phi_one = {
-            // Flux of one luminaire: 2 pi int_0^1 i(mu) dmu (midpoint rule).
-            let n = 20_000;
-            (0..n).map(|k| i((k as f64 + 0.5) / n as f64)).sum::<f64>() * 2.0 * PI / n as f64
-        };
-        let height = self.eye + self.h;
-        let (dx, dy) = (self.x / quad as f64, self.y / quad as f64);
-        let mut floor = 0.0;
-        for c in &lum {
-            for u in 0..quad {
-                for v in 0..quad {
-                    let px = (u as f64 + 0.5) * dx - c[0];
-                    let py = (v as f64 + 0.5) * dy - c[1];
-                    let d2 = px * px + py * py + height * height;
-                    let cos = height / d2.sqrt();
-                    floor += i(cos) * cos / d2 * dx * dy;
-                }
+    /// The eye [m]: the middle of the wall `x = 0`.
+    pub fn eye_position(&self) -> DVec3 {
+        DVec3::new(0.0, 0.5 * self.across, self.eye)
+    }
+
+    /// `sum L^2 omega / p^2` [(cd/m^2)^2 sr] over every luminaire of the
+    /// room that shows the eye a luminous area.
+    pub fn glare_sum(&self, lum: &dyn TableLuminaire) -> f64 {
+        let eye = self.eye_position();
+        let mut sum = CompensatedSum::default();
+        for c in self.luminaires() {
+            let v = c - eye;
+            let d = v.length();
+            let w = -v / d;
+            let (i, a_p) = (lum.intensity(w), lum.projected_area(w));
+            if i > 0.0 && a_p > 0.0 {
+                let l = i / a_p;
+                let p = position_index(v.x, v.y, v.z);
+                sum.add(l * l * (a_p / (d * d)) / (p * p));
             }
         }
-        let total = phi_one * lum.len() as f64;
-        let walls = total - floor;
-        // Areas, view factors and the three-surface inter-reflection:
-        // E_k = E0_k + sum_j F_kj M_j, M_k = rho_k E_k.
-        let (ac, af) = (self.x * self.y, self.x * self.y);
-        let aw = 2.0 * (self.x + self.y) * height;
-        let f_cf = view_factor_parallel(self.x, self.y, height);
+        sum.total()
+    }
+
+    /// The direct flux on ceiling, walls and floor, given the luminaire's
+    /// upward and downward flux ([`hemisphere_fluxes`]). The floor's is
+    /// `sum_luminaires int_floor I(r) h_c / |r|^3 dA` (`r` from the
+    /// luminaire to the floor point, `h_c = eye + h`), computed as one
+    /// integral over the offset `r`: the number of luminaire-floor pairs
+    /// with horizontal offset in the spacing cell `(k, l)` is
+    /// `(n_along - |k|) (n_across - |l|)` (the cells are centred on whole
+    /// multiples of the spacing), each cell by an 8 x 8 Gauss-Legendre rule.
+    pub fn direct_flux(&self, lum: &dyn TableLuminaire, (up, down): (f64, f64)) -> DirectFlux {
+        let (na, nc) = self.counts();
+        let (sa, sc) = (self.along / na as f64, self.across / nc as f64);
+        let hc = self.eye + self.h;
+        let rule = rule8();
+        let mut floor = CompensatedSum::default();
+        for k in 1 - na as i64..na as i64 {
+            let wk = (na as i64 - k.abs()) as f64;
+            for l in 1 - nc as i64..nc as i64 {
+                let wl = (nc as i64 - l.abs()) as f64;
+                let mut cell = 0.0;
+                for &(xa, wa) in rule {
+                    let ux = (k as f64 + 0.5 * xa) * sa;
+                    for &(xc, wc) in rule {
+                        let uy = (l as f64 + 0.5 * xc) * sc;
+                        let r = DVec3::new(ux, uy, -hc);
+                        let d = r.length();
+                        cell += wa * wc * lum.intensity(r / d) * hc / (d * d * d);
+                    }
+                }
+                floor.add(wk * wl * cell * 0.25 * sa * sc);
+            }
+        }
+        let n = (na * nc) as f64;
+        let floor = floor.total();
+        DirectFlux {
+            ceiling: n * up,
+            walls: (n * down - floor).max(0.0),
+            floor,
+        }
+    }
+
+    /// The walls' average indirect illuminance [lx] from the direct flux:
+    /// the three surfaces, each of uniform illuminance, exchange light by
+    /// the box's exact view factors, `E_k = E0_k + sum_j F_kj rho_j E_j`.
+    pub fn wall_indirect(&self, flux: &DirectFlux) -> f64 {
+        let hc = self.eye + self.h;
+        let (ac, af) = (self.along * self.across, self.along * self.across);
+        let aw = 2.0 * (self.along + self.across) * hc;
+        let f_cf = view_factor_parallel(self.along, self.across, hc);
         let f_cw = 1.0 - f_cf;
         let f_wc = ac * f_cw / aw;
         let f_ww = 1.0 - 2.0 * f_wc;
         let f = [[0.0, f_cw, f_cf], [f_wc, f_ww, f_wc], [f_cf, f_cw, 0.0]];
-        let e0 = [0.0, walls / aw, floor / af];
+        let e0 = [flux.ceiling / ac, flux.walls / aw, flux.floor / af];
         // Solve (I - F diag(rho)) E = E0 by Gaussian elimination (3 x 3).
         let mut m = [[0.0; 4]; 3];
         for k in 0..3 {
@@ -153,13 +303,130 @@ impl StandardRoom {
             let s: f64 = (k + 1..3).map(|j| m[k][j] * e[j]).sum();
             e[k] = (m[k][3] - s) / m[k][k];
         }
-        let e_wall_ind = e[1] - e0[1];
+        e[1] - e0[1]
+    }
+
+    /// The tabular rating of the room with luminaire `lum`.
+    pub fn rating(&self, lum: &dyn TableLuminaire) -> Tabular {
+        let sum = self.glare_sum(lum);
+        let flux = self.direct_flux(lum, hemisphere_fluxes(lum));
+        let e_wall_ind = self.wall_indirect(&flux);
         Tabular {
             sum,
             e_wall_ind,
-            ugr: 8.0 * (0.25 * PI * sum / e_wall_ind).log10(),
+            ugr: rating(sum, e_wall_ind),
         }
     }
+}
+
+/// `8 log10(0.25 pi sum / E_W)`; NaN when either is not positive.
+fn rating(sum: f64, e_wall_ind: f64) -> f64 {
+    if sum > 0.0 && e_wall_ind > 0.0 {
+        8.0 * (0.25 * PI * sum / e_wall_ind).log10()
+    } else {
+        f64::NAN
+    }
+}
+
+/// The standard table's rooms, `(X, Y)` in units of `H` (`X` across the
+/// line of sight, `Y` along it), in the order the tables print them.
+pub const ROOMS: [(f64, f64); 19] = [
+    (2.0, 2.0),
+    (2.0, 3.0),
+    (2.0, 4.0),
+    (2.0, 6.0),
+    (2.0, 8.0),
+    (2.0, 12.0),
+    (4.0, 2.0),
+    (4.0, 3.0),
+    (4.0, 4.0),
+    (4.0, 6.0),
+    (4.0, 8.0),
+    (4.0, 12.0),
+    (8.0, 4.0),
+    (8.0, 6.0),
+    (8.0, 8.0),
+    (8.0, 12.0),
+    (12.0, 4.0),
+    (12.0, 6.0),
+    (12.0, 8.0),
+];
+
+/// The standard table's reflectances (ceiling, walls, floor).
+pub const REFLECTANCES: [[f64; 3]; 5] = [
+    [0.7, 0.5, 0.2],
+    [0.7, 0.3, 0.2],
+    [0.5, 0.5, 0.2],
+    [0.5, 0.3, 0.2],
+    [0.3, 0.3, 0.2],
+];
+
+/// One room of a UGR table: the ratings for each of [`REFLECTANCES`],
+/// viewed crosswise and endwise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UgrRow {
+    /// Room dimension across the line of sight, in units of `H`.
+    pub x: f64,
+    /// Room dimension along the line of sight, in units of `H`.
+    pub y: f64,
+    /// Ratings viewed crosswise.
+    pub crosswise: [f64; 5],
+    /// Ratings viewed endwise.
+    pub endwise: [f64; 5],
+}
+
+/// A luminaire's UGR table by the tabular method: [`ROOMS`] by
+/// [`REFLECTANCES`], viewed crosswise and endwise, luminaires `h` [m] above
+/// the eye at `eye` [m], spaced `spacing_h` times `h`.
+pub fn ugr_table(
+    dist: &Goniometric,
+    area: &LuminousArea,
+    h: f64,
+    eye: f64,
+    spacing_h: f64,
+) -> Vec<UgrRow> {
+    use rayon::prelude::*;
+    let along_axis = FileLuminaire {
+        dist,
+        area,
+        frame: View::Endwise.frame(),
+    };
+    let fluxes = hemisphere_fluxes(&along_axis);
+    ROOMS
+        .par_iter()
+        .map(|&(x, y)| {
+            let mut ratings = [[0.0; 5]; 2];
+            for (view, out) in [View::Crosswise, View::Endwise]
+                .into_iter()
+                .zip(&mut ratings)
+            {
+                let lum = FileLuminaire {
+                    dist,
+                    area,
+                    frame: view.frame(),
+                };
+                let room = StandardRoom {
+                    across: x * h,
+                    along: y * h,
+                    eye,
+                    h,
+                    spacing: spacing_h * h,
+                    rho: [0.0; 3],
+                };
+                let sum = room.glare_sum(&lum);
+                let flux = room.direct_flux(&lum, fluxes);
+                for (rho, r) in REFLECTANCES.iter().zip(out.iter_mut()) {
+                    *r = rating(sum, StandardRoom { rho: *rho, ..room }.wall_indirect(&flux));
+                }
+            }
+            UgrRow {
+                x,
+                y,
+                crosswise: ratings[0],
+                endwise: ratings[1],
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -177,29 +444,165 @@ mod tests {
         assert!((view_factor_parallel(1e3, 1e3, 1.0) - 1.0).abs() < 3e-3);
     }
 
-    /// Flux balance of the three-surface model: with black walls and floor
-    /// the walls' indirect illuminance is 0; with reflectance 0 everywhere
-    /// too; and the direct part adds up to the luminaires' flux (floor
-    /// share checked against the exact value for one luminaire over an
-    /// infinite floor: all of it).
+    /// An analytic luminaire: `down mu (1 + c2 cos 2C)` below (`mu` the
+    /// cosine from the nadir, `C` from `+x`), `up` [cd] everywhere above,
+    /// a square opening of side `side` [m] facing down.
+    struct Analytic {
+        down: f64,
+        up: f64,
+        c2: f64,
+        side: f64,
+    }
+
+    impl TableLuminaire for Analytic {
+        fn intensity(&self, w: DVec3) -> f64 {
+            let mu = -w.z;
+            if mu > 0.0 {
+                let c = w.y.atan2(w.x);
+                self.down * mu * (1.0 + self.c2 * (2.0 * c).cos())
+            } else {
+                self.up
+            }
+        }
+        fn projected_area(&self, w: DVec3) -> f64 {
+            self.side * self.side * (-w.z).max(0.0)
+        }
+    }
+
+    const LUM: Analytic = Analytic {
+        down: 200.0,
+        up: 30.0,
+        c2: 0.5,
+        side: 0.3,
+    };
+
+    /// The hemispheres' flux against the closed forms `pi down` and
+    /// `2 pi up` (the `cos 2C` term integrates to 0).
+    #[test]
+    fn hemisphere_fluxes_closed_form() {
+        let (up, down) = hemisphere_fluxes(&LUM);
+        assert!((down / (PI * 200.0) - 1.0).abs() < 1e-6, "{down}");
+        assert!((up / (2.0 * PI * 30.0) - 1.0).abs() < 1e-6, "{up}");
+    }
+
+    /// The floor's direct flux by the offset-cell integral against a brute
+    /// force sum over luminaires of a midpoint rule over the floor (a code
+    /// path that shares nothing but the luminaire); and the three parts add
+    /// up to the luminaires' flux.
+    #[test]
+    fn floor_flux_against_brute_force() {
+        let room = StandardRoom {
+            across: 3.0,
+            along: 2.0,
+            eye: 1.0,
+            h: 1.5,
+            spacing: 1.0,
+            rho: [0.0; 3],
+        };
+        let fluxes = hemisphere_fluxes(&LUM);
+        let f = room.direct_flux(&LUM, fluxes);
+        let hc = room.eye + room.h;
+        let (nx, ny) = (600, 900);
+        let (dx, dy) = (room.along / nx as f64, room.across / ny as f64);
+        let mut brute = CompensatedSum::default();
+        for c in room.luminaires() {
+            assert_eq!(c.z, hc);
+            for u in 0..nx {
+                for v in 0..ny {
+                    let p = DVec3::new((u as f64 + 0.5) * dx, (v as f64 + 0.5) * dy, 0.0);
+                    let r = p - c;
+                    let d = r.length();
+                    brute.add(LUM.intensity(r / d) * hc / (d * d * d) * dx * dy);
+                }
+            }
+        }
+        let brute = brute.total();
+        assert!(
+            (f.floor / brute - 1.0).abs() < 2e-5,
+            "{} vs {brute}",
+            f.floor
+        );
+        assert_eq!(room.luminaires().len(), 6);
+        let total = 6.0 * (fluxes.0 + fluxes.1);
+        assert!(((f.floor + f.walls + f.ceiling) / total - 1.0).abs() < 1e-12);
+        assert!(f.walls > 0.1 * f.floor && f.ceiling == 6.0 * fluxes.0);
+    }
+
+    /// Flux balance of the three-surface model: black surfaces give no
+    /// indirect light; the walls' indirect illuminance grows with each
+    /// reflectance; a white box with no absorption has no finite answer
+    /// (the solve divides by zero) and is not a standard room.
     #[test]
     fn background_limits() {
         let room = StandardRoom {
-            x: 8.0,
-            y: 8.0,
+            across: 8.0,
+            along: 8.0,
             eye: 1.2,
             h: 2.0,
             spacing: 0.5,
             rho: [0.0, 0.0, 0.0],
         };
-        let cosine = |mu: f64| 100.0 * mu;
-        let t = room.rating(&cosine, 0.3, 40);
-        assert_eq!(t.e_wall_ind, 0.0);
-        let t = StandardRoom {
-            rho: [0.7, 0.5, 0.2],
-            ..room
+        let flux = room.direct_flux(&LUM, hemisphere_fluxes(&LUM));
+        assert_eq!(room.wall_indirect(&flux), 0.0);
+        let e = |rho| StandardRoom { rho, ..room }.wall_indirect(&flux);
+        let base = e([0.7, 0.5, 0.2]);
+        assert!(base > 0.0);
+        assert!(e([0.8, 0.5, 0.2]) > base && e([0.7, 0.6, 0.2]) > base);
+        assert!(e([0.7, 0.5, 0.3]) > base);
+        // Only the floor reflects: its first bounce reaches the walls by
+        // F_fw, nothing returns to the floor.
+        let hc = 3.2;
+        let f_cf = view_factor_parallel(8.0, 8.0, hc);
+        let aw = 2.0 * 16.0 * hc;
+        let want = 0.2 * flux.floor / 64.0 * 64.0 * (1.0 - f_cf) / aw;
+        assert!((e([0.0, 0.0, 0.2]) / want - 1.0).abs() < 1e-12);
+    }
+
+    fn file(name: &str) -> (Goniometric, LuminousArea) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("data/photometry")
+            .join(name);
+        let p = crate::io::photometry::read(&path).unwrap();
+        let area = LuminousArea::of_file(&p.opening).unwrap();
+        (Goniometric::new(&p, 1.0), area)
+    }
+
+    /// A rotationally symmetric luminaire with a flat opening rates the
+    /// same crosswise and endwise; one with a narrow C90 beam does not;
+    /// twice the flux adds `8 log10 2` to every entry (sum `~ Phi^2`,
+    /// background `~ Phi`); more luminaires in view rate higher.
+    #[test]
+    fn table_properties() {
+        let (g, a) = file("lm63_2002.ies");
+        let t = ugr_table(&g, &a, 2.0, 1.2, 0.25);
+        assert_eq!(t.len(), 19);
+        for r in &t {
+            for k in 0..5 {
+                assert!(r.crosswise[k].is_finite());
+                assert!((r.crosswise[k] - r.endwise[k]).abs() < 1e-9, "{r:?}");
+            }
+            // Darker walls and ceiling: less background, more glare.
+            assert!(r.crosswise[1] > r.crosswise[0] && r.crosswise[4] > r.crosswise[3]);
         }
-        .rating(&cosine, 0.3, 40);
-        assert!(t.e_wall_ind > 0.0 && t.ugr.is_finite());
+        // 2H x 2H against 2H x 12H (looking along a long room): higher.
+        assert!(t[5].crosswise[0] > t[0].crosswise[0] + 1.0);
+        let p = crate::io::photometry::read(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/photometry/lm63_2002.ies"),
+        )
+        .unwrap();
+        let t2 = ugr_table(&Goniometric::new(&p, 2.0), &a, 2.0, 1.2, 0.25);
+        for (r, r2) in t.iter().zip(&t2) {
+            for k in 0..5 {
+                let d = r2.endwise[k] - r.endwise[k];
+                assert!((d - 8.0 * 2f64.log10()).abs() < 1e-9, "{d}");
+            }
+        }
+        let (g, a) = file("sym_quadrant.ies");
+        let t = ugr_table(&g, &a, 2.0, 1.2, 0.25);
+        let most = t
+            .iter()
+            .map(|r| (r.crosswise[0] - r.endwise[0]).abs())
+            .fold(0.0, f64::max);
+        assert!(most > 0.5, "{most}");
     }
 }

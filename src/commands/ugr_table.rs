@@ -1,0 +1,148 @@
+//! `lumest ugr-table FILE`: a luminaire's UGR table by the tabular method
+//! of CIE 117 ([`crate::glare::tabular`]), as luminaire data sheets print
+//! it: 19 standard rooms by 5 reflectance sets, viewed crosswise and
+//! endwise.
+
+use crate::glare::LuminousArea;
+use crate::glare::tabular::{REFLECTANCES, UgrRow, ugr_table};
+use crate::io::photometry::PhotometricType;
+use crate::io::write_atomic;
+use crate::light::Goniometric;
+use anyhow::Context;
+use clap::Args;
+use std::path::Path;
+
+/// Arguments of `lumest ugr-table`.
+#[derive(Args, Clone, Debug)]
+pub struct UgrTableArgs {
+    /// An IES (`.ies`) or EULUMDAT (`.ldt`) file of type C with a luminous
+    /// opening.
+    pub file: std::path::PathBuf,
+    /// Luminaire spacing as a multiple of `H` (CIE 117's tables: 0.25).
+    #[arg(long, default_value_t = 0.25)]
+    pub spacing: f64,
+    /// Height `H` [m] of the luminaires above the eye.
+    #[arg(long, default_value_t = 2.0)]
+    pub height: f64,
+    /// Eye height [m] above the floor (1.2 seated, 1.7 standing).
+    #[arg(long, default_value_t = 1.2)]
+    pub eye: f64,
+    /// Also write the table as CSV here (`-`: standard output instead of
+    /// the printed table).
+    #[arg(long)]
+    pub out: Option<String>,
+}
+
+/// The CSV column of reflectance set `rho` viewed `view`, e.g.
+/// `crosswise_70_50_20`.
+fn column(view: &str, rho: &[f64; 3]) -> String {
+    format!(
+        "{view}_{:.0}_{:.0}_{:.0}",
+        rho[0] * 100.0,
+        rho[1] * 100.0,
+        rho[2] * 100.0
+    )
+}
+
+/// The table as CSV: `X_H,Y_H` and one column per reflectance set and
+/// view, ratings to 2 decimals.
+pub fn table_csv(rows: &[UgrRow]) -> String {
+    let mut s = String::from("X_H,Y_H");
+    for view in ["crosswise", "endwise"] {
+        for rho in &REFLECTANCES {
+            s += ",";
+            s += &column(view, rho);
+        }
+    }
+    s += "\n";
+    for r in rows {
+        s += &format!("{},{}", r.x, r.y);
+        for v in r.crosswise.iter().chain(&r.endwise) {
+            s += &format!(",{v:.2}");
+        }
+        s += "\n";
+    }
+    s
+}
+
+/// The table as data sheets print it, ratings to 1 decimal.
+pub fn table_text(rows: &[UgrRow]) -> String {
+    let line = |label: &str, k: usize| {
+        let v: Vec<String> = REFLECTANCES
+            .iter()
+            .map(|r| format!("{:5.2}", r[k]))
+            .collect();
+        format!("{label:<10}{}  |{}\n", v.join(" "), v.join(" "))
+    };
+    let mut s = line("ceiling", 0) + &line("walls", 1) + &line("floor", 2);
+    s += &format!(
+        "{:<10}{:<29}  |{}\n",
+        "X   Y", " viewed crosswise", " viewed endwise"
+    );
+    for r in rows {
+        let f = |a: &[f64; 5]| {
+            a.iter()
+                .map(|v| format!("{v:5.1}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        s += &format!(
+            "{:<10}{}  |{}\n",
+            format!("{}H {}H", r.x, r.y),
+            f(&r.crosswise),
+            f(&r.endwise)
+        );
+    }
+    s
+}
+
+/// Run `lumest ugr-table`.
+pub fn ugr_table_command(a: &UgrTableArgs) -> anyhow::Result<()> {
+    if let Some(out) = &a.out {
+        super::outputs::check_outputs(&[a.file.as_path()], &[("--out", Path::new(out))])?;
+    }
+    for (name, v) in [
+        ("--spacing", a.spacing),
+        ("--height", a.height),
+        ("--eye", a.eye),
+    ] {
+        anyhow::ensure!(
+            v.is_finite() && v > 0.0,
+            "{name} {v}: must be a positive number"
+        );
+    }
+    anyhow::ensure!(
+        a.spacing <= 2.0,
+        "--spacing {}: the tabular method covers spacings up to 2 H",
+        a.spacing
+    );
+    let p = crate::io::photometry::read(&a.file)?;
+    let shown = a.file.display();
+    anyhow::ensure!(
+        p.kind == PhotometricType::C,
+        "{shown}: type {:?} photometry: UGR tables are for indoor luminaires of type C",
+        p.kind
+    );
+    let area = LuminousArea::of_file(&p.opening).map_err(|e| anyhow::anyhow!("{shown}: {e}"))?;
+    let g = Goniometric::new(&p, 1.0);
+    let rows = ugr_table(&g, &area, a.height, a.eye, a.spacing);
+    if a.out.as_deref() != Some("-") {
+        println!(
+            "UGR table of {shown} (CIE 117 tabular method, Guth's position index by its \
+             closed form): luminaire flux {:.1} lm, luminaires {} m above the eye at {} m, \
+             spacing {} H; X across the line of sight, Y along it; crosswise: the line of \
+             sight across C0-C180 (the luminaire's length). For a flux Phi instead, add \
+             8 log10(Phi / {:.1}).",
+            g.power(),
+            a.height,
+            a.eye,
+            a.spacing,
+            g.power()
+        );
+        print!("{}", table_text(&rows));
+    }
+    if let Some(out) = &a.out {
+        write_atomic(out, table_csv(&rows).as_bytes()).with_context(|| format!("writing {out}"))?;
+    }
+    Ok(())
+}
