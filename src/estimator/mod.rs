@@ -415,8 +415,10 @@ struct ReceiverList {
 /// for a rectangle's); past it a list tests every shape.
 const MAX_OCCLUDERS: usize = 2_000_000;
 
-/// Most visibility-cell masks kept over all receiver lists (8 bytes each);
-/// a list whose cells would pass it takes coarser cells, or none.
+/// Most 8-byte words of visibility cells kept over all receiver lists
+/// (masks, split responses and, at worst, full test lists: 64 MB;
+/// [`visibility_cells::VisibilityCells::size`]); a list whose cells would
+/// pass it takes coarser cells, or none.
 const MAX_CELL_MASKS: usize = 8_000_000;
 
 /// Receivers compiled against a scene.

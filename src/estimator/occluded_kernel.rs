@@ -243,8 +243,9 @@ fn score_split<const COUNT: bool>(
             };
         }
     }
-    for &(k, mask) in tests {
+    for &k in tests {
         let k = k as usize;
+        let mask = row[k];
         let p = [list.px[k], list.py[k], list.pz[k]];
         let [cx, cp, dd] = kernel_parts(x, n, p, [list.nx[k], list.ny[k], list.nz[k]]);
         if !(cx > 0.0 && cp > 0.0) || dd < list.eps2[k] {

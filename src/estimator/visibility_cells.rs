@@ -13,8 +13,8 @@ use crate::scene::world::Occluder;
 use glam::DVec3;
 
 /// One cell's split ([`VisibilityCells::split`]): the open responses, the
-/// pairs left to a test with their masks, and the cell's masks.
-pub(super) type CellSplit<'a> = (&'a [f64], &'a [(u32, u64)], &'a [u64]);
+/// entries left to a test (their masks are the cell's), and the cell's masks.
+pub(super) type CellSplit<'a> = (&'a [f64], &'a [u32], &'a [u64]);
 
 /// Most cells along a region's longest side: for a flat region (a wall, a
 /// floor, a desk top: one cell across) and for a solid one. Finer flat
@@ -45,11 +45,11 @@ pub(super) struct VisibilityCells {
     /// straight-line code ...
     open_w: Vec<f64>,
     n_const: usize,
-    /// ... and the entries left to a shadow test, with their masks:
-    /// `tests[test_start[c]..test_start[c + 1]]` for cell `c` (a dark
-    /// entry is in neither).
+    /// ... and the entries left to a shadow test (their masks are in
+    /// `vis`): `tests[test_start[c]..test_start[c + 1]]` for cell `c` (a
+    /// dark entry is in neither).
     test_start: Vec<u32>,
-    tests: Vec<(u32, u64)>,
+    tests: Vec<u32>,
 }
 
 impl VisibilityCells {
@@ -67,13 +67,14 @@ impl VisibilityCells {
         })
     }
 
-    /// Number of 8-byte words the cells of a region would take for `len`
-    /// entries (`split` of them also split for the two-pass kernel, see
-    /// [`Self::build`]), at most `per_side` cells along the longest side;
-    /// the split's test lists not counted.
+    /// Most 8-byte words the cells of a region can take for `len` entries
+    /// (`split` of them also split for the two-pass kernel, see
+    /// [`Self::build`]), at most `per_side` cells along the longest side:
+    /// per cell a mask per entry, an open response per split entry and, at
+    /// worst, every split entry on the cell's test list (4 bytes each).
     pub(super) fn size(region: (DVec3, DVec3), len: usize, split: usize, per_side: usize) -> usize {
         let n = Self::counts(region.1 - region.0, per_side);
-        n[0] * n[1] * n[2] * (len + split)
+        n[0] * n[1] * n[2] * (len + split + split.div_ceil(2))
     }
 
     /// The cells of `region` [m] for entries at `points` whose occluders
@@ -135,7 +136,7 @@ impl VisibilityCells {
                 for (k, (&m, &w)) in row.iter().zip(w).enumerate() {
                     open_w.push(if m == 0 { w } else { 0.0 });
                     if m != 0 && m != crate::scene::world::CELL_DARK {
-                        tests.push((k as u32, m));
+                        tests.push(k as u32);
                     }
                 }
                 test_start.push(tests.len() as u32);
