@@ -1002,7 +1002,7 @@ pub fn drive(
         work,
         &capped,
         bs,
-        planned.min(by_chains),
+        run_length(planned, by_chains, 0, r_p),
         start,
         observe,
         None,
@@ -1125,12 +1125,27 @@ fn calibrated_run(
         tallies: capped.shard.is_none().then_some(tallies),
         batches: first.batches,
     };
-    let total = plan.planned.min(by_chains);
+    let total = run_length(plan.planned, by_chains, cal, r_c);
     let mut result = drive_batches(work, capped, bs, total, start, observe, Some(prior));
     if result.reason == StopReason::Chains && plan.planned <= by_chains {
         result.reason = StopReason::RelError;
     }
     finish(result, plan)
+}
+
+/// Batches a planned run folds in all: the plan capped by `--chains`
+/// (`by_chains`); when no plan could be made because the measured error
+/// `r` is not finite (a receiver's estimate is not a number, which no run
+/// length mends), the least a run has ([`MIN_BATCHES`], or the `least`
+/// already folded), so that it neither runs to the time cap nor, as a
+/// shard (which has none), forever. (A plan too large to count, from a
+/// finite error and a tiny target, runs until a limit stops it.)
+fn run_length(planned: u64, by_chains: u64, least: u64, r: f64) -> u64 {
+    if r.is_finite() {
+        planned.min(by_chains)
+    } else {
+        least.max(MIN_BATCHES).min(by_chains)
+    }
 }
 
 /// Batches `0 .. folded` of the run proper, done before [`drive_batches`]

@@ -420,3 +420,85 @@ fn an_rms_plan_picks_its_batch_size_within_20_percent_of_the_best() {
         );
     }
 }
+
+/// Work whose batch means are not numbers (a receiver's scores went NaN):
+/// no plan can be made from its pilot.
+struct NotANumber;
+
+impl BatchWork for NotANumber {
+    fn len(&self) -> usize {
+        8
+    }
+    fn direct(&self) -> &[f64] {
+        &[0.0; 8]
+    }
+    fn emits(&self) -> bool {
+        true
+    }
+    fn scratch_len(&self, _buckets: usize) -> usize {
+        0
+    }
+    fn default_batch_size(&self, chains: Option<u64>) -> u64 {
+        lumest::run::cap_batch_size(1024, chains)
+    }
+    fn run_batch(&self, _cfg: &RunConfig, b: u64, bs: u64, k: usize, _s: &mut [f64]) -> Batch {
+        // Order buckets `q * 8 + j`; receiver 3 is NaN in each.
+        let mut sums = vec![bs as f64 / k as f64; 8 * k];
+        for q in 0..k {
+            sums[q * 8 + 3] = f64::NAN;
+        }
+        Batch {
+            index: b,
+            chains: bs,
+            sums,
+            collisions: 0,
+            scores: 0,
+            near_hits: Vec::new(),
+            direct_sums: Vec::new(),
+        }
+    }
+}
+
+/// A plan that cannot be made (a receiver's estimate is NaN, which no run
+/// length mends) must neither hide the NaN as an exact 0 nor run to the
+/// time cap or, as a shard (which has none), forever: with a largest or an
+/// RMS target, the run proper stops at the least 32 batches and says that
+/// no plan was made. (Without the guard this test would not end: the
+/// watchdog fails it.)
+#[test]
+fn a_run_without_a_plan_ends() {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for rms in [false, true] {
+            for shard in [None, Some((0, 2))] {
+                let cfg = RunConfig {
+                    seed: 1,
+                    threads: 1,
+                    shard,
+                    stop: Stop {
+                        rel_error: Some(1e-3),
+                        rms,
+                        ..Stop::default()
+                    },
+                    ..RunConfig::default()
+                };
+                let r = drive(&NotANumber, &cfg, &mut |_| true);
+                let errors: Vec<f64> = r.tallies.rel_errors(&r.direct).collect();
+                // A shard's whole run, or the batches a run folded.
+                let total = r.total_batches.max(r.tallies.batches());
+                tx.send((rms, shard, r.pilot.map(|p| p.planned), total, errors))
+                    .unwrap();
+            }
+        }
+    });
+    for _ in 0..4 {
+        let (rms, shard, planned, total, errors) = rx
+            .recv_timeout(std::time::Duration::from_secs(120))
+            .expect("a run with no plan ran on");
+        assert_eq!(planned, Some(u64::MAX), "rms {rms} shard {shard:?}");
+        assert_eq!(total, MIN_BATCHES, "rms {rms} shard {shard:?}");
+        if shard.is_none() {
+            assert!(errors[3].is_nan() && errors[2] == 0.0, "{errors:?}");
+        }
+    }
+}

@@ -252,6 +252,21 @@ fn exact_cells(l: f64, orders: u32) -> Vec<String> {
     c
 }
 
+/// How many batches a `--rel-error` plan holds, in words (`what`: which
+/// batches, e.g. "fresh batches were planned"): none could be made where
+/// the measured error `r` was not finite.
+fn planned_text(planned: u64, r: f64, what: &str) -> String {
+    if !r.is_finite() {
+        format!(
+            "no plan could be made (the error is not finite: a receiver's estimate is not a number), \
+             and the least {} batches ran",
+            crate::run::MIN_BATCHES
+        )
+    } else {
+        format!("{} {what}", format_number(planned as f64))
+    }
+}
+
 /// The run summary printed to standard error.
 pub fn summary(r: &RunResult) -> String {
     let rms = r.tallies.rms_rel_error(&r.direct);
@@ -383,7 +398,7 @@ pub fn summary(r: &RunResult) -> String {
             format!(
                 "\n{flag} {target:.3e}: the run's first {} batches of {} chains (sized by a pilot of \
                  {} chains on their own streams, {:.3} s) gave {what} R {:.3e} (margin {:.3} for {:.0} \
-                 degrees of freedom), so {} batches were planned in all, those {} included",
+                 degrees of freedom), so {}, those {} included",
                 p.calibration,
                 p.batch_size,
                 format_number(p.pilot_chains as f64),
@@ -391,14 +406,14 @@ pub fn summary(r: &RunResult) -> String {
                 p.rel_error,
                 crate::run::variance_margin(p.dof),
                 p.dof,
-                format_number(p.planned as f64),
+                planned_text(p.planned, p.rel_error, "batches were planned in all"),
                 p.calibration,
             )
         } else {
             format!(
                 "\n{flag} {target:.3e}: a pilot of {} batches of {} chains ({:.3} s, own streams{}) \
                  gave {what} R {:.3e} per batch of {} (margin {:.3} for {:.0} degrees of freedom), so \
-                 {} fresh batches were planned",
+                 {}",
                 p.batches,
                 p.batch_size,
                 p.wall,
@@ -416,13 +431,15 @@ pub fn summary(r: &RunResult) -> String {
                 r.batch_size,
                 crate::run::variance_margin(p.dof),
                 p.dof,
-                format_number(p.planned as f64),
+                planned_text(p.planned, p.rel_error, "fresh batches were planned"),
             )
         };
         text += &format!(
             "{measured}; achieved {what} R {max:.3e}{}",
             if max <= target {
                 " (target met)".to_string()
+            } else if max.is_nan() {
+                " (target MISSED: the error is not a number; see the flagged rows)".to_string()
             } else if r.reason == crate::run::StopReason::Time {
                 format!(
                     " (target MISSED: stopped by {}; the {} planned batches need about {:.3e} s at \

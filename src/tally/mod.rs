@@ -238,12 +238,16 @@ impl Welford {
         self.mean
     }
 
-    /// Unbiased sample variance (0 with fewer than two observations).
+    /// Unbiased sample variance (0 with fewer than two observations; NaN
+    /// when an observation was not a number, never hidden as 0).
     pub fn variance(&self) -> f64 {
         if self.n < 2 {
             0.0
         } else {
-            (self.m2 / (self.n - 1) as f64).max(0.0)
+            // Rounding can leave m2 a hair below 0; `f64::max` would also
+            // turn a NaN into 0, an exact-looking estimate.
+            let v = self.m2 / (self.n - 1) as f64;
+            if v < 0.0 { 0.0 } else { v }
         }
     }
 
@@ -456,6 +460,23 @@ mod tests {
         assert!(plain >= 80, "{plain}: the plain limit should flag ~4 %");
         assert_eq!(vov_limit(32), 6.0 / 32.0);
         assert_eq!(vov_limit(1000), 0.1);
+    }
+
+    /// A batch mean that is not a number makes the error NaN, not an
+    /// exact-looking 0 (and so the relative error, and a run's largest).
+    #[test]
+    fn a_nan_observation_is_not_an_exact_estimate() {
+        let mut w = Welford::new();
+        for x in [1.0, f64::NAN, 2.0] {
+            w.push(x);
+        }
+        assert!(w.variance().is_nan() && w.std_error().is_nan());
+        assert!(relative_error(w.mean(), w.std_error()).is_nan());
+        let mut c = Welford::new();
+        for _ in 0..4 {
+            c.push(3.0);
+        }
+        assert_eq!((c.variance(), c.std_error()), (0.0, 0.0));
     }
 
     #[test]
