@@ -103,6 +103,23 @@ fn bad_inputs_are_refused() {
         &[q.as_os_str(), "--spacing".as_ref(), "0".as_ref()],
         "--spacing 0",
     );
+    // A grid of 1 / spacing^2 luminaires: 0.001 H would need gigabytes.
+    refuse(
+        &[q.as_os_str(), "--spacing".as_ref(), "0.001".as_ref()],
+        "--spacing 0.001",
+    );
+    // All the light upwards: no luminance towards the eye, no rating (the
+    // table would be NaN throughout).
+    let up = dir.path().join("up.ies");
+    std::fs::write(
+        &up,
+        "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 5 1 1 2 0.3 0.3 0\n1 1 0\n0 45 90 135 180\n0\n0 0 0 100 100\n",
+    )
+    .unwrap();
+    refuse(
+        &[up.as_os_str()],
+        "no finite UGR for the 2H x 2H room viewed crosswise, reflectances 70/50/20",
+    );
     refuse(
         &[q.as_os_str(), "--eye".as_ref(), "nan".as_ref()],
         "--eye NaN",

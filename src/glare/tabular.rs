@@ -558,6 +558,112 @@ mod tests {
         assert!((e([0.0, 0.0, 0.2]) / want - 1.0).abs() < 1e-12);
     }
 
+    /// The room's axes: `along` runs along the line of sight from the
+    /// observer's wall, `across` to the side. A room one luminaire wide and
+    /// three deep puts all three straight ahead of the eye, so the sum is
+    /// the hand-written one (position index at `tau = 0`, `C = 180` deg from
+    /// the luminaire to the eye); with the axes swapped they would stand to
+    /// the side.
+    #[test]
+    fn room_axes_by_hand() {
+        let room = StandardRoom {
+            across: 0.5,
+            along: 1.5,
+            eye: 1.2,
+            h: 2.0,
+            spacing: 0.5,
+            rho: [0.0; 3],
+        };
+        let mut want = 0.0;
+        for x in [0.25f64, 0.75, 1.25] {
+            let d2 = x * x + 4.0;
+            let mu = 2.0 / d2.sqrt();
+            let i = 200.0 * mu * 1.5;
+            let p = super::super::guth_index(0.0, (2.0 / x).atan().to_degrees());
+            want += i * i / (0.09 * mu * d2 * p * p);
+        }
+        let got = room.glare_sum(&LUM);
+        assert!((got / want - 1.0).abs() < 1e-12, "{got} vs {want}");
+    }
+
+    /// The fraction of the light leaving the walls (uniform, diffuse) that
+    /// reaches the ceiling, by stratified ray casting from both kinds of
+    /// wall: code that shares nothing with the view-factor algebra.
+    fn walls_to_ceiling(along: f64, across: f64, hc: f64) -> f64 {
+        let n = 64;
+        let mut hit = [0.0; 2];
+        // Wall 0 at x = 0 (width `across`), wall 1 at y = 0 (width `along`).
+        for (wall, (width, depth)) in [(across, along), (along, across)].into_iter().enumerate() {
+            let mut count = 0usize;
+            for a in 0..n {
+                for b in 0..n {
+                    let (t, z) = (
+                        (a as f64 + 0.5) / n as f64 * width,
+                        (b as f64 + 0.5) / n as f64 * hc,
+                    );
+                    for c in 0..n {
+                        for e in 0..n {
+                            let (u1, u2) =
+                                ((c as f64 + 0.5) / n as f64, (e as f64 + 0.5) / n as f64);
+                            // Cosine-weighted about the wall's normal.
+                            let (r, phi) = (u1.sqrt(), 2.0 * PI * u2);
+                            let (dn, dt, dz) = ((1.0 - u1).sqrt(), r * phi.cos(), r * phi.sin());
+                            if dz <= 0.0 {
+                                continue;
+                            }
+                            let s = (hc - z) / dz;
+                            let (pn, pt) = (dn * s, t + dt * s);
+                            if pn <= depth && (0.0..=width).contains(&pt) {
+                                count += 1;
+                            }
+                        }
+                    }
+                }
+            }
+            hit[wall] = count as f64 / (n as f64).powi(4);
+        }
+        (hit[0] * across + hit[1] * along) / (across + along)
+    }
+
+    /// The walls' exchange: only the ceiling reflects, `E_W = F_wc rho_c
+    /// E0_c`; only the walls, `E_W = E0_w F_ww rho / (1 - F_ww rho)` with
+    /// `F_ww = 1 - 2 F_wc`; `F_wc` by ray casting (stratified, 64^4 rays:
+    /// 4.5e-4 above the exact 0.28369 here, converging as the grid is
+    /// refined; the bounds 2e-3 relative).
+    #[test]
+    fn wall_exchange_against_ray_casting() {
+        let room = StandardRoom {
+            across: 4.0,
+            along: 12.0,
+            eye: 1.2,
+            h: 2.0,
+            spacing: 0.5,
+            rho: [0.0; 3],
+        };
+        let hc = 3.2;
+        let f_wc = walls_to_ceiling(room.along, room.across, hc);
+        let aw = 2.0 * (room.along + room.across) * hc;
+        let flux = DirectFlux {
+            ceiling: 1000.0,
+            walls: 2000.0,
+            floor: 3000.0,
+        };
+        let e = |rho| StandardRoom { rho, ..room }.wall_indirect(&flux);
+        let want = f_wc * 0.7 * 1000.0 / (room.along * room.across);
+        assert!(
+            (e([0.7, 0.0, 0.0]) / want - 1.0).abs() < 2e-3,
+            "{} vs {want}",
+            e([0.7, 0.0, 0.0])
+        );
+        let f_ww = 1.0 - 2.0 * f_wc;
+        let want = 2000.0 / aw * f_ww * 0.5 / (1.0 - f_ww * 0.5);
+        assert!(
+            (e([0.0, 0.5, 0.0]) / want - 1.0).abs() < 2e-3,
+            "{} vs {want}",
+            e([0.0, 0.5, 0.0])
+        );
+    }
+
     fn file(name: &str) -> (Goniometric, LuminousArea) {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("data/photometry")
@@ -599,6 +705,38 @@ mod tests {
         }
         let (g, a) = file("sym_quadrant.ies");
         let t = ugr_table(&g, &a, 2.0, 1.2, 0.25);
+        // The row `X = 2H, Y = 12H` is the room 2H across, 12H along the
+        // line of sight, not its transpose (which rates far apart).
+        assert_eq!((t[5].x, t[5].y), (2.0, 12.0));
+        for (view, got) in [
+            (View::Crosswise, t[5].crosswise),
+            (View::Endwise, t[5].endwise),
+        ] {
+            let lum = FileLuminaire {
+                dist: &g,
+                area: &a,
+                frame: view.frame(),
+            };
+            let room = |across, along| StandardRoom {
+                across,
+                along,
+                eye: 1.2,
+                h: 2.0,
+                spacing: 0.5,
+                rho: REFLECTANCES[0],
+            };
+            let want = room(4.0, 24.0).rating(&lum).ugr;
+            assert!(
+                (got[0] - want).abs() < 1e-6,
+                "{view:?}: {} vs {want}",
+                got[0]
+            );
+            let transposed = room(24.0, 4.0).rating(&lum).ugr;
+            assert!(
+                (want - transposed).abs() > 0.5,
+                "{view:?}: {want} vs {transposed}"
+            );
+        }
         let most = t
             .iter()
             .map(|r| (r.crosswise[0] - r.endwise[0]).abs())
