@@ -47,7 +47,7 @@ fn csv_rows_are_the_tabular_ratings() {
         let room = StandardRoom {
             across: 8.0,
             along: 8.0,
-            eye: 1.2,
+            eye: 0.0,
             h: 2.0,
             spacing: 0.5,
             rho: [0.7, 0.5, 0.2],
@@ -121,8 +121,8 @@ fn bad_inputs_are_refused() {
         "no finite UGR for the 2H x 2H room viewed crosswise, reflectances 70/50/20",
     );
     refuse(
-        &[q.as_os_str(), "--eye".as_ref(), "nan".as_ref()],
-        "--eye NaN",
+        &[q.as_os_str(), "--spacing".as_ref(), "nan".as_ref()],
+        "--spacing NaN",
     );
     // The output may not be the input.
     let copy = dir.path().join("q.ies");

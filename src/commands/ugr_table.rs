@@ -22,12 +22,6 @@ pub struct UgrTableArgs {
     /// from 0.05 to 2).
     #[arg(long, default_value_t = 0.25)]
     pub spacing: f64,
-    /// Height `H` [m] of the luminaires above the eye.
-    #[arg(long, default_value_t = 2.0)]
-    pub height: f64,
-    /// Eye height [m] above the floor (1.2 seated, 1.7 standing).
-    #[arg(long, default_value_t = 1.2)]
-    pub eye: f64,
     /// Also write the table as CSV here (`-`: standard output instead of
     /// the printed table).
     #[arg(long)]
@@ -126,16 +120,11 @@ pub fn ugr_table_command(a: &UgrTableArgs) -> anyhow::Result<()> {
     if let Some(out) = &a.out {
         super::outputs::check_outputs(&[a.file.as_path()], &[("--out", Path::new(out))])?;
     }
-    for (name, v) in [
-        ("--spacing", a.spacing),
-        ("--height", a.height),
-        ("--eye", a.eye),
-    ] {
-        anyhow::ensure!(
-            v.is_finite() && v > 0.0,
-            "{name} {v}: must be a positive number"
-        );
-    }
+    anyhow::ensure!(
+        a.spacing.is_finite() && a.spacing > 0.0,
+        "--spacing {}: must be a positive number",
+        a.spacing
+    );
     // Below 0.05 H the grid grows as 1 / spacing^2 and the floor's offset
     // integral as 1 / spacing^4 (measured: 0.24 s at 0.25 H, 3.2 s at
     // 0.05 H, 23 s at 0.02 H; 0.001 H would need 3.5 GB of positions).
@@ -153,7 +142,7 @@ pub fn ugr_table_command(a: &UgrTableArgs) -> anyhow::Result<()> {
     );
     let area = LuminousArea::of_file(&p.opening).map_err(|e| anyhow::anyhow!("{shown}: {e}"))?;
     let g = Goniometric::new(&p, 1.0);
-    let rows = ugr_table(&g, &area, a.height, a.eye, a.spacing);
+    let rows = ugr_table(&g, &area, a.spacing);
     if let Some(bad) = first_undefined(&rows) {
         anyhow::bail!(
             "{shown}: no finite UGR for {bad}: the luminaire sends no light towards the eye \
@@ -163,13 +152,11 @@ pub fn ugr_table_command(a: &UgrTableArgs) -> anyhow::Result<()> {
     if a.out.as_deref() != Some("-") {
         println!(
             "UGR table of {shown} (CIE 117 tabular method, Guth's position index by its \
-             closed form): luminaire flux {:.1} lm, luminaires {} m above the eye at {} m, \
-             spacing {} H; X across the line of sight, Y along it; crosswise: the line of \
-             sight across C0-C180 (the luminaire's length). For a flux Phi instead, add \
-             8 log10(Phi / {:.1}).",
+             closed form): luminaire flux {:.1} lm, spacing {} H, with H the luminaires' height \
+             above the eye (their height above the floor less 1.2 m seated, 1.7 m standing); X \
+             across the line of sight, Y along it; crosswise: the line of sight across C0-C180 \
+             (the luminaire's length). For a flux Phi instead, add 8 log10(Phi / {:.1}).",
             g.power(),
-            a.height,
-            a.eye,
             a.spacing,
             g.power()
         );

@@ -4,10 +4,19 @@
 //!
 //! The standard room: a floor `across x along` [m] (CIE 117's `X`, across
 //! the line of sight, and `Y`, along it), luminaires in a regular grid in
-//! the ceiling plane at height `H` above the eye (eye 1.2 m above the
-//! floor; the outer rows half a spacing from the walls), the observer at
-//! the middle of the wall `along = 0` looking horizontally into the room,
-//! reflectances of ceiling, walls and floor. The rating uses the same
+//! the ceiling plane at height `H` above the eye (the outer rows half a
+//! spacing from the walls), the observer at the middle of the wall `along
+//! = 0` looking horizontally into the room, reflectances of ceiling, walls
+//! and floor. The box whose surfaces inter-reflect reaches from the floor
+//! to the ceiling; in the published tables ([`ugr_table`]) its floor is
+//! the eye plane, standing for the floor cavity below it with that
+//! cavity's effective reflectance (the tables' 0.2), so that its walls are
+//! `H` high and a table depends on the room only through `X / H`, `Y / H`
+//! and the spacing over `H`, as tables are printed (a user finds `H` as
+//! the luminaires' height above the floor less the eye's, 1.2 m seated or
+//! 1.7 m standing; tested). A room with a real floor below the eye (the
+//! checks against `lumest glare` in a scene) sets the eye's height above
+//! it. The rating uses the same
 //! terms `L^2 omega / p^2` as [`crate::glare`] (the luminance and the
 //! projected luminous area of [`LuminousArea`], Guth's [`position_index`];
 //! no obstruction in an empty room) over every luminaire of the room, and
@@ -95,7 +104,9 @@ pub struct StandardRoom {
     pub across: f64,
     /// Room dimension along the line of sight [m] (CIE 117's `Y`).
     pub along: f64,
-    /// Eye height above the floor [m].
+    /// Eye height above the floor of the inter-reflecting box [m]: 0 in
+    /// the published tables (the floor cavity collapsed into the eye
+    /// plane), 1.2 for a seated eye above a real floor.
     pub eye: f64,
     /// Height of the luminaire (ceiling) plane above the eye [m].
     pub h: f64,
@@ -328,6 +339,10 @@ fn rating(sum: f64, e_wall_ind: f64) -> f64 {
     }
 }
 
+/// The height `H` [m] a table is computed at (any other gives the same
+/// ratings to rounding).
+pub const TABLE_H: f64 = 2.0;
+
 /// The standard table's rooms, `(X, Y)` in units of `H` (`X` across the
 /// line of sight, `Y` along it), in the order the tables print them.
 pub const ROOMS: [(f64, f64); 19] = [
@@ -376,16 +391,13 @@ pub struct UgrRow {
 }
 
 /// A luminaire's UGR table by the tabular method: [`ROOMS`] by
-/// [`REFLECTANCES`], viewed crosswise and endwise, luminaires `h` [m] above
-/// the eye at `eye` [m], spaced `spacing_h` times `h`.
-pub fn ugr_table(
-    dist: &Goniometric,
-    area: &LuminousArea,
-    h: f64,
-    eye: f64,
-    spacing_h: f64,
-) -> Vec<UgrRow> {
+/// [`REFLECTANCES`], viewed crosswise and endwise, luminaires spaced
+/// `spacing_h` times their height `H` above the eye, the floor cavity in
+/// the eye plane (module docs). The ratings do not depend on `H`; they
+/// are computed at [`TABLE_H`].
+pub fn ugr_table(dist: &Goniometric, area: &LuminousArea, spacing_h: f64) -> Vec<UgrRow> {
     use rayon::prelude::*;
+    let (h, eye) = (TABLE_H, 0.0);
     let along_axis = FileLuminaire {
         dist,
         area,
@@ -680,7 +692,7 @@ mod tests {
     #[test]
     fn table_properties() {
         let (g, a) = file("lm63_2002.ies");
-        let t = ugr_table(&g, &a, 2.0, 1.2, 0.25);
+        let t = ugr_table(&g, &a, 0.25);
         assert_eq!(t.len(), 19);
         for r in &t {
             for k in 0..5 {
@@ -696,7 +708,7 @@ mod tests {
             &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/photometry/lm63_2002.ies"),
         )
         .unwrap();
-        let t2 = ugr_table(&Goniometric::new(&p, 2.0), &a, 2.0, 1.2, 0.25);
+        let t2 = ugr_table(&Goniometric::new(&p, 2.0), &a, 0.25);
         for (r, r2) in t.iter().zip(&t2) {
             for k in 0..5 {
                 let d = r2.endwise[k] - r.endwise[k];
@@ -704,7 +716,7 @@ mod tests {
             }
         }
         let (g, a) = file("sym_quadrant.ies");
-        let t = ugr_table(&g, &a, 2.0, 1.2, 0.25);
+        let t = ugr_table(&g, &a, 0.25);
         // The row `X = 2H, Y = 12H` is the room 2H across, 12H along the
         // line of sight, not its transpose (which rates far apart).
         assert_eq!((t[5].x, t[5].y), (2.0, 12.0));
@@ -720,7 +732,7 @@ mod tests {
             let room = |across, along| StandardRoom {
                 across,
                 along,
-                eye: 1.2,
+                eye: 0.0,
                 h: 2.0,
                 spacing: 0.5,
                 rho: REFLECTANCES[0],
@@ -731,6 +743,24 @@ mod tests {
                 "{view:?}: {} vs {want}",
                 got[0]
             );
+            // The ratings depend on the room only in units of H: the same
+            // room at H = 5 m; but a real floor 1.2 m below the eye (at H =
+            // 2 m) changes them.
+            let scaled = StandardRoom {
+                across: 10.0,
+                along: 60.0,
+                h: 5.0,
+                spacing: 1.25,
+                ..room(0.0, 0.0)
+            };
+            let at_5 = scaled.rating(&lum).ugr;
+            assert!((at_5 - want).abs() < 1e-9, "{view:?}: {at_5} vs {want}");
+            let seated = StandardRoom {
+                eye: 1.2,
+                ..room(4.0, 24.0)
+            };
+            let real_floor = seated.rating(&lum).ugr;
+            assert!((real_floor - want).abs() > 0.05, "{view:?}: {real_floor}");
             let transposed = room(24.0, 4.0).rating(&lum).ugr;
             assert!(
                 (want - transposed).abs() > 0.5,
