@@ -181,12 +181,37 @@ fn office_report_matches_its_figures() {
         })
         .collect();
     assert_eq!(rows.len(), 6 + 1);
-    assert_eq!(rows[5], ["pendant", "ies", "3000.0", "pendant.ies"]);
+    // The reference UGR (4H x 8H, 70/50/20, crosswise / endwise) of each
+    // file at its flux in the scene, from the table code on the file read
+    // here: the pendant dimmed to 3000 lm (rotationally symmetric, so the
+    // two views agree), the downlight at its own flux.
+    let reference = |file: &str, flux: Option<f64>| {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("data")
+            .join(file);
+        let p = lumest::io::photometry::read(&path).unwrap();
+        let g = lumest::light::Goniometric::new(&p, 1.0);
+        let g = match flux {
+            Some(f) => lumest::light::Goniometric::new(&p, f / g.power()),
+            None => g,
+        };
+        let area = lumest::glare::LuminousArea::of_file(&p.opening).unwrap();
+        let (c, e) = lumest::glare::tabular::reference_ugr(&g, &area);
+        format!("{c:.1} / {e:.1}")
+    };
+    let pendant = reference("pendant.ies", Some(3000.0));
+    assert_eq!(
+        rows[5],
+        ["pendant", "ies", "3000.0", "pendant.ies", &pendant]
+    );
+    let downlight = reference("downlight.ldt", None);
     assert!(
         rows[..5]
             .iter()
-            .all(|r| r[1] == "ldt" && r[3] == "downlight.ldt")
+            .all(|r| r[1] == "ldt" && r[3] == "downlight.ldt" && r[4] == downlight),
+        "{rows:?} vs {downlight}"
     );
+    eprintln!("reference UGR: pendant {pendant}, downlight {downlight}");
     // Run statistics: chains and seed as asked.
     let run: HashMap<String, String> = doc
         .select(&sel("#run-table tr"))

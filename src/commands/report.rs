@@ -304,6 +304,30 @@ fn build(
     desc: Option<&SceneDesc>,
     grids: Vec<GridSection>,
 ) -> Report {
+    // Reference ratings, once per distinct distribution (the same file
+    // at the same flux shares one).
+    let mut ugr_cache: Vec<(std::sync::Arc<crate::light::Goniometric>, String)> = Vec::new();
+    let mut reference = |l: &crate::light::Light| -> String {
+        let crate::light::Light::Gonio { dist, .. } = l else {
+            return "-".to_string();
+        };
+        if let Some((_, v)) = ugr_cache.iter().find(|(d, _)| **d == **dist) {
+            return v.clone();
+        }
+        let v = match crate::glare::LuminousArea::of_file(&dist.file_opening()) {
+            Ok(area) if dist.kind() == crate::io::photometry::PhotometricType::C => {
+                let (c, e) = crate::glare::tabular::reference_ugr(dist, &area);
+                if c.is_finite() && e.is_finite() {
+                    format!("{c:.1} / {e:.1}")
+                } else {
+                    "-".to_string()
+                }
+            }
+            _ => "-".to_string(),
+        };
+        ugr_cache.push((dist.clone(), v.clone()));
+        v
+    };
     let luminaires: Vec<Luminaire> = scene
         .lights
         .iter()
@@ -330,6 +354,7 @@ fn build(
                 file: d
                     .and_then(|d| d.file.as_ref())
                     .map_or(String::new(), |f| f.get_ref().clone()),
+                ugr_ref: reference(l),
             }
         })
         .collect();

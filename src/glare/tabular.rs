@@ -397,48 +397,73 @@ pub struct UgrRow {
 /// are computed at [`TABLE_H`].
 pub fn ugr_table(dist: &Goniometric, area: &LuminousArea, spacing_h: f64) -> Vec<UgrRow> {
     use rayon::prelude::*;
-    let (h, eye) = (TABLE_H, 0.0);
-    let along_axis = FileLuminaire {
-        dist,
-        area,
-        frame: View::Endwise.frame(),
-    };
-    let fluxes = hemisphere_fluxes(&along_axis);
+    let fluxes = luminaire_fluxes(dist, area);
     ROOMS
         .par_iter()
         .map(|&(x, y)| {
-            let mut ratings = [[0.0; 5]; 2];
-            for (view, out) in [View::Crosswise, View::Endwise]
-                .into_iter()
-                .zip(&mut ratings)
-            {
-                let lum = FileLuminaire {
-                    dist,
-                    area,
-                    frame: view.frame(),
-                };
-                let room = StandardRoom {
-                    across: x * h,
-                    along: y * h,
-                    eye,
-                    h,
-                    spacing: spacing_h * h,
-                    rho: [0.0; 3],
-                };
-                let sum = room.glare_sum(&lum);
-                let flux = room.direct_flux(&lum, fluxes);
-                for (rho, r) in REFLECTANCES.iter().zip(out.iter_mut()) {
-                    *r = rating(sum, StandardRoom { rho: *rho, ..room }.wall_indirect(&flux));
-                }
-            }
+            let [crosswise, endwise] = room_ratings(dist, area, fluxes, (x, y), spacing_h);
             UgrRow {
                 x,
                 y,
-                crosswise: ratings[0],
-                endwise: ratings[1],
+                crosswise,
+                endwise,
             }
         })
         .collect()
+}
+
+/// The reference ratings a luminaire is labelled with: the standard room
+/// `X = 4H`, `Y = 8H`, reflectances 0.7 / 0.5 / 0.2, spacing 0.25 H,
+/// `(crosswise, endwise)` (the entries of [`ugr_table`]'s row `4H 8H`).
+pub fn reference_ugr(dist: &Goniometric, area: &LuminousArea) -> (f64, f64) {
+    let [c, e] = room_ratings(dist, area, luminaire_fluxes(dist, area), (4.0, 8.0), 0.25);
+    (c[0], e[0])
+}
+
+/// A file luminaire's upward and downward flux [lm] ([`hemisphere_fluxes`]).
+fn luminaire_fluxes(dist: &Goniometric, area: &LuminousArea) -> (f64, f64) {
+    hemisphere_fluxes(&FileLuminaire {
+        dist,
+        area,
+        frame: View::Endwise.frame(),
+    })
+}
+
+/// The ratings of one standard room `(X, Y)` [H], for each of
+/// [`REFLECTANCES`], viewed crosswise and endwise.
+fn room_ratings(
+    dist: &Goniometric,
+    area: &LuminousArea,
+    fluxes: (f64, f64),
+    (x, y): (f64, f64),
+    spacing_h: f64,
+) -> [[f64; 5]; 2] {
+    let h = TABLE_H;
+    let mut ratings = [[0.0; 5]; 2];
+    for (view, out) in [View::Crosswise, View::Endwise]
+        .into_iter()
+        .zip(&mut ratings)
+    {
+        let lum = FileLuminaire {
+            dist,
+            area,
+            frame: view.frame(),
+        };
+        let room = StandardRoom {
+            across: x * h,
+            along: y * h,
+            eye: 0.0,
+            h,
+            spacing: spacing_h * h,
+            rho: [0.0; 3],
+        };
+        let sum = room.glare_sum(&lum);
+        let flux = room.direct_flux(&lum, fluxes);
+        for (rho, r) in REFLECTANCES.iter().zip(out.iter_mut()) {
+            *r = rating(sum, StandardRoom { rho: *rho, ..room }.wall_indirect(&flux));
+        }
+    }
+    ratings
 }
 
 #[cfg(test)]

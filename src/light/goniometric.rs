@@ -200,6 +200,11 @@ impl Goniometric {
         f0 * self.measure(v0, v1) + (f1 - f0) / dv * m1
     }
 
+    /// Layout of the angles (type C, B or A).
+    pub fn kind(&self) -> PhotometricType {
+        self.kind
+    }
+
     /// Emitted flux [lm], exact for the bilinear interpolant.
     pub fn power(&self) -> f64 {
         self.power

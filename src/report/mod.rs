@@ -59,6 +59,11 @@ pub struct Luminaire {
     pub flux: String,
     /// Its photometric file, if any.
     pub file: String,
+    /// Its reference UGR, crosswise / endwise (CIE 117 tabular method,
+    /// room 4H x 8H, reflectances 0.7 / 0.5 / 0.2, spacing 0.25 H, at its
+    /// flux in the scene); `-` for a luminaire without type C photometry
+    /// and a luminous area.
+    pub ugr_ref: String,
 }
 
 /// One grid's section.
