@@ -1,6 +1,6 @@
 //! The tabular method of CIE 117-1995 for standard rooms: the rating of a
 //! luminaire in a regular array, as luminaire makers publish it (the UGR
-//! table, [`UgrTable`]), and an independent check of `lumest glare`.
+//! table, [`ugr_table`]), and an independent check of `lumest glare`.
 //!
 //! The standard room: a floor `across x along` [m] (CIE 117's `X`, across
 //! the line of sight, and `Y`, along it), luminaires in a regular grid in
@@ -16,11 +16,11 @@
 //! the luminaires' height above the floor less the eye's, 1.2 m seated or
 //! 1.7 m standing; tested). A room with a real floor below the eye (the
 //! checks against `lumest glare` in a scene) sets the eye's height above
-//! it. The rating uses the same
-//! terms `L^2 omega / p^2` as [`crate::glare`] (the luminance and the
-//! projected luminous area of [`LuminousArea`], Guth's [`position_index`];
-//! no obstruction in an empty room) over every luminaire of the room, and
-//! the background of the tabular method: `L_b = E_W / pi` with `E_W` the
+//! it. The rating uses the same terms `L^2 omega / p^2` as
+//! [`crate::glare`] (the luminance and the projected luminous area of
+//! [`LuminousArea`], Guth's [`position_index`]; no obstruction in an empty
+//! room) over every luminaire of the room, and the background of the
+//! tabular method: `L_b = E_W / pi` with `E_W` the
 //! **average indirect illuminance on the walls**. That comes from the
 //! luminaires' direct flux onto floor, walls and ceiling and the
 //! inter-reflection of the three surfaces, each treated as uniform (the
