@@ -481,3 +481,49 @@ fn scene_observers_rate_as_the_csv_observers() {
         "{err}"
     );
 }
+
+/// A spherical luminaire (LM-63-2002 sphere: width, length and height all
+/// -0.4 m; 100 cd in every direction) at (0, 0, 3), seen side-on from the
+/// eye at (-3, 0, 3) looking at it along +x: its luminance is `I / (pi r^2)`
+/// and its solid angle `pi r^2 / d^2` with `r = 0.2 m`, `d = 3 m`, the
+/// position index 1 (on the line of sight). The former reading (a disc
+/// with cylinder sides) gave the area `D^2`, 27 % more.
+#[test]
+fn a_spherical_luminaire_seen_side_on_matches_the_hand_values() {
+    use glam::DVec3;
+    use lumest::glare::{Observer, glare_term, luminous_area};
+    let dir = tempfile::tempdir().unwrap();
+    let ies = "IESNA:LM-63-2002\n[TEST] sphere\nTILT=NONE\n\
+               1 -1 1 3 1 1 2 -0.4 -0.4 -0.4\n1 1 0\n0 90 180\n0\n100 100 100\n";
+    std::fs::write(dir.path().join("lum.ies"), ies).unwrap();
+    let path = dir.path().join("s.toml");
+    std::fs::write(
+        &path,
+        "[[surface]]\ntype = \"rectangle\"\ncorner = [-50, -50, -40]\nedge1 = [100, 0, 0]\n\
+         edge2 = [0, 100, 0]\nsides = \"both\"\nmaterial = { type = \"lambertian\", reflectance = 0.5 }\n\
+         [[light]]\ntype = \"ies\"\nname = \"lum\"\nfile = \"lum.ies\"\nposition = [0, 0, 3]\n",
+    )
+    .unwrap();
+    let scene = lumest::scene::load(&path).unwrap();
+    let area = luminous_area(&scene.lights[0]).unwrap().unwrap();
+    let (r, d) = (0.2f64, 3.0f64);
+    let obs = Observer::new(DVec3::new(-d, 0.0, 3.0), DVec3::X).unwrap();
+    let t = glare_term(&scene, 0, &area, &obs).unwrap();
+    let (l, omega) = (100.0 / (PI * r * r), PI * r * r / (d * d));
+    assert!((t.l / l - 1.0).abs() < 1e-12, "L {} vs {l}", t.l);
+    assert!(
+        (t.omega / omega - 1.0).abs() < 1e-12,
+        "omega {} vs {omega}",
+        t.omega
+    );
+    assert_eq!((t.p, t.seen), (1.0, 1.0));
+    assert!((t.value() / (l * l * omega) - 1.0).abs() < 1e-12);
+    // From below and obliquely the sphere is the same disc.
+    for eye in [DVec3::new(-2.0, 0.5, 1.2), DVec3::new(-1.0, -1.0, 0.0)] {
+        let obs = Observer::new(eye, DVec3::new(1.0, 0.0, 0.0)).unwrap();
+        let t = glare_term(&scene, 0, &area, &obs).unwrap();
+        let d = (DVec3::new(0.0, 0.0, 3.0) - eye).length();
+        assert!((t.l / l - 1.0).abs() < 1e-12);
+        assert!((t.omega / (PI * r * r / (d * d)) - 1.0).abs() < 1e-12);
+    }
+}

@@ -121,15 +121,23 @@ pub fn summary(p: &Photometry) -> Vec<String> {
     let o = p.opening;
     lines.push(if o.width == 0.0 && o.length == 0.0 {
         "luminous opening: none given (a point source)".to_string()
-    } else if o.round {
+    } else if o.round && o.length == 0.0 {
         format!(
             "luminous opening: disc of diameter {} m, height {} m",
             o.width, o.height
         )
-    } else {
+    } else if o.shape == crate::io::photometry::OpeningShape::Rectangle {
         format!(
             "luminous opening: {} m x {} m, height {} m",
             o.width, o.length, o.height
+        )
+    } else {
+        format!(
+            "luminous opening: {}, width {} m, length {} m, height {} m",
+            o.shape.name(o.width, o.length, o.height),
+            o.width,
+            o.length,
+            o.height
         )
     });
     lines

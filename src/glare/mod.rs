@@ -27,21 +27,28 @@
 //! with the solid angle of the part it sees ([`visible_part`]), its
 //! luminance unchanged.
 //!
-//! Luminous areas: a goniometric luminaire's from its file (LM-63 width,
-//! length and height of the luminous sides; EULUMDAT the same fields): the
-//! bottom `A |cos gamma|` when the eye lies below the luminaire's plane,
-//! plus the luminous sides, `h w |w_x| + h l |w_y|` for a rectangle (`h D
-//! sin gamma` for a disc of diameter `D`); an area source's own surface
-//! (its average luminance `Phi / (pi A)` per emitting side); a sphere light's
+//! Luminous areas: a goniometric luminaire's from its file's luminous
+//! shape ([`crate::io::photometry::OpeningShape`]: every shape of LM-63-2002's
+//! table, EULUMDAT's rectangle and disc), each projected exactly along the
+//! direction of the eye ([`luminous_parts`] gives the closed forms): a
+//! rectangle's or an ellipse's bottom `A |cos gamma|` when the eye lies
+//! below the luminaire's plane, plus its luminous sides (`h w |w_x| + h l
+//! |w_y|` for a rectangle, `h D sin gamma` for a disc of diameter `D`);
+//! an ellipsoid's outline (`pi r^2` for a sphere); a horizontal
+//! cylinder's end and mantle; a vertical ellipse's `pi a b |cos|`; an
+//! area source's own surface (its average luminance `Phi / (pi A)` per
+//! emitting side); a sphere light's
 //! disc `pi r^2`. Point and spot lights have no luminous area: a glare
 //! calculation refuses them. Lights at infinity (sky, sun, environment)
 //! are not luminaires here; their reflected light is part of `E_ind`.
 
+pub mod luminous_parts;
 pub mod scene_observers;
 pub mod tabular;
 pub mod visible_part;
 
-use crate::light::{Light, LuminousOpening};
+use crate::io::photometry::OpeningShape;
+use crate::light::Light;
 use crate::scene::Scene;
 use glam::DVec3;
 use std::f64::consts::{LN_10, PI};
@@ -122,13 +129,16 @@ impl Observer {
 /// The luminous parts of one luminaire, as glare needs them.
 #[derive(Clone, Debug, PartialEq)]
 pub enum LuminousArea {
-    /// A goniometric luminaire: its bottom opening (in the plane normal to
-    /// the nadir) and the height [m] of its luminous sides.
+    /// A goniometric luminaire: its file's luminous shape (LM-63-2002's
+    /// shapes; EULUMDAT's rectangle or disc) and half its extents [m]
+    /// along the local `x` (C0, the length), `y` (C90, the width) and `z`
+    /// (the height) axes: for a rectangle or an ellipse facing down, `z`
+    /// is half the height of its luminous sides (0: none).
     Gonio {
-        /// The opening.
-        opening: LuminousOpening,
-        /// Height of the luminous sides [m] (0: none).
-        height: f64,
+        /// The shape.
+        shape: OpeningShape,
+        /// Half the extents [m] along local `x`, `y`, `z`.
+        half: DVec3,
     },
     /// A flat Lambertian source of `area` [m^2] facing `normal`, of average
     /// luminance `l` [cd/m^2] on its emitting side(s).
@@ -152,22 +162,45 @@ pub enum LuminousArea {
 }
 
 impl LuminousArea {
-    /// The luminous parts a photometric file gives (its opening and the
-    /// height of its luminous sides); an error when it gives no opening.
+    /// The luminous parts a photometric file gives (its shape and its
+    /// dimensions [m]); an error when it gives none, or a shape with a
+    /// zero or non-finite dimension.
     pub fn of_file(o: &crate::io::photometry::Opening) -> Result<Self, GlareError> {
-        let opening = LuminousOpening::of(o).ok_or_else(|| {
-            GlareError::NoArea(
+        let (w, l, h) = (o.width.abs(), o.length.abs(), o.height.abs());
+        let name = o.shape.name(w, l, h);
+        let ok = |v: f64| v > 0.0 && v.is_finite();
+        // Luminous sides of a non-finite height are left out, as before.
+        let sides = if h.is_finite() { h } else { 0.0 };
+        let (valid, whole) = match o.shape {
+            OpeningShape::Point => (false, DVec3::ZERO),
+            OpeningShape::Rectangle => (ok(w) && ok(l), DVec3::new(l, w, sides)),
+            OpeningShape::Ellipse => {
+                // Length 0: a disc of diameter `width`.
+                let l = if l == 0.0 { w } else { l };
+                (ok(w) && ok(l), DVec3::new(l, w, sides))
+            }
+            OpeningShape::Ellipsoid | OpeningShape::CylinderC0 | OpeningShape::CylinderC90 => {
+                (ok(w) && ok(l) && ok(h), DVec3::new(l, w, h))
+            }
+            OpeningShape::VerticalEllipseC0 => (ok(w) && ok(h), DVec3::new(0.0, w, h)),
+            OpeningShape::VerticalEllipseC90 => (ok(l) && ok(h), DVec3::new(l, 0.0, h)),
+        };
+        if !valid {
+            return Err(GlareError::NoArea(if o.shape == OpeningShape::Point {
                 "its photometric file gives no luminous area (width and length 0): \
                  UGR needs the luminance of the luminous parts"
-                    .to_string(),
-            )
-        })?;
-        let height = if o.height.is_finite() {
-            o.height.abs()
-        } else {
-            0.0
-        };
-        Ok(LuminousArea::Gonio { opening, height })
+                    .to_string()
+            } else {
+                format!(
+                    "its photometric file's luminous shape ({name}, width {w} m, length {l} m, \
+                     height {h} m) has no area: UGR needs the luminance of the luminous parts"
+                )
+            }));
+        }
+        Ok(LuminousArea::Gonio {
+            shape: o.shape,
+            half: whole * 0.5,
+        })
     }
 
     /// Projected luminous area [m^2] seen along unit world direction `w`
@@ -175,21 +208,11 @@ impl LuminousArea {
     /// axes `frame` (goniometric only).
     pub fn projected(&self, w: DVec3, frame: &crate::light::LuminaireFrame) -> f64 {
         match self {
-            LuminousArea::Gonio { opening, height } => {
-                let d = frame.to_local(w);
-                // The bottom faces the nadir (-z).
-                let bottom = opening.area() * (-d.z).max(0.0);
-                let sides = if *height > 0.0 {
-                    if opening.round {
-                        height * 2.0 * opening.half_x * d.x.hypot(d.y)
-                    } else {
-                        // Faces normal to x are 2 half_y wide; to y, 2 half_x.
-                        height * 2.0 * (opening.half_y * d.x.abs() + opening.half_x * d.y.abs())
-                    }
-                } else {
-                    0.0
-                };
-                bottom + sides
+            LuminousArea::Gonio { shape, half } => {
+                luminous_parts::parts(*shape, *half, frame.to_local(w))
+                    .iter()
+                    .map(|p| p.0)
+                    .sum()
             }
             LuminousArea::Flat {
                 area,

@@ -15,7 +15,11 @@
 //! placed as a volume centred on the luminaire's position (the photometric
 //! centre; the sides `height` tall, the bottom `height / 2` below the
 //! centre, so a luminaire without luminous sides has its opening through
-//! the centre); an area source's surface, its points in proportion to its
+//! the centre); the solid LM-63 shapes centred there, each seen as its
+//! outline from the eye (an ellipsoid's half facing the eye, uniform in its
+//! projected ellipse; a horizontal cylinder's end and the half of its
+//! mantle facing the eye; a vertical ellipse), the points of
+//! [`super::luminous_parts`]; an area source's surface, its points in proportion to its
 //! luminance; a sphere light's cap facing the eye, uniform in its
 //! projected disc.
 
@@ -61,59 +65,12 @@ pub fn visible_fraction(
     // (part's projected area, its seen share), summed.
     let mut parts: Vec<(f64, f64)> = Vec::new();
     match area {
-        LuminousArea::Gonio { opening, height } => {
+        LuminousArea::Gonio { shape, half } => {
             let d = frame.to_local(w);
-            let at = |x: f64, y: f64, z: f64| c + frame.x * x + frame.y * y + frame.z * z;
-            // The luminous volume centred on the luminaire's position: the
-            // bottom `height / 2` below it along the nadir (in its plane for
-            // a luminaire without luminous sides), the sides from there up
-            // by `height`.
-            let z0 = -0.5 * height;
-            let bottom = opening.area() * (-d.z).max(0.0);
-            if bottom > 0.0 {
-                parts.push((
-                    bottom,
-                    share(&|u| {
-                        let (x, y) = opening.sample(u);
-                        at(x, y, z0)
-                    }),
-                ));
-            }
-            if *height > 0.0 {
-                let (hx, hy) = (opening.half_x, opening.half_y);
-                if opening.round {
-                    // The half of the cylinder that faces the eye.
-                    let a = height * 2.0 * hx * d.x.hypot(d.y);
-                    if a > 0.0 {
-                        let phi0 = d.y.atan2(d.x);
-                        parts.push((
-                            a,
-                            share(&|u| {
-                                // Uniform in the projected width: sin.
-                                let s = 2.0 * u[0] - 1.0;
-                                let phi = phi0 + s.asin();
-                                at(hx * phi.cos(), hx * phi.sin(), z0 + height * u[1])
-                            }),
-                        ));
-                    }
-                } else {
-                    // The face normal to x towards the eye, then y.
-                    let ax = height * 2.0 * hy * d.x.abs();
-                    if ax > 0.0 {
-                        let sx = hx * d.x.signum();
-                        parts.push((
-                            ax,
-                            share(&|u| at(sx, hy * (2.0 * u[0] - 1.0), z0 + height * u[1])),
-                        ));
-                    }
-                    let ay = height * 2.0 * hx * d.y.abs();
-                    if ay > 0.0 {
-                        let sy = hy * d.y.signum();
-                        parts.push((
-                            ay,
-                            share(&|u| at(hx * (2.0 * u[0] - 1.0), sy, z0 + height * u[1])),
-                        ));
-                    }
+            let at = |p: DVec3| c + frame.x * p.x + frame.y * p.y + frame.z * p.z;
+            for (a, part) in super::luminous_parts::parts(*shape, *half, d) {
+                if a > 0.0 {
+                    parts.push((a, share(&|u| at(part.point(u)))));
                 }
             }
         }

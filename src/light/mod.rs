@@ -66,47 +66,61 @@ pub enum Light {
 
 /// The luminous opening of a goniometric luminaire, for near-field
 /// emission: a rectangle `length x width` [m] (length along the C0 axis,
-/// width along C90, as LM-63 and EULUMDAT give them) or a disc of diameter
-/// `width`, centred on the luminaire's position in the plane normal to its
-/// nadir. Every element `dA` of it emits `I(w) dA / A` towards `w`: the
-/// far field is the file's distribution, and near the luminaire the light
-/// comes from the whole opening (the classic rule says the point
-/// approximation is about 1 % off at five times the opening's size). The
-/// height of luminous sides is not modelled.
+/// width along C90, as LM-63 and EULUMDAT give them) or an ellipse of
+/// diameters `length x width` (a disc of diameter `width`), centred on the
+/// luminaire's position in the plane normal to its nadir. Every element
+/// `dA` of it emits `I(w) dA / A` towards `w`: the far field is the file's
+/// distribution, and near the luminaire the light comes from the whole
+/// opening (the classic rule says the point approximation is about 1 %
+/// off at five times the opening's size). The height of luminous sides is
+/// not modelled; the solid LM-63 shapes (ellipsoid, horizontal cylinders)
+/// emit from their outline seen from below (an ellipse, a rectangle).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LuminousOpening {
-    /// Half the length along the local `x` (C0) axis [m], or the radius of a disc.
+    /// Half the length along the local `x` (C0) axis [m] (an ellipse: its semi-axis).
     pub half_x: f64,
-    /// Half the width along the local `y` (C90) axis [m] (a disc: the radius).
+    /// Half the width along the local `y` (C90) axis [m] (an ellipse: its semi-axis).
     pub half_y: f64,
-    /// A disc of radius `half_x`.
+    /// An ellipse (a disc when `half_x == half_y`).
     pub round: bool,
 }
 
 impl LuminousOpening {
-    /// The opening of a photometric file; `None` when it gives none (zero
-    /// width or, for a rectangle, zero length).
+    /// The opening of a photometric file, its outline seen from below;
+    /// `None` when it gives none (a point, a zero width or length, a
+    /// vertical circle or ellipse).
     pub fn of(o: &crate::io::photometry::Opening) -> Option<Self> {
+        use crate::io::photometry::OpeningShape as S;
         let (w, l) = (o.width.abs(), o.length.abs());
-        if o.round {
-            (w > 0.0 && w.is_finite()).then_some(Self {
-                half_x: w / 2.0,
+        let ok = |v: f64| v > 0.0 && v.is_finite();
+        match o.shape {
+            S::Ellipse => {
+                // Length 0: a disc of diameter `width`.
+                let l = if l == 0.0 { w } else { l };
+                (ok(w) && ok(l)).then_some(Self {
+                    half_x: l / 2.0,
+                    half_y: w / 2.0,
+                    round: true,
+                })
+            }
+            S::Ellipsoid => (ok(w) && ok(l)).then_some(Self {
+                half_x: l / 2.0,
                 half_y: w / 2.0,
                 round: true,
-            })
-        } else {
-            (w > 0.0 && l > 0.0 && w.is_finite() && l.is_finite()).then_some(Self {
+            }),
+            S::Rectangle | S::CylinderC0 | S::CylinderC90 => (ok(w) && ok(l)).then_some(Self {
                 half_x: l / 2.0,
                 half_y: w / 2.0,
                 round: false,
-            })
+            }),
+            S::Point | S::VerticalEllipseC0 | S::VerticalEllipseC90 => None,
         }
     }
 
     /// Area [m^2].
     pub fn area(&self) -> f64 {
         if self.round {
-            PI * self.half_x * self.half_x
+            PI * self.half_x * self.half_y
         } else {
             4.0 * self.half_x * self.half_y
         }
@@ -116,9 +130,9 @@ impl LuminousOpening {
     /// `(x, y)` coordinates [m].
     pub fn sample(&self, u: [f64; 2]) -> (f64, f64) {
         if self.round {
-            let r = self.half_x * u[0].sqrt();
+            let r = u[0].sqrt();
             let (s, c) = crate::sampling::warp::sin_cos_turns(u[1]);
-            (r * c, r * s)
+            (self.half_x * r * c, self.half_y * r * s)
         } else {
             (
                 self.half_x * (2.0 * u[0] - 1.0),

@@ -1760,8 +1760,13 @@ fn goniometric(
                     o.span(),
                     "opening",
                     format!(
-                        "`{}` gives no luminous opening (its width and length are zero): it can only be a point",
-                        fs.get_ref()
+                        "`{}` gives no luminous opening facing down (its luminous shape: {}): it can only be a point",
+                        fs.get_ref(),
+                        photometry.opening.shape.name(
+                            photometry.opening.width,
+                            photometry.opening.length,
+                            photometry.opening.height
+                        )
                     ),
                 )
             })?,
@@ -1769,9 +1774,14 @@ fn goniometric(
         _ => None,
     };
     let note = match &opening {
-        Some(o) if o.round => format!(
+        Some(o) if o.round && o.half_x == o.half_y => format!(
             "{note}; emitting from its opening, a disc of diameter {} m",
             2.0 * o.half_x
+        ),
+        Some(o) if o.round => format!(
+            "{note}; emitting from its opening, an ellipse {} m (C0) x {} m (C90)",
+            2.0 * o.half_x,
+            2.0 * o.half_y
         ),
         Some(o) => format!(
             "{note}; emitting from its opening, {} m (C0) x {} m (C90)",

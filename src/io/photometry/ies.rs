@@ -23,7 +23,8 @@
 //! the versions that define one (never the 2019 file-generation type), and
 //! times the tilt factor at 0 degrees (the luminaire used as measured) with
 //! `TILT=INCLUDE`. A `TILT=<file>` reference is refused: the data must be
-//! included. A negative width is a round opening of that diameter (LM-63-2002).
+//! included. The signs of width, length and height give the opening's shape
+//! (LM-63-2002's luminous shapes: [`opening`]).
 
 use super::{Opening, PhotometricType, Photometry, PhotometryError, check_angles, whole};
 
@@ -324,19 +325,14 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
             format!("unexpected `{tok}` after the last candela value"),
         ));
     }
-    let round = w < 0.0;
+    let opening = opening(version, w, l, h, unit);
     Ok(Photometry {
         kind,
         v_angles,
         h_angles,
         candela,
         lamp_lumens: (lumens > 0.0).then_some(lumens * lamps as f64),
-        opening: Opening {
-            width: w.abs() * unit,
-            length: if round { 0.0 } else { l.abs() * unit },
-            height: h.abs() * unit,
-            round,
-        },
+        opening,
         watts: (watts > 0.0).then_some(watts),
         format: match version {
             Version::Lm1986 => "IES LM-63-1986",
@@ -346,6 +342,80 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
             Version::Lm2019 => "IES LM-63-2019",
         }
         .to_string(),
+    })
+}
+
+/// The luminous opening [m] of a file of `version` from its width `w`,
+/// length `l` and height `h` (signed, in the file's units; `unit` [m] per
+/// unit).
+///
+/// LM-63-2002 and 2019 (Table 1 of LM-63-2002), by the signs of `(w, l, h)`:
+/// `(0, 0, 0)` a point; `(+, +, 0)` a rectangle, `(+, +, +)` one with
+/// luminous sides; `(-, -, 0)` a circle or an ellipse, `(-, -, +)` a
+/// vertical circular or elliptical cylinder; `(-, -, -)` a sphere or an
+/// ellipsoid; `(-, +, -)` a horizontal cylinder along the photometric
+/// horizontal (C0-C180), `(+, -, -)` one across it (along C90-C270);
+/// `(-, 0, -)` a vertical circle or ellipse facing the photometric
+/// horizontal, `(0, -, -)` one facing across it.
+///
+/// LM-63-1995 (as Radiance's `ies2rad` reads it): `(-, 0, -)` a sphere of
+/// diameter `|w|` (an ellipsoid `|w| x |w| x |h|` where they differ),
+/// `(-, +, -)` and `(+, -, -)` ellipsoids, `(0, +, -)` and `(+, 0, -)`
+/// horizontal cylinders along C0 and C90 (diameter `|h|`), `(-, +, h)`
+/// and `(+, -, h)` with `h >= 0` ellipses (with luminous sides `h`).
+/// LM-63-1986 and 1991: `(-, +, 0)` an ellipse, `(-, +, +)` an ellipsoid.
+///
+/// Any other negative width is read as before these shapes were known: a
+/// disc of diameter `|w|` with luminous sides `|h|` (so `(-, 0, 0)`, the
+/// 1986-1995 circle, and `(-, 0, +)`, their vertical cylinder); any other
+/// combination a rectangle `|w| x |l|` with sides `|h|`.
+fn opening(version: Version, w: f64, l: f64, h: f64, unit: f64) -> Opening {
+    use super::OpeningShape as S;
+    let (wa, la, ha) = (w.abs() * unit, l.abs() * unit, h.abs() * unit);
+    let of = |shape: S, width: f64, length: f64, height: f64| Opening {
+        width,
+        length,
+        height,
+        round: shape == S::Ellipse,
+        shape,
+    };
+    // An ellipse's length 0 stands for a circle (as EULUMDAT writes it).
+    let ellipse = |width: f64, length: f64, sides: f64| {
+        let length = if length == width { 0.0 } else { length };
+        of(S::Ellipse, width, length, sides)
+    };
+    let sign = |v: f64| (v > 0.0) as i8 - (v < 0.0) as i8;
+    let shape = match version {
+        Version::Lm2002 | Version::Lm2019 => match (sign(w), sign(l), sign(h)) {
+            (-1, -1, 0 | 1) => Some(ellipse(wa, la, ha)),
+            (-1, -1, -1) => Some(of(S::Ellipsoid, wa, la, ha)),
+            (-1, 1, -1) => Some(of(S::CylinderC0, wa, la, ha)),
+            (1, -1, -1) => Some(of(S::CylinderC90, wa, la, ha)),
+            (-1, 0, -1) => Some(of(S::VerticalEllipseC0, wa, 0.0, ha)),
+            (0, -1, -1) => Some(of(S::VerticalEllipseC90, 0.0, la, ha)),
+            _ => None,
+        },
+        Version::Lm1995 => match (sign(w), sign(l), sign(h)) {
+            (-1, 0, -1) => Some(of(S::Ellipsoid, wa, wa, ha)),
+            (-1, 1, -1) | (1, -1, -1) => Some(of(S::Ellipsoid, wa, la, ha)),
+            (0, 1, -1) => Some(of(S::CylinderC0, ha, la, ha)),
+            (1, 0, -1) => Some(of(S::CylinderC90, wa, ha, ha)),
+            (-1, 1, 0 | 1) | (1, -1, 0 | 1) => Some(ellipse(wa, la, ha)),
+            _ => None,
+        },
+        Version::Lm1986 | Version::Lm1991 => match (sign(w), sign(l), sign(h)) {
+            (-1, 1, 0) => Some(ellipse(wa, la, 0.0)),
+            (-1, 1, 1) => Some(of(S::Ellipsoid, wa, la, ha)),
+            _ => None,
+        },
+    };
+    shape.unwrap_or(if w < 0.0 {
+        of(S::Ellipse, wa, 0.0, ha)
+    } else if wa == 0.0 && la == 0.0 {
+        // No opening; a height alone makes none.
+        of(S::Point, 0.0, 0.0, ha)
+    } else {
+        of(S::Rectangle, wa, la, ha)
     })
 }
 
@@ -414,6 +484,155 @@ TILT=NONE
         assert!(p.opening.round);
         assert!((p.opening.width - 0.3048).abs() < 1e-15);
         assert!((p.opening.height - 1.92 * 0.3048).abs() < 1e-15);
+    }
+
+    /// Every LM-63-2002 luminous shape (its Table 1), written in metres,
+    /// parsed to its shape and dimensions; the same signs in an LM-63-1995
+    /// file where that version reads them otherwise; and the older forms
+    /// kept (a negative width alone: a disc).
+    #[test]
+    fn luminous_shapes_by_their_signs() {
+        use super::super::OpeningShape as S;
+        let file = |version: &str, w: f64, l: f64, h: f64| {
+            let text = format!(
+                "{version}\n[TEST] shape\nTILT=NONE\n1 1000 1 3 1 1 2 {w} {l} {h}\n1 1 0\n0 45 90\n0\n100 80 50\n"
+            );
+            parse(&text, "s.ies").unwrap().opening
+        };
+        let v02 = "IESNA:LM-63-2002";
+        let cases = [
+            ((0.0, 0.0, 0.0), S::Point, (0.0, 0.0, 0.0), "point"),
+            (
+                (0.3, 1.2, 0.0),
+                S::Rectangle,
+                (0.3, 1.2, 0.0),
+                "rectangular",
+            ),
+            (
+                (0.3, 1.2, 0.1),
+                S::Rectangle,
+                (0.3, 1.2, 0.1),
+                "rectangular with luminous sides",
+            ),
+            ((-0.4, -0.4, 0.0), S::Ellipse, (0.4, 0.0, 0.0), "circular"),
+            ((-0.4, -0.6, 0.0), S::Ellipse, (0.4, 0.6, 0.0), "ellipse"),
+            (
+                (-0.4, -0.4, 0.2),
+                S::Ellipse,
+                (0.4, 0.0, 0.2),
+                "vertical cylinder",
+            ),
+            (
+                (-0.4, -0.6, 0.2),
+                S::Ellipse,
+                (0.4, 0.6, 0.2),
+                "vertical elliptical cylinder",
+            ),
+            ((-0.4, -0.4, -0.4), S::Ellipsoid, (0.4, 0.4, 0.4), "sphere"),
+            (
+                (-0.4, -0.6, -0.2),
+                S::Ellipsoid,
+                (0.4, 0.6, 0.2),
+                "ellipsoidal spheroid",
+            ),
+            (
+                (-0.1, 1.2, -0.1),
+                S::CylinderC0,
+                (0.1, 1.2, 0.1),
+                "horizontal cylinder along photometric horizontal",
+            ),
+            (
+                (-0.1, 1.2, -0.2),
+                S::CylinderC0,
+                (0.1, 1.2, 0.2),
+                "horizontal elliptical cylinder along photometric horizontal",
+            ),
+            (
+                (1.2, -0.1, -0.1),
+                S::CylinderC90,
+                (1.2, 0.1, 0.1),
+                "horizontal cylinder perpendicular to photometric horizontal",
+            ),
+            (
+                (1.2, -0.1, -0.2),
+                S::CylinderC90,
+                (1.2, 0.1, 0.2),
+                "horizontal elliptical cylinder perpendicular to photometric horizontal",
+            ),
+            (
+                (-0.3, 0.0, -0.3),
+                S::VerticalEllipseC0,
+                (0.3, 0.0, 0.3),
+                "vertical circle facing photometric horizontal",
+            ),
+            (
+                (-0.3, 0.0, -0.5),
+                S::VerticalEllipseC0,
+                (0.3, 0.0, 0.5),
+                "vertical ellipse facing photometric horizontal",
+            ),
+            (
+                (0.0, -0.3, -0.3),
+                S::VerticalEllipseC90,
+                (0.0, 0.3, 0.3),
+                "vertical circle facing perpendicular to photometric horizontal",
+            ),
+            (
+                (0.0, -0.3, -0.5),
+                S::VerticalEllipseC90,
+                (0.0, 0.3, 0.5),
+                "vertical ellipse facing perpendicular to photometric horizontal",
+            ),
+            // Not in the 2002 table: read as before (a disc of diameter |w|).
+            ((-0.3, 0.0, 0.0), S::Ellipse, (0.3, 0.0, 0.0), "circular"),
+            (
+                (-0.3, 0.0, 0.5),
+                S::Ellipse,
+                (0.3, 0.0, 0.5),
+                "vertical cylinder",
+            ),
+        ];
+        for ((w, l, h), shape, (ww, ll, hh), name) in cases {
+            for version in [v02, "IES:LM-63-2019"] {
+                let o = file(version, w, l, h);
+                assert_eq!(o.shape, shape, "{version} ({w}, {l}, {h})");
+                assert_eq!(
+                    (o.width, o.length, o.height),
+                    (ww, ll, hh),
+                    "({w}, {l}, {h})"
+                );
+                assert_eq!(o.round, shape == S::Ellipse);
+                assert_eq!(shape.name(o.width, o.length, o.height), name);
+            }
+        }
+        // Feet: every dimension converted.
+        let o = parse(
+            "IESNA:LM-63-2002\nTILT=NONE\n1 1000 1 3 1 1 1 -1 -1 -1\n1 1 0\n0 45 90\n0\n100 80 50\n",
+            "f.ies",
+        )
+        .unwrap()
+        .opening;
+        assert_eq!((o.width, o.length, o.height), (0.3048, 0.3048, 0.3048));
+        // LM-63-1995: (-, 0, -) a sphere, (0, +, -) a cylinder along C0,
+        // (-, +, -) an ellipsoid.
+        let v95 = "IESNA:LM-63-1995";
+        let o = file(v95, -0.4, 0.0, -0.4);
+        assert_eq!(
+            (o.shape, o.width, o.length, o.height),
+            (S::Ellipsoid, 0.4, 0.4, 0.4)
+        );
+        let o = file(v95, 0.0, 1.2, -0.1);
+        assert_eq!(
+            (o.shape, o.width, o.length, o.height),
+            (S::CylinderC0, 0.1, 1.2, 0.1)
+        );
+        let o = file(v95, 0.8, 0.0, -0.1);
+        assert_eq!(
+            (o.shape, o.width, o.length, o.height),
+            (S::CylinderC90, 0.8, 0.1, 0.1)
+        );
+        assert_eq!(file(v95, -0.1, 1.2, -0.2).shape, S::Ellipsoid);
+        assert_eq!(file(v95, -1.0, 0.0, 1.92).shape, S::Ellipse);
     }
 
     #[test]

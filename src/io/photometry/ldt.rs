@@ -29,7 +29,9 @@
 //! refers; the others are alternatives and are listed only). Decimal commas
 //! are accepted.
 
-use super::{Opening, PhotometricType, Photometry, PhotometryError, check_angles, whole};
+use super::{
+    Opening, OpeningShape, PhotometricType, Photometry, PhotometryError, check_angles, whole,
+};
 
 /// Most C-planes and gamma angles per plane.
 const MAX_ANGLES: usize = 100_000;
@@ -241,6 +243,14 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
     }
     let absolute = lamps[0] < 0.0;
     let [_, _, _, la, wa, h0, h90, h180, h270] = dims;
+    let round = wa == 0.0 && la > 0.0;
+    let shape = if round {
+        OpeningShape::Ellipse
+    } else if la != 0.0 || wa != 0.0 {
+        OpeningShape::Rectangle
+    } else {
+        OpeningShape::Point
+    };
     Ok(Photometry {
         kind: PhotometricType::C,
         v_angles: gamma,
@@ -251,7 +261,8 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
             width: if wa == 0.0 { la } else { wa } / 1000.0,
             length: if wa == 0.0 { 0.0 } else { la / 1000.0 },
             height: (h0 + h90 + h180 + h270) / 4000.0,
-            round: wa == 0.0 && la > 0.0,
+            round,
+            shape,
         },
         watts: (watts[0] > 0.0).then_some(watts[0]),
         format: "EULUMDAT".to_string(),

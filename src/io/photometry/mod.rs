@@ -25,19 +25,116 @@ pub enum PhotometricType {
     A,
 }
 
-/// Luminous opening of the luminaire [m]: a rectangle `width x length`, or
-/// a disc of diameter `width` when `round`; `height` of the luminous sides.
-/// All zero: a point source.
+/// The shape of a luminous opening, as IES LM-63-2002 (Table 1, "luminous
+/// shapes") encodes it in the signs of width, length and height; the LM-63
+/// names in [`OpeningShape::name`]. Axes: the length along the C0-C180
+/// plane (the "photometric horizontal", local `x`), the width along
+/// C90-C270 (local `y`), the height vertical (local `z`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OpeningShape {
+    /// No luminous opening (all dimensions zero).
+    #[default]
+    Point,
+    /// A rectangle `length x width` facing down (the nadir), with luminous
+    /// sides `height` tall (0: none). LM-63: all positive; EULUMDAT: a
+    /// length and a width.
+    Rectangle,
+    /// An ellipse facing down with diameters `length` (C0) and `width`
+    /// (C90) (a circle when equal), with luminous sides `height` tall (a
+    /// vertical circular or elliptical cylinder; 0: none). LM-63-2002:
+    /// width and length negative, height positive or zero; EULUMDAT: a
+    /// diameter.
+    Ellipse,
+    /// An ellipsoid with diameters `length`, `width` and `height` (a sphere
+    /// when equal), luminous all over. LM-63-2002: all three negative.
+    Ellipsoid,
+    /// A horizontal circular or elliptical cylinder along C0-C180, `length`
+    /// long, its cross-section an ellipse of diameters `width` and
+    /// `height`, luminous all over (ends included). LM-63-2002: width and
+    /// height negative, length positive.
+    CylinderC0,
+    /// A horizontal cylinder along C90-C270, `width` long, its
+    /// cross-section an ellipse of diameters `length` and `height`.
+    /// LM-63-2002: length and height negative, width positive.
+    CylinderC90,
+    /// A vertical circle or ellipse facing C0 and C180 (both faces
+    /// luminous), of diameters `width` and `height`. LM-63-2002: width and
+    /// height negative, length zero.
+    VerticalEllipseC0,
+    /// A vertical circle or ellipse facing C90 and C270, of diameters
+    /// `length` and `height`. LM-63-2002: length and height negative,
+    /// width zero.
+    VerticalEllipseC90,
+}
+
+impl OpeningShape {
+    /// The LM-63-2002 name of the shape with these dimensions [m] (circle,
+    /// cylinder, sphere where the diameters agree to 1e-9 relative).
+    pub fn name(self, width: f64, length: f64, height: f64) -> &'static str {
+        let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+        // An ellipse's length 0 means "as wide as it is long" (a circle).
+        let length = if self == OpeningShape::Ellipse && length == 0.0 {
+            width
+        } else {
+            length
+        };
+        match self {
+            OpeningShape::Point => "point",
+            OpeningShape::Rectangle if height > 0.0 => "rectangular with luminous sides",
+            OpeningShape::Rectangle => "rectangular",
+            OpeningShape::Ellipse => match (same(width, length), height > 0.0) {
+                (true, false) => "circular",
+                (false, false) => "ellipse",
+                (true, true) => "vertical cylinder",
+                (false, true) => "vertical elliptical cylinder",
+            },
+            OpeningShape::Ellipsoid if same(width, length) && same(width, height) => "sphere",
+            OpeningShape::Ellipsoid => "ellipsoidal spheroid",
+            OpeningShape::CylinderC0 if same(width, height) => {
+                "horizontal cylinder along photometric horizontal"
+            }
+            OpeningShape::CylinderC0 => {
+                "horizontal elliptical cylinder along photometric horizontal"
+            }
+            OpeningShape::CylinderC90 if same(length, height) => {
+                "horizontal cylinder perpendicular to photometric horizontal"
+            }
+            OpeningShape::CylinderC90 => {
+                "horizontal elliptical cylinder perpendicular to photometric horizontal"
+            }
+            OpeningShape::VerticalEllipseC0 if same(width, height) => {
+                "vertical circle facing photometric horizontal"
+            }
+            OpeningShape::VerticalEllipseC0 => "vertical ellipse facing photometric horizontal",
+            OpeningShape::VerticalEllipseC90 if same(length, height) => {
+                "vertical circle facing perpendicular to photometric horizontal"
+            }
+            OpeningShape::VerticalEllipseC90 => {
+                "vertical ellipse facing perpendicular to photometric horizontal"
+            }
+        }
+    }
+}
+
+/// Luminous opening of the luminaire: its [`OpeningShape`] and the three
+/// dimensions [m] (all >= 0) that the shape gives meaning to. The
+/// rectangle and the disc (`round`) keep their older reading: a rectangle
+/// `width x length` or a disc of diameter `width` (its `length` 0), each
+/// with luminous sides `height` tall. All zero: a point source.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Opening {
-    /// Width [m] (diameter when `round`).
+    /// Width [m], along C90-C270 (the diameter of a disc).
     pub width: f64,
-    /// Length [m] (0 when `round`).
+    /// Length [m], along C0-C180 (0 for a disc: as long as it is wide).
     pub length: f64,
-    /// Height of the luminous sides [m].
+    /// Height [m]: of the luminous sides of a rectangle or an ellipse (0:
+    /// none); a diameter of the other shapes.
     pub height: f64,
-    /// A circular opening.
+    /// A circular or elliptical opening facing down (`shape` is
+    /// [`OpeningShape::Ellipse`]).
     pub round: bool,
+    /// The shape.
+    pub shape: OpeningShape,
 }
 
 /// A luminaire's measured intensity distribution, as read from the file.
