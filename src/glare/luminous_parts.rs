@@ -169,28 +169,24 @@ pub fn parts(shape: OpeningShape, half: DVec3, d: DVec3) -> [(f64, Part); 3] {
             // Axis along y: the same with (x, y) exchanged.
             out = cylinder(DVec3::new(d.y, d.x, d.z), b, a, c, [y, x, z]);
         }
-        OpeningShape::VerticalEllipseC0 => {
-            out[0] = (
-                PI * b * c * d.x.abs(),
-                Part::Ellipse {
-                    c: DVec3::ZERO,
-                    e1: b * y,
-                    e2: c * z,
-                },
-            );
-        }
-        OpeningShape::VerticalEllipseC90 => {
-            out[0] = (
-                PI * a * c * d.y.abs(),
-                Part::Ellipse {
-                    c: DVec3::ZERO,
-                    e1: a * x,
-                    e2: c * z,
-                },
-            );
-        }
+        OpeningShape::VerticalEllipseC0 => out[0] = vertical_ellipse(d.x, (b, y), (c, z)),
+        OpeningShape::VerticalEllipseC90 => out[0] = vertical_ellipse(d.y, (a, x), (c, z)),
     }
     out
+}
+
+/// A vertical ellipse through the centre, luminous on both faces, of
+/// semi-axes `s1` along unit `e1` and `s2` along unit `e2`, seen with
+/// `facing` the direction's component along its normal.
+fn vertical_ellipse(facing: f64, (s1, e1): (f64, DVec3), (s2, e2): (f64, DVec3)) -> (f64, Part) {
+    (
+        PI * s1 * s2 * facing.abs(),
+        Part::Ellipse {
+            c: DVec3::ZERO,
+            e1: s1 * e1,
+            e2: s2 * e2,
+        },
+    )
 }
 
 /// A horizontal cylinder along axis `ex`, half length `a`, cross-section

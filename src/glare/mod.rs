@@ -364,6 +364,13 @@ pub fn glare_term(
     })
 }
 
+/// CIE 117's formula: `8 log10(0.25 sum / L_b)` with `L_b = e / pi`, from
+/// the glare sum `sum` [(cd/m^2)^2 sr] and the background illuminance `e`
+/// [lx] (at the eye, or the walls' average in the tabular method).
+pub fn ugr_formula(sum: f64, e: f64) -> f64 {
+    8.0 * (0.25 * PI * sum / e).log10()
+}
+
 /// The rating and its uncertainty at one observer.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ugr {
@@ -392,7 +399,7 @@ impl Ugr {
     pub fn from_parts(sum: f64, e_ind: f64, se: f64, t: f64) -> Self {
         let lb = e_ind / PI;
         let lb_std_error = se / PI;
-        let rating = |e: f64| 8.0 * (0.25 * PI * sum / e).log10();
+        let rating = |e: f64| ugr_formula(sum, e);
         if !(sum > 0.0 && e_ind > 0.0 && sum.is_finite() && e_ind.is_finite() && se.is_finite()) {
             return Self {
                 sum,

@@ -330,10 +330,11 @@ impl StandardRoom {
     }
 }
 
-/// `8 log10(0.25 pi sum / E_W)`; NaN when either is not positive.
+/// [`super::ugr_formula`] over the walls' indirect illuminance; NaN when
+/// either is not positive.
 fn rating(sum: f64, e_wall_ind: f64) -> f64 {
     if sum > 0.0 && e_wall_ind > 0.0 {
-        8.0 * (0.25 * PI * sum / e_wall_ind).log10()
+        super::ugr_formula(sum, e_wall_ind)
     } else {
         f64::NAN
     }
@@ -795,7 +796,8 @@ mod tests {
         let most = t
             .iter()
             .map(|r| (r.crosswise[0] - r.endwise[0]).abs())
-            .fold(0.0, f64::max);
+            // NaN-propagating: a NaN entry fails rather than drops out.
+            .fold(0.0, |m: f64, d| if d.is_nan() || d > m { d } else { m });
         assert!(most > 0.5, "{most}");
     }
 }
