@@ -484,6 +484,15 @@ fn a_run_without_a_plan_ends() {
                 };
                 let r = drive(&NotANumber, &cfg, &mut |_| true);
                 let errors: Vec<f64> = r.tallies.rel_errors(&r.direct).collect();
+                if shard.is_none() {
+                    // The NaN receiver's row carries the `R` flag, the others none.
+                    let flag = |j: usize| r.tallies.diagnostics(j, r.direct[j]).flag();
+                    assert!(
+                        flag(3).contains('R') && !flag(2).contains('R'),
+                        "{}",
+                        flag(3)
+                    );
+                }
                 // A shard's whole run, or the batches a run folded.
                 let total = r.total_batches.max(r.tallies.batches());
                 tx.send((rms, shard, r.pilot.map(|p| p.planned), total, errors))
@@ -494,7 +503,7 @@ fn a_run_without_a_plan_ends() {
     for _ in 0..4 {
         let (rms, shard, planned, total, errors) = rx
             .recv_timeout(std::time::Duration::from_secs(120))
-            .expect("a run with no plan ran on");
+            .expect("a run with no plan ran on, or its checks in the thread failed");
         assert_eq!(planned, Some(u64::MAX), "rms {rms} shard {shard:?}");
         assert_eq!(total, MIN_BATCHES, "rms {rms} shard {shard:?}");
         if shard.is_none() {
