@@ -281,7 +281,7 @@ pub fn summary(r: &RunResult) -> String {
         }
     }
     let flags = if counts.is_empty() {
-        "statistical checks: all receivers pass (R <= 0.1, VOV <= max(0.1, 6/B), stable FOM where 64 or more batches allow the check, no heavy tail, not sparse)"
+        "statistical checks: all receivers pass (R <= 0.1; VOV, FOM stability where 64 or more batches allow it, and heavy tail within their bounds at 0.1 % false alarms per run; not sparse)"
             .to_string()
     } else {
         let list: Vec<String> = counts.iter().map(|(k, v)| format!("{k}: {v}")).collect();

@@ -16,19 +16,26 @@
 //!
 //! - variance of the variance `VOV = sum (x_b - m)^4 / (sum (x_b - m)^2)^2 - 1/B`,
 //!   the relative variance of the estimated variance; about `2/B` for
-//!   well-behaved (normal) batch means. Flagged above [`vov_limit`]`(B) =
-//!   max(0.1, 6/B)`: the 0.1 of transport codes, raised below 60 batches to
-//!   6/B, about the 0.999 quantile of `B VOV` for normal batch means (5.9 at
-//!   B = 32). With 0.1 alone, 4 % of perfectly normal tallies of 32 batches
-//!   would be flagged (simulated: 0.1 % with the raised limit).
+//!   well-behaved (normal) batch means. Flagged above the larger of 0.1
+//!   (the transport codes' bound) and its quantile for normal batch means
+//!   at the run's false-alarm rate ([`check_bounds`]): `6/B` at 32 batches
+//!   for one receiver (with 0.1 alone, 4 % of perfectly normal tallies of
+//!   32 batches would be flagged), more for many.
 //! - FOM stability: `FOM(B_h) / FOM(B) = (R^2 B) / (R_h^2 B_h)` between the
 //!   largest power-of-two batch count `B_h <= B/2` and the end (the time is
 //!   taken proportional to the batches, `FOM = 1/(R^2 T)`); near 1 when the
 //!   error falls like `1/sqrt(T)`, above 1 when the FOM falls as the run
-//!   goes on (a rare large score arrived late). Flagged outside [0.5, 2].
-//! - heavy tail: the largest `|x_b - m| / s` over the batches against the
-//!   Sidak bound for `B` normal values at rate 0.001; a batch that far out
-//!   means rare huge scores (a heavy tail). Flagged when above.
+//!   goes on (a rare large score arrived late). Flagged outside `[0.5, 2]`,
+//!   widened to its quantiles for normal batch means at the run's
+//!   false-alarm rate ([`check_bounds`]).
+//! - heavy tail: the largest `|x_b - m| / s` over the batches (Grubbs'
+//!   statistic) against its critical value for `B` normal values at the
+//!   run's false-alarm rate ([`check_bounds`]); a batch that far out means
+//!   rare huge scores (a heavy tail). Flagged when above.
+//! - These three bounds hold the rate of false alarms per *run* (per
+//!   tally of `m` receivers) at [`check_bounds::FALSE_ALARM`] = 0.1 % each
+//!   for normal batch means, not per receiver: at 0.1 % per receiver,
+//!   10,000 Sobolev points carried flags in 7 of 10 sound runs.
 //! - `R > 0.1` is flagged: the estimate is not yet trustworthy.
 //! - fewer than 32 batches is flagged: too few for the error bar or the
 //!   checks to be trusted (a `--chains` run below 32 chains).
@@ -83,6 +90,7 @@ pub mod zcheck;
 
 mod batch;
 mod batch_means;
+pub mod check_bounds;
 pub mod checkpoint;
 mod rms_precision;
 pub mod shard;
@@ -320,8 +328,13 @@ pub struct Diagnostics {
     pub fom_ratio: Option<f64>,
     /// Largest batch deviation `|x_b - m| / s`.
     pub max_deviation: f64,
-    /// Sidak bound the largest deviation is checked against.
+    /// Bound the largest deviation is checked against (Grubbs' critical
+    /// value at the run's false-alarm rate, [`check_bounds`]).
     pub deviation_bound: f64,
+    /// Largest trusted VOV ([`check_bounds`]).
+    pub vov_bound: f64,
+    /// Accepted range of `fom_ratio` ([`check_bounds`]).
+    pub fom_bounds: (f64, f64),
     /// Number of batches behind the estimate.
     pub batches: u64,
     /// Collisions that scored from the point's watched neighbourhood over
@@ -347,19 +360,27 @@ pub struct Diagnostics {
 }
 
 impl Diagnostics {
-    /// Checks of accumulator `w` for an estimate whose total is `exact + w.mean()`,
-    /// with `r2b_half = R^2 B` at an earlier batch count, if any.
-    pub fn of(w: &Welford, exact: f64, r2b_half: Option<f64>) -> Self {
+    /// Checks of accumulator `w` for an estimate whose total is `exact +
+    /// w.mean()`, with `half = (B_h, R^2 B_h)` at an earlier batch count
+    /// `B_h`, if any, for one of `receivers` receivers checked in the run
+    /// (the bounds hold the false alarms per run, [`check_bounds`]).
+    pub fn of(w: &Welford, exact: f64, half: Option<(u64, f64)>, receivers: usize) -> Self {
         let rel_err = relative_error(exact + w.mean(), w.std_error());
         let r2b = rel_err * rel_err * w.count() as f64;
         // FOM(B_h) / FOM(B) = (R^2 B) / (R_h^2 B_h).
-        let fom_ratio = r2b_half.filter(|&h| h > 0.0 && r2b > 0.0).map(|h| r2b / h);
+        let fom_ratio = half
+            .map(|h| h.1)
+            .filter(|&h| h > 0.0 && r2b > 0.0)
+            .map(|h| r2b / h);
+        let bounds = check_bounds::CheckBounds::new(w.count(), half.map(|h| h.0), receivers);
         Self {
             rel_err,
             vov: w.vov(),
             fom_ratio,
             max_deviation: w.max_deviation(),
-            deviation_bound: sidak_bound(1e-3, w.count().max(1) as usize, None),
+            deviation_bound: bounds.deviation,
+            vov_bound: bounds.vov,
+            fom_bounds: bounds.fom,
             batches: w.count(),
             near_hits: None,
             near_reach: None,
@@ -381,10 +402,11 @@ impl Diagnostics {
             f.push("R");
         }
         // NaN or infinite statistics are failures, never `ok`.
-        if self.vov.is_nan() || self.vov > vov_limit(self.batches) {
+        if self.vov.is_nan() || self.vov > self.vov_bound {
             f.push("VOV");
         }
-        if self.fom_ratio.is_some_and(|r| !(0.5..=2.0).contains(&r)) {
+        let (lo, hi) = self.fom_bounds;
+        if self.fom_ratio.is_some_and(|r| !(lo..=hi).contains(&r)) {
             f.push("FOM");
         }
         if self.max_deviation > self.deviation_bound {
@@ -411,12 +433,6 @@ impl Diagnostics {
 /// Fewest collisions that must score from a point's watched neighbourhood
 /// before its local estimate is trusted (the `sparse` check).
 pub const SPARSE_HITS: u64 = 10;
-
-/// Largest trusted variance of the variance for `batches` batch means:
-/// `max(0.1, 6 / batches)` (see the module docs).
-pub fn vov_limit(batches: u64) -> f64 {
-    (6.0 / batches.max(1) as f64).max(0.1)
-}
 
 /// Summary of one estimated quantity.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -453,13 +469,12 @@ mod tests {
                 w.push(r * c);
                 w.push(r * s);
             }
-            raised += usize::from(w.vov() > vov_limit(w.count()));
+            raised += usize::from(w.vov() > check_bounds::CheckBounds::new(w.count(), None, 1).vov);
             plain += usize::from(w.vov() > 0.1);
         }
         assert!(raised <= 16, "{raised} of 4000 flagged");
         assert!(plain >= 80, "{plain}: the plain limit should flag ~4 %");
-        assert_eq!(vov_limit(32), 6.0 / 32.0);
-        assert_eq!(vov_limit(1000), 0.1);
+        assert_eq!(check_bounds::CheckBounds::new(1000, None, 1).vov, 0.1);
     }
 
     /// A batch mean that is not a number makes the error NaN, not an
@@ -539,18 +554,23 @@ mod tests {
         for i in 0..64 {
             w.push(1.0 + 0.01 * ((i * 7919 % 64) as f64 / 64.0 - 0.5));
         }
-        assert_eq!(Diagnostics::of(&w, 0.0, None).flag(), "ok");
+        assert_eq!(Diagnostics::of(&w, 0.0, None, 1).flag(), "ok");
         // The same R^2 B at half the batches: a stable FOM.
-        let r2b = Diagnostics::of(&w, 0.0, None).rel_err.powi(2) * 64.0;
-        assert_eq!(Diagnostics::of(&w, 0.0, Some(r2b)).fom_ratio, Some(1.0));
+        let r2b = Diagnostics::of(&w, 0.0, None, 1).rel_err.powi(2) * 64.0;
+        assert_eq!(
+            Diagnostics::of(&w, 0.0, Some((32, r2b)), 1).fom_ratio,
+            Some(1.0)
+        );
         assert!(
-            Diagnostics::of(&w, 0.0, Some(3.0 * r2b))
+            Diagnostics::of(&w, 0.0, Some((32, 3.0 * r2b)), 1)
                 .flag()
                 .contains("FOM")
         );
         // The ratio is FOM(half) / FOM(end): R^2 B at half the run four times
         // the final one means the FOM was 4 times lower then, i.e. a ratio of 1/4.
-        let ratio = Diagnostics::of(&w, 0.0, Some(4.0 * r2b)).fom_ratio.unwrap();
+        let ratio = Diagnostics::of(&w, 0.0, Some((32, 4.0 * r2b)), 1)
+            .fom_ratio
+            .unwrap();
         assert!((ratio - 0.25).abs() < 1e-12, "{ratio}");
         // One huge batch among many small ones: a heavy tail and a large VOV.
         let mut h = Welford::new();
@@ -558,18 +578,20 @@ mod tests {
             h.push(1.0);
         }
         h.push(1000.0);
-        let d = Diagnostics::of(&h, 0.0, None);
-        assert!(
-            d.flag().contains("VOV") && d.flag().contains("tail"),
-            "{}",
-            d.flag()
-        );
+        // Also among a million receivers: the bounds per run still catch it.
+        for m in [1, 1_000_000] {
+            let d = Diagnostics::of(&h, 0.0, None, m);
+            assert!(
+                d.flag().contains("VOV") && d.flag().contains("tail"),
+                "{m}: {d:?}"
+            );
+        }
         // A relative error above 0.1.
         let mut r = Welford::new();
         for x in [0.0, 2.0, 0.0, 2.0] {
             r.push(x);
         }
-        assert!(Diagnostics::of(&r, 0.0, None).flag().contains('R'));
+        assert!(Diagnostics::of(&r, 0.0, None, 1).flag().contains('R'));
     }
 
     #[test]

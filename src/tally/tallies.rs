@@ -142,8 +142,8 @@ impl Tallies {
             .iter()
             .rev()
             .find(|(n, _)| 2 * n <= b)
-            .map(|(_, v)| v[j]);
-        let mut d = Diagnostics::of(&self.estimated[j], direct, half);
+            .map(|(n, v)| (*n, v[j]));
+        let mut d = Diagnostics::of(&self.estimated[j], direct, half, self.estimated.len());
         d.near_hits = self
             .watched
             .get(j)
