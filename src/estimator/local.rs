@@ -181,6 +181,7 @@ impl BatchWork for LocalWork<'_> {
         const POOL_KEY: u64 = 0x706f_6f6c; // "pool"
         let (paths, radii) = receivers.near_field();
         let mut pool = (paths > 0).then(|| Pool::new(bs, Philox4x32::new(cfg.seed ^ POOL_KEY, b)));
+        let mut held = receivers.new_hold();
         for c in b * bs..(b + 1) * bs {
             let mut rng = Philox4x32::new(cfg.seed, c);
             let i = (c - b * bs) as u32;
@@ -204,13 +205,12 @@ impl BatchWork for LocalWork<'_> {
                 if let Some(p) = pool.as_mut() {
                     p.offer(col);
                 }
-                let (acc, near) = acc.split_at_mut(buckets * len);
                 // Every `SPARSE_STRIDE`-th chain also counts where it scores from.
-                let near = (c % SPARSE_STRIDE == 0).then_some(near);
-                scores +=
-                    receivers.score(scene, col, &mut acc[k * len..(k + 1) * len], near) as u64;
+                let counting = c % SPARSE_STRIDE == 0;
+                scores += receivers.score_held(scene, col, k, acc, counting, &mut held) as u64;
             }));
         }
+        receivers.flush_held(&mut held, acc);
         let n = receivers.len();
         let mut sums = vec![0.0; buckets * n];
         for k in 0..buckets {

@@ -1114,21 +1114,7 @@ impl Receivers {
             None => (&mut none[..], false),
         };
         let (x, n) = (c.p, c.n);
-        let xm = if list.blockers != 0 {
-            scene.side_mask(x)
-        } else {
-            SideMask::default()
-        };
-        let open = (xm.front | xm.back) & list.blockers == 0;
-        // Spheres and boxes holding both the collision and every entry never block.
-        let x_inside = if scene.planes_only() {
-            0
-        } else {
-            scene.inside_mask(x)
-        };
-        // Panes on the way scale scores by their transmittance: per pair.
-        let shapes_open = scene.planes_only()
-            || (!scene.has_panes() && scene.nothing_blocks(x_inside & list.inside_all));
+        let (xm, x_inside, open, shapes_open) = collision_context(scene, list, x);
         let nc = list.n_const;
         match material.constant_brdf() {
             Some(f) if open && shapes_open && counting => {
@@ -1187,6 +1173,113 @@ impl Receivers {
             return len + self.score_images(scene, img, material, c, acc_all);
         }
         len
+    }
+
+    /// [`Self::score`] for a batch's chains, with collisions bound for
+    /// the open kernel of a list of more than [`open_kernel::BLOCK`]
+    /// entries held in `held` and scored a block of entries at a time
+    /// ([`open_kernel::score_open_held`]); the others are scored at once,
+    /// after what the list holds. Every entry receives the same terms in
+    /// the same order as from [`Self::score`] (the same bits), once
+    /// [`Self::flush_held`] has run. `acc_all` holds every bucket of
+    /// [`Self::accumulator_len`] and then the counts (the batch's scratch);
+    /// the collision goes to bucket `bucket` and is counted where
+    /// `counting`.
+    #[inline]
+    pub fn score_held(
+        &self,
+        scene: &Scene,
+        c: &Collision,
+        bucket: usize,
+        acc_all: &mut [f64],
+        counting: bool,
+        held: &mut HeldScores,
+    ) -> usize {
+        let total = self.total_len;
+        let li = self.list_of[c.surface as usize] as usize;
+        let list = &self.lists[li];
+        let material = &scene.surfaces[c.surface as usize].material;
+        if list.n_const > open_kernel::BLOCK
+            && let Some(f) = material.constant_brdf()
+        {
+            let (xm, x_inside, open, shapes_open) = collision_context(scene, list, c.p);
+            if open && shapes_open {
+                held.lists[li].push(open_kernel::Held {
+                    x: c.p,
+                    n: c.n,
+                    qf: c.q * f,
+                    acc: bucket * total + list.offset,
+                    count: counting,
+                });
+                if held.lists[li].len() >= HeldScores::HOLD {
+                    self.flush_list(li, held, acc_all);
+                }
+                let len = list.idx.len();
+                let (acc, near) = acc_all.split_at_mut(acc_all.len() - total);
+                let acc = &mut acc[bucket * total..(bucket + 1) * total];
+                if list.n_const < len {
+                    let range = list.offset..list.offset + len;
+                    let near = if counting {
+                        &mut near[range.clone()]
+                    } else {
+                        &mut []
+                    };
+                    let a = &mut acc[range];
+                    self.score_general(
+                        scene,
+                        list,
+                        x_inside,
+                        list.n_const..len,
+                        material,
+                        c,
+                        xm,
+                        a,
+                        near,
+                    );
+                }
+                return match self.image_list {
+                    Some(img) => {
+                        self.flush_list(img as usize, held, acc_all);
+                        let acc = &mut acc_all[bucket * total..(bucket + 1) * total];
+                        len + self.score_images(scene, img, material, c, acc)
+                    }
+                    None => len,
+                };
+            }
+        }
+        self.flush_list(li, held, acc_all);
+        if let Some(img) = self.image_list {
+            self.flush_list(img as usize, held, acc_all);
+        }
+        let (acc, near) = acc_all.split_at_mut(acc_all.len() - total);
+        let acc = &mut acc[bucket * total..(bucket + 1) * total];
+        self.score(scene, c, acc, counting.then_some(near))
+    }
+
+    /// Score what list `li` holds ([`Self::score_held`]) and let it go.
+    fn flush_list(&self, li: usize, held: &mut HeldScores, acc_all: &mut [f64]) {
+        let h = &mut held.lists[li];
+        if h.is_empty() {
+            return;
+        }
+        let (acc, near) = acc_all.split_at_mut(acc_all.len() - self.total_len);
+        open_kernel::score_open_held(&self.lists[li], h, acc, near);
+        h.clear();
+    }
+
+    /// Score everything held ([`Self::score_held`]): at the end of a batch,
+    /// before its accumulator is read.
+    pub fn flush_held(&self, held: &mut HeldScores, acc_all: &mut [f64]) {
+        for li in 0..held.lists.len() {
+            self.flush_list(li, held, acc_all);
+        }
+    }
+
+    /// An empty hold for [`Self::score_held`].
+    pub fn new_hold(&self) -> HeldScores {
+        HeldScores {
+            lists: vec![Vec::new(); self.lists.len()],
+        }
     }
 
     /// Scores of collision `c` that reach a receiver by one mirror
@@ -1325,6 +1418,43 @@ impl Receivers {
             }
         }
     }
+}
+
+/// Collisions held for the open kernel, per receiver list
+/// ([`Receivers::score_held`]).
+#[derive(Debug)]
+pub struct HeldScores {
+    lists: Vec<Vec<open_kernel::Held>>,
+}
+
+impl HeldScores {
+    /// Collisions a list holds before they are scored: enough that reading
+    /// a block of entries from memory is spread over many of them.
+    const HOLD: usize = 256;
+}
+
+/// How a collision at `x` on a surface of `list` reaches the list's
+/// entries: its side mask (planes that may be in the way), the spheres and
+/// boxes it lies inside, whether no plane separates it from any entry
+/// (`open`), and whether no shape can be in the way either.
+#[inline]
+fn collision_context(scene: &Scene, list: &ReceiverList, x: DVec3) -> (SideMask, u64, bool, bool) {
+    let xm = if list.blockers != 0 {
+        scene.side_mask(x)
+    } else {
+        SideMask::default()
+    };
+    let open = (xm.front | xm.back) & list.blockers == 0;
+    // Spheres and boxes holding both the collision and every entry never block.
+    let x_inside = if scene.planes_only() {
+        0
+    } else {
+        scene.inside_mask(x)
+    };
+    // Panes on the way scale scores by their transmittance: per pair.
+    let shapes_open = scene.planes_only()
+        || (!scene.has_panes() && scene.nothing_blocks(x_inside & list.inside_all));
+    (xm, x_inside, open, shapes_open)
 }
 
 /// The near/far radius [m] a receiver at `p` (normal frame `frame`) needs:
