@@ -42,6 +42,8 @@ mod visibility_cells;
 
 use open_kernel::score_open;
 pub use open_kernel::{Kernel, active_kernel, arith_touch, set_kernel, stream_touch};
+/// Lists longer than this hold their collisions ([`Receivers::score_held`]).
+pub const HELD_BLOCK: usize = open_kernel::BLOCK;
 
 use crate::chain::Collision;
 use crate::geometry::SideMask;
