@@ -96,9 +96,11 @@ pub fn grubbs_bound(batches: u64, a: f64) -> f64 {
         return f64::INFINITY;
     }
     let n = batches as f64;
-    let t = StudentsT::new(0.0, 1.0, n - 2.0)
+    // The upper quantile as minus the lower one: `1 - p` rounds to 1 for
+    // the tiny `p` of many receivers (an infinite `t`, a NaN bound).
+    let t = -StudentsT::new(0.0, 1.0, n - 2.0)
         .expect("positive degrees of freedom")
-        .inverse_cdf(1.0 - a / (2.0 * n));
+        .inverse_cdf(a / (2.0 * n));
     (n - 1.0) / n.sqrt() * (t * t / (n - 2.0 + t * t)).sqrt()
 }
 
@@ -112,15 +114,20 @@ pub fn fom_quantiles(half: u64, batches: u64, a: f64) -> (f64, f64) {
     let y =
         Beta::new(0.5 * (half - 1) as f64, 0.5 * (batches - half) as f64).expect("positive shapes");
     let scale = (half - 1) as f64 / (batches - 1) as f64;
+    // The upper quantile of `Y` as 1 minus the lower one of `1 - Y ~
+    // Beta(b, a)`, exact for tiny levels where `1 - a / 2` rounds to 1.
+    let flipped =
+        Beta::new(0.5 * (batches - half) as f64, 0.5 * (half - 1) as f64).expect("positive shapes");
     let y_lo = y.inverse_cdf(0.5 * a);
-    let y_hi = y.inverse_cdf(1.0 - 0.5 * a);
+    let y_hi = 1.0 - flipped.inverse_cdf(0.5 * a);
     (scale / y_hi, scale / y_lo)
 }
 
 /// Upper quantile at level `a` of `VOV = (b_2 - 1) / B` for `batches`
 /// normal values, by the Anscombe-Glynn approximation of the kurtosis
-/// `b_2` (module docs); infinite where the approximation has no quantile
-/// that far out, or below 8 batches.
+/// `b_2` (module docs); infinite (the check off) where the approximation
+/// has no quantile that far out or puts it beyond the largest VOV of
+/// `batches` values, or below 8 batches.
 pub fn vov_quantile(batches: u64, a: f64) -> f64 {
     if batches < 8 {
         return f64::INFINITY;
@@ -131,7 +138,7 @@ pub fn vov_quantile(batches: u64, a: f64) -> f64 {
     let beta1 = 6.0 * (n * n - 5.0 * n + 2.0) / ((n + 7.0) * (n + 9.0))
         * (6.0 * (n + 3.0) * (n + 5.0) / (n * (n - 2.0) * (n - 3.0))).sqrt();
     let big_a = 6.0 + 8.0 / beta1 * (2.0 / beta1 + (1.0 + 4.0 / (beta1 * beta1)).sqrt());
-    let z = Normal::standard().inverse_cdf(1.0 - a);
+    let z = -Normal::standard().inverse_cdf(a);
     // Z = (1 - 2/(9A) - cbrt((1 - 2/A) / (1 + x sqrt(2/(A-4))))) / sqrt(2/(9A)).
     let t = 1.0 - 2.0 / (9.0 * big_a) - z * (2.0 / (9.0 * big_a)).sqrt();
     if t <= 0.0 {
@@ -139,6 +146,13 @@ pub fn vov_quantile(batches: u64, a: f64) -> f64 {
     }
     let x = ((1.0 - 2.0 / big_a) / t.powi(3) - 1.0) / (2.0 / (big_a - 4.0)).sqrt();
     let b2 = mean + x * var.sqrt();
+    // No VOV of `B` values exceeds one outlier's, `b_2 = (B^2 - 3B + 3) /
+    // (B - 1)`: a quantile beyond it (the approximation's far tail, many
+    // receivers and few batches) means the check cannot discriminate there.
+    let b2_max = (n * n - 3.0 * n + 3.0) / (n - 1.0);
+    if b2 >= b2_max {
+        return f64::INFINITY;
+    }
     (b2 - 1.0) / n
 }
 
@@ -219,6 +233,31 @@ mod tests {
         assert!(fom_m.1 > fom1.1 && fom_m.0 == 0.5, "{fom_m:?}");
         assert!((per_receiver_level(1e-3, 1) - 1e-3).abs() < 1e-15);
         assert!((per_receiver_level(1e-3, 1000) - 1.0005e-6).abs() < 1e-9);
+        // Tiny levels (10^12 receivers) and long runs: finite bounds that
+        // grow with the receivers, below what the statistics can reach
+        // (`1 - p` would round to 1 there: infinite quantiles, NaN bounds).
+        for b in [32u64, 500, 1003, 5000, 100_000] {
+            let mut last = CheckBounds::new(b, Some(b / 2), 1);
+            for m in [1e3, 1e6, 1e9, 1e12] {
+                let c = CheckBounds::new(b, Some(b / 2), m as usize);
+                let (n, max_g) = (b as f64, (b as f64 - 1.0) / (b as f64).sqrt());
+                assert!(
+                    c.deviation.is_finite() && c.deviation < max_g,
+                    "{b} {m}: {c:?}"
+                );
+                assert!(c.deviation > last.deviation, "{b} {m}: {c:?}");
+                assert!(c.fom.0 > 0.0 && c.fom.1.is_finite(), "{b} {m}: {c:?}");
+                assert!(
+                    c.fom.1 >= last.fom.1 && c.fom.0 <= last.fom.0,
+                    "{b} {m}: {c:?}"
+                );
+                assert!(!c.vov.is_nan() && c.vov >= last.vov, "{b} {m}: {c:?}");
+                // The largest VOV of B values is (b2_max - 1) / B.
+                let vov_max = ((n * n - 3.0 * n + 3.0) / (n - 1.0) - 1.0) / n;
+                assert!(c.vov < vov_max || c.vov.is_infinite(), "{b} {m}: {c:?}");
+                last = c;
+            }
+        }
     }
 
     /// Checks of one receiver from its batch means, the FOM snapshot at 32.

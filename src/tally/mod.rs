@@ -291,6 +291,24 @@ pub fn figure_of_merit(rel_err: f64, seconds: f64) -> f64 {
 /// quantile with `batches - 1` degrees of freedom, or the normal one above
 /// 1000 degrees of freedom (where statrs' t quantile loses accuracy).
 pub fn t_factor(level: f64, batches: u64) -> f64 {
+    // Memoised for the last arguments (per thread): a run's rows share them,
+    // and a quantile costs microseconds (a second at 1,000,000 points).
+    thread_local! {
+        static LAST: std::cell::Cell<Option<(u64, u64, f64)>> = const { std::cell::Cell::new(None) };
+    }
+    let key = (level.to_bits(), batches);
+    if let Some((l, b, t)) = LAST.with(std::cell::Cell::get)
+        && (l, b) == key
+    {
+        return t;
+    }
+    let t = t_quantile(level, batches);
+    LAST.with(|c| c.set(Some((key.0, key.1, t))));
+    t
+}
+
+/// [`t_factor`], computed.
+fn t_quantile(level: f64, batches: u64) -> f64 {
     let p = 0.5 + 0.5 * level;
     let dof = batches.saturating_sub(1);
     if dof == 0 {
