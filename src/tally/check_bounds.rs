@@ -255,6 +255,29 @@ mod tests {
         assert!((per_receiver_level(1e-3, 1000) - 1.0005e-6).abs() < 1e-9);
     }
 
+    /// The FOM quantiles against the closed forms of their Beta law where it
+    /// has one: `B_h = 3` makes the first shape 1, `Y ~ Beta(1, b)` with
+    /// quantile `1 - (1 - p)^(1/b)` (`B = 5`: uniform). A swapped shape, a
+    /// scale `B_h / B` or a one-sided level miss them (the simulation test
+    /// cannot resolve a 2 % shift of the scale).
+    #[test]
+    fn fom_quantiles_match_closed_forms() {
+        for (h, b) in [(3u64, 5u64), (3, 9), (3, 40)] {
+            let shape_b = 0.5 * (b - h) as f64;
+            let scale = 2.0 / (b - 1) as f64;
+            for a in [0.02, 1e-6] {
+                let q = |p: f64| 1.0 - (1.0 - p).powf(1.0 / shape_b);
+                let want = (scale / q(1.0 - 0.5 * a), scale / q(0.5 * a));
+                let got = fom_quantiles(h, b, a);
+                let close = |x: f64, y: f64| (x - y).abs() < 1e-6 * y;
+                assert!(
+                    close(got.0, want.0) && close(got.1, want.1),
+                    "B_h {h} B {b} a {a}: {got:?} against {want:?}"
+                );
+            }
+        }
+    }
+
     /// Grubbs' critical values against the published two-sided 5 % table
     /// (n = 10: 2.290, 20: 2.709, 30: 2.908, 100: 3.384): wrong degrees of
     /// freedom (`B` or `B - 1`) or a one-sided level miss them by 0.5 % and
