@@ -385,10 +385,11 @@ impl Diagnostics {
     pub fn of(w: &Welford, exact: f64, half: Option<(u64, f64)>, receivers: usize) -> Self {
         let rel_err = relative_error(exact + w.mean(), w.std_error());
         let r2b = rel_err * rel_err * w.count() as f64;
-        // FOM(B_h) / FOM(B) = (R^2 B) / (R_h^2 B_h).
+        // FOM(B_h) / FOM(B) = (R^2 B) / (R_h^2 B_h); none where either is
+        // exact (0), but a NaN stays a NaN ratio, which flags.
         let fom_ratio = half
             .map(|h| h.1)
-            .filter(|&h| h > 0.0 && r2b > 0.0)
+            .filter(|&h| h != 0.0 && r2b != 0.0)
             .map(|h| r2b / h);
         let bounds = check_bounds::CheckBounds::new(w.count(), half.map(|h| h.0), receivers);
         Self {
@@ -427,7 +428,7 @@ impl Diagnostics {
         if self.fom_ratio.is_some_and(|r| !(lo..=hi).contains(&r)) {
             f.push("FOM");
         }
-        if self.max_deviation > self.deviation_bound {
+        if self.max_deviation.is_nan() || self.max_deviation > self.deviation_bound {
             f.push("tail");
         }
         let few = |h: Option<u64>| h.is_some_and(|h| h < SPARSE_HITS);
@@ -510,6 +511,30 @@ mod tests {
             c.push(3.0);
         }
         assert_eq!((c.variance(), c.std_error()), (0.0, 0.0));
+    }
+
+    /// A statistic that is not a number fails its check, never passes: a
+    /// NaN batch mean flags the FOM and tail checks too (not only `R` and
+    /// `VOV`), and so does a NaN FOM snapshot of an otherwise sound tally;
+    /// an exact (0) snapshot gives no ratio, as before.
+    #[test]
+    fn nan_statistics_flag_every_check_they_reach() {
+        let mut w = Welford::new();
+        for i in 0..64 {
+            w.push(1.0 + 0.01 * ((i * 7919 % 64) as f64 / 64.0 - 0.5));
+        }
+        let r2b = Diagnostics::of(&w, 0.0, None, 1).rel_err.powi(2) * 64.0;
+        assert_eq!(Diagnostics::of(&w, 0.0, Some((32, r2b)), 1).flag(), "ok");
+        let d = Diagnostics::of(&w, 0.0, Some((32, f64::NAN)), 1);
+        assert!(d.fom_ratio.is_some_and(f64::is_nan), "{d:?}");
+        assert_eq!(d.flag(), "FOM");
+        assert_eq!(Diagnostics::of(&w, 0.0, Some((32, 0.0)), 1).fom_ratio, None);
+        let mut nan = w;
+        nan.push(f64::NAN);
+        for m in [0, 1, 10_000_000] {
+            let flag = Diagnostics::of(&nan, 0.0, Some((32, r2b)), m).flag();
+            assert_eq!(flag, "R;VOV;FOM;tail", "{m}");
+        }
     }
 
     #[test]
