@@ -399,7 +399,9 @@ impl Diagnostics {
             max_deviation: w.max_deviation(),
             deviation_bound: bounds.deviation,
             vov_bound: bounds.vov,
-            fom_bounds: bounds.fom,
+            fom_bounds: half.map_or((0.0, f64::INFINITY), |h| {
+                check_bounds::fom_bounds(&bounds, rel_err, w.count(), h.0)
+            }),
             batches: w.count(),
             near_hits: None,
             near_reach: None,
