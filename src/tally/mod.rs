@@ -25,7 +25,8 @@
 //!   largest power-of-two batch count `B_h <= B/2` and the end (the time is
 //!   taken proportional to the batches, `FOM = 1/(R^2 T)`); near 1 when the
 //!   error falls like `1/sqrt(T)`, above 1 when the FOM falls as the run
-//!   goes on (a rare large score arrived late). Flagged outside `[0.5, 2]`,
+//!   goes on (a rare large score arrived late; infinite when nothing had
+//!   scored at all by `B_h`). Flagged outside `[0.5, 2]`,
 //!   widened to its quantiles for normal batch means at the run's
 //!   false-alarm rate ([`check_bounds`]).
 //! - heavy tail: the largest `|x_b - m| / s` over the batches (Grubbs'
@@ -385,12 +386,11 @@ impl Diagnostics {
     pub fn of(w: &Welford, exact: f64, half: Option<(u64, f64)>, receivers: usize) -> Self {
         let rel_err = relative_error(exact + w.mean(), w.std_error());
         let r2b = rel_err * rel_err * w.count() as f64;
-        // FOM(B_h) / FOM(B) = (R^2 B) / (R_h^2 B_h); none where either is
-        // exact (0), but a NaN stays a NaN ratio, which flags.
-        let fom_ratio = half
-            .map(|h| h.1)
-            .filter(|&h| h != 0.0 && r2b != 0.0)
-            .map(|h| r2b / h);
+        // FOM(B_h) / FOM(B) = (R^2 B) / (R_h^2 B_h); none where the end is
+        // exact (0). An exact snapshot before an error (nothing at all
+        // scored in the first B_h batches, then something) is an infinite
+        // ratio, and a NaN stays a NaN ratio: both flag.
+        let fom_ratio = half.map(|h| h.1).filter(|_| r2b != 0.0).map(|h| r2b / h);
         let bounds = check_bounds::CheckBounds::new(w.count(), half.map(|h| h.0), receivers);
         Self {
             rel_err,
@@ -518,7 +518,8 @@ mod tests {
     /// A statistic that is not a number fails its check, never passes: a
     /// NaN batch mean flags the FOM and tail checks too (not only `R` and
     /// `VOV`), and so does a NaN FOM snapshot of an otherwise sound tally;
-    /// an exact (0) snapshot gives no ratio, as before.
+    /// an exact (0) snapshot before a finite error is an infinite ratio,
+    /// flagged (nothing had scored in the first half of the run).
     #[test]
     fn nan_statistics_flag_every_check_they_reach() {
         let mut w = Welford::new();
@@ -530,7 +531,18 @@ mod tests {
         let d = Diagnostics::of(&w, 0.0, Some((32, f64::NAN)), 1);
         assert!(d.fom_ratio.is_some_and(f64::is_nan), "{d:?}");
         assert_eq!(d.flag(), "FOM");
-        assert_eq!(Diagnostics::of(&w, 0.0, Some((32, 0.0)), 1).fom_ratio, None);
+        let late = Diagnostics::of(&w, 0.0, Some((32, 0.0)), 1);
+        assert_eq!(
+            (late.fom_ratio, late.flag().as_str()),
+            (Some(f64::INFINITY), "FOM")
+        );
+        // An exact end (and so an exact snapshot) has no ratio.
+        let mut exact = Welford::new();
+        (0..64).for_each(|_| exact.push(0.0));
+        assert_eq!(
+            Diagnostics::of(&exact, 2.0, Some((32, 0.0)), 1).fom_ratio,
+            None
+        );
         let mut nan = w;
         nan.push(f64::NAN);
         for m in [0, 1, 10_000_000] {
