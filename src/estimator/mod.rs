@@ -1098,7 +1098,7 @@ impl Receivers {
         scene: &Scene,
         c: &Collision,
         acc_all: &mut [f64],
-        near: Option<&mut [f64]>,
+        mut near_all: Option<&mut [f64]>,
     ) -> usize {
         let list = &self.lists[self.list_of[c.surface as usize] as usize];
         let len = list.idx.len();
@@ -1111,7 +1111,7 @@ impl Receivers {
         }
         let acc = &mut acc_all[list.offset..list.offset + len];
         let mut none = [];
-        let (near, counting) = match near {
+        let (near, counting) = match near_all.as_deref_mut() {
             Some(v) => (&mut v[list.offset..list.offset + len], true),
             None => (&mut none[..], false),
         };
@@ -1168,13 +1168,40 @@ impl Receivers {
             }
             _ => self.score_general(scene, list, x_inside, 0..nc, material, c, xm, acc, near),
         }
+        len + self.score_rest(scene, list, (x_inside, xm), material, c, acc_all, near_all)
+    }
+
+    /// The scores of collision `c` beyond the constant-response entries of
+    /// its list `list`: into the entries evaluated per pair (`n_const..`),
+    /// and by reflection in glass panes ([`Self::score_images`]). `acc_all`
+    /// is one bucket of [`Self::accumulator_len`], `near_all` (if
+    /// counting) the counts; `(x_inside, xm)` from [`collision_context`].
+    /// Returns the pane pairs evaluated.
+    #[allow(clippy::too_many_arguments)]
+    fn score_rest(
+        &self,
+        scene: &Scene,
+        list: &ReceiverList,
+        (x_inside, xm): (u64, SideMask),
+        material: &Material,
+        c: &Collision,
+        acc_all: &mut [f64],
+        near_all: Option<&mut [f64]>,
+    ) -> usize {
+        let (nc, len) = (list.n_const, list.idx.len());
         if nc < len {
+            let range = list.offset..list.offset + len;
+            let near = match near_all {
+                Some(v) => &mut v[range.clone()],
+                None => &mut [],
+            };
+            let acc = &mut acc_all[range];
             self.score_general(scene, list, x_inside, nc..len, material, c, xm, acc, near);
         }
-        if let Some(img) = self.image_list {
-            return len + self.score_images(scene, img, material, c, acc_all);
+        match self.image_list {
+            Some(img) => self.score_images(scene, img, material, c, acc_all),
+            None => 0,
         }
-        len
     }
 
     /// [`Self::score`] for a batch's chains, with collisions bound for
@@ -1216,43 +1243,16 @@ impl Receivers {
                 if held.lists[li].len() >= HeldScores::HOLD {
                     self.flush_list(li, held, acc_all);
                 }
-                let len = list.idx.len();
+                // The rest touches other entries than the held ones (and
+                // the panes' own stretch, which holds nothing).
                 let (acc, near) = acc_all.split_at_mut(acc_all.len() - total);
                 let acc = &mut acc[bucket * total..(bucket + 1) * total];
-                if list.n_const < len {
-                    let range = list.offset..list.offset + len;
-                    let near = if counting {
-                        &mut near[range.clone()]
-                    } else {
-                        &mut []
-                    };
-                    let a = &mut acc[range];
-                    self.score_general(
-                        scene,
-                        list,
-                        x_inside,
-                        list.n_const..len,
-                        material,
-                        c,
-                        xm,
-                        a,
-                        near,
-                    );
-                }
-                return match self.image_list {
-                    Some(img) => {
-                        self.flush_list(img as usize, held, acc_all);
-                        let acc = &mut acc_all[bucket * total..(bucket + 1) * total];
-                        len + self.score_images(scene, img, material, c, acc)
-                    }
-                    None => len,
-                };
+                let near = counting.then_some(near);
+                let at = (x_inside, xm);
+                return list.idx.len() + self.score_rest(scene, list, at, material, c, acc, near);
             }
         }
         self.flush_list(li, held, acc_all);
-        if let Some(img) = self.image_list {
-            self.flush_list(img as usize, held, acc_all);
-        }
         let (acc, near) = acc_all.split_at_mut(acc_all.len() - total);
         let acc = &mut acc[bucket * total..(bucket + 1) * total];
         self.score(scene, c, acc, counting.then_some(near))
