@@ -134,8 +134,20 @@ impl Tallies {
         self.snapshots.push((b, v));
     }
 
-    /// Statistical checks of receiver `j` whose exact part is `direct`.
+    /// Statistical checks of receiver `j` whose exact part is `direct`, at
+    /// [`super::check_bounds::FALSE_ALARM`] per check over this run's
+    /// receivers.
     pub fn diagnostics(&self, j: usize, direct: f64) -> Diagnostics {
+        self.diagnostics_among(j, direct, self.estimated.len())
+    }
+
+    /// [`Self::diagnostics`] with the false-alarm rate held over a family
+    /// of `family` receivers (at least this run's): a gate that judges the
+    /// rows of several runs together (`lumest validate daylight`) passes
+    /// them all, so that a sound gate fails in at most
+    /// [`super::check_bounds::FALSE_ALARM`] of its runs per check, however
+    /// many runs it makes.
+    pub fn diagnostics_among(&self, j: usize, direct: f64, family: usize) -> Diagnostics {
         let b = self.batches();
         let half = self
             .snapshots
@@ -143,7 +155,8 @@ impl Tallies {
             .rev()
             .find(|(n, _)| 2 * n <= b)
             .map(|(n, v)| (*n, v[j]));
-        let mut d = Diagnostics::of(&self.estimated[j], direct, half, self.estimated.len());
+        let family = family.max(self.estimated.len());
+        let mut d = Diagnostics::of(&self.estimated[j], direct, half, family);
         d.near_hits = self
             .watched
             .get(j)
@@ -189,5 +202,57 @@ impl Tallies {
         // A fold from +0: an empty f64 sum is -0, which printed as "-0.000e0".
         let s = self.rel_errors(direct).fold(0.0, |a, r| a + r * r);
         (s / n).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One receiver of 40 batch means: 39 at +-1 and one outlier `v`.
+    fn one_outlier(v: f64) -> Tallies {
+        let mut t = Tallies::new(1, 0);
+        let mut means = [0.0];
+        for b in 0..40 {
+            let x = if b == 17 {
+                v
+            } else if b % 2 == 0 {
+                11.0
+            } else {
+                9.0
+            };
+            t.fold(&[x], &[], 1, &[], &mut means);
+        }
+        t
+    }
+
+    /// A gate over many runs' rows widens each run's check bounds to its
+    /// family: an outlier flagged among one receiver's bounds passes among
+    /// a million receivers', and a family smaller than the run is the run.
+    #[test]
+    fn diagnostics_among_a_family_widen_to_it() {
+        let own = one_outlier(10.0).diagnostics(0, 0.0);
+        let many = one_outlier(10.0).diagnostics_among(0, 0.0, 1_000_000);
+        assert!(own.deviation_bound < many.deviation_bound);
+        assert!(own.vov_bound <= many.vov_bound);
+        // The outlier whose deviation lies between the two bounds.
+        let v = (0..2000)
+            .map(|i| 10.0 + 0.01 * f64::from(i))
+            .find(|&v| {
+                let d = one_outlier(v).diagnostics(0, 0.0);
+                d.max_deviation > d.deviation_bound
+            })
+            .expect("some outlier flags among one receiver");
+        let t = one_outlier(v);
+        assert!(t.diagnostics(0, 0.0).flag().contains("tail"));
+        assert!(
+            !t.diagnostics_among(0, 0.0, 1_000_000)
+                .flag()
+                .contains("tail")
+        );
+        // A family below the run's own receivers is the run's.
+        let (a, b) = (t.diagnostics(0, 0.0), t.diagnostics_among(0, 0.0, 0));
+        assert_eq!(a.deviation_bound, b.deviation_bound);
+        assert_eq!(a.flag(), b.flag());
     }
 }
