@@ -225,8 +225,30 @@ pub(crate) struct Pool {
 impl Pool {
     /// Most collisions kept per batch.
     pub(crate) const CAP: usize = 1 << 16;
-    /// Pool collisions joined to each path vertex.
+    /// Pool collisions joined to a path vertex of full weight (see
+    /// [`Pool::picks`]).
     pub(crate) const PICKS: u32 = 16;
+
+    /// Pool collisions joined to a vertex of path weight `beta` on a path
+    /// that started with weight `beta0`: `ceil(PICKS beta / beta0)`, at
+    /// least 1 and at most [`Self::PICKS`]. A vertex's joins are scaled by
+    /// its own count, so any count leaves the estimate unbiased; this one
+    /// spends the shadow tests where they weigh, as a vertex's pool light
+    /// scales with its weight (a Lambertian path's weight falls by its
+    /// reflectance at each bounce; the first vertex keeps full weight).
+    /// Measured against 16 at every vertex, same seeds, same minutes: the
+    /// office's 506 planar grid points (524,288 chains, 2 threads, seeds 1
+    /// and 2) ran 12-15 % faster at the same RMS error, FOM 5.5e3-5.9e3 ->
+    /// 6.4e3 (the near parts of the points behind the cabinet bounce in a
+    /// 5 cm gap); the far field of two planes (`rho1 rho2 = 0.99`,
+    /// `r = 1e4`, 8 s, seeds 1-4) R 1.4e-3-1.7e-3 -> 0.95e-3-1.1e-3 at 1.5
+    /// times the chains; points 1 mm to 5 cm above the lit Sobolev floor
+    /// unchanged.
+    pub(crate) fn picks(beta: f64, beta0: f64) -> u32 {
+        let k = (f64::from(Self::PICKS) * (beta / beta0)).ceil();
+        // (`as` saturates, NaN to 0.)
+        (k as u32).clamp(1, Self::PICKS)
+    }
 
     /// An empty pool for a batch of `chains` chains, drawing its reservoir
     /// choices from `rng`.
@@ -286,7 +308,7 @@ pub(crate) struct Walk {
 /// With `path.pool` (the batch's light-tracing collisions) the split recurses:
 /// at each vertex `x` light from surfaces within [`split_radius`] comes by
 /// the next segment (a longer one ends the path), and light from farther
-/// surfaces by [`Pool::PICKS`] pool collisions scored into `x` (see
+/// surfaces by [`Pool::picks`] pool collisions scored into `x` (see
 /// [`crate::estimator::Receivers::with_near_field`]).
 ///
 /// # Light-guided connections (`cfg.chain.guide`)
@@ -427,6 +449,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                     wo,
                     beta,
                     k: order,
+                    picks: Pool::picks(beta, beta0),
                 };
                 join_pool(scene, pool, &at, radius, cfg.chain.max_order, rng, &mut add);
                 // Exposed: the receiver's radius, not `d / 2`, sets the split
@@ -492,7 +515,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
 /// planes (`rho1 rho2 = 0.999`, `r = 1e4`, `--near-radius auto`, 5 s):
 /// `d / 2` gives `E` within 0.4 % (z = 0.4); `d / 10` within 2 %; `d`
 /// leaves half of that halo to the path and reads 23 % low, `2 d` 44 %
-/// (4 pool picks a vertex then; now 16).
+/// (4 pool picks a vertex then; now up to 16, [`Pool::picks`]).
 fn split_radius(scene: &Scene, x: DVec3, r: f64) -> f64 {
     let d = scene
         .lights
@@ -503,7 +526,8 @@ fn split_radius(scene: &Scene, x: DVec3, r: f64) -> f64 {
 }
 
 /// A path vertex: the hit, its material and normal frame, the direction to
-/// the previous vertex (local), the path weight and its order `k`.
+/// the previous vertex (local), the path weight, its order `k` and the
+/// pool collisions it joins ([`Pool::picks`]).
 struct Vertex<'a> {
     h: &'a Hit,
     m: &'a Material,
@@ -511,12 +535,13 @@ struct Vertex<'a> {
     wo: DVec3,
     beta: f64,
     k: u32,
+    picks: u32,
 }
 
 /// The far part at path vertex `v`: light-tracing collisions `y` at
 /// `|y - x| >= radius` score into it as into a receiver,
-/// `beta Q_y f_y cos_y cos_x / d^2 f_x`, through [`Pool::PICKS`] collisions
-/// drawn uniformly from the pool, each weighted by `seen / (PICKS chains)`;
+/// `beta Q_y f_y cos_y cos_x / d^2 f_x`, through `v.picks` collisions
+/// drawn uniformly from the pool, each weighted by `seen / (picks chains)`;
 /// light reflected `o_y + k` times (dropped beyond `max_order`, if set).
 fn join_pool<F: FnMut(u32, f64)>(
     scene: &Scene,
@@ -534,14 +559,15 @@ fn join_pool<F: FnMut(u32, f64)>(
         wo,
         beta,
         k,
+        picks,
     } = *v;
     let n = pool.items.len();
     if n == 0 || beta <= 0.0 {
         return;
     }
-    let scale = pool.seen as f64 / (f64::from(Pool::PICKS) * pool.chains as f64);
+    let scale = pool.seen as f64 / (f64::from(picks) * pool.chains as f64);
     let from = Some((h.surface, h.prim));
-    for _ in 0..Pool::PICKS {
+    for _ in 0..picks {
         let i = ((rng.next_f64() * n as f64) as usize).min(n - 1);
         let y = &pool.items[i];
         if max_order.is_some_and(|m| y.order + k > m) {
@@ -890,4 +916,24 @@ fn connect(
     }
     // T (cos_y / t^2) N / (pdf_a cos_y / t^2 + p_B), multiplied through by t^2.
     tr * cos_y * nee / (pdf_a * cos_y + p_b * t2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Pool;
+
+    /// Full weight joins every pick, a lighter vertex fewer in proportion
+    /// (rounded up), never none, never more, and a NaN weight one.
+    #[test]
+    fn pool_picks_follow_the_path_weight() {
+        let b0 = std::f64::consts::PI;
+        assert_eq!(Pool::picks(b0, b0), Pool::PICKS);
+        assert_eq!(Pool::picks(2.0 * b0, b0), Pool::PICKS);
+        assert_eq!(Pool::picks(0.5 * b0, b0), Pool::PICKS / 2);
+        assert_eq!(Pool::picks(0.3 * b0, b0), 5); // ceil(4.8)
+        assert_eq!(Pool::picks(1e-9 * b0, b0), 1);
+        assert_eq!(Pool::picks(0.0, b0), 1);
+        assert_eq!(Pool::picks(0.0, 0.0), 1);
+        assert_eq!(Pool::picks(f64::INFINITY, b0), Pool::PICKS);
+    }
 }
