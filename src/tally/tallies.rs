@@ -255,4 +255,40 @@ mod tests {
         assert_eq!(a.deviation_bound, b.deviation_bound);
         assert_eq!(a.flag(), b.flag());
     }
+
+    /// Every check's bound widens with the family (the tail, the VOV and
+    /// the FOM range), and a family smaller than the run's receivers is the
+    /// run's: a run of 3 receivers (64 batches, FOM snapshot at 32) judged
+    /// among 1 keeps the bounds of 3, not those of a lone receiver.
+    #[test]
+    fn diagnostics_among_widen_every_check_and_never_narrow_the_run() {
+        let mut t = Tallies::new(3, 0);
+        let mut means = [0.0; 3];
+        let mut rng = crate::sampling::Philox4x32::new(7, 0);
+        for b in 0..64u64 {
+            let x: Vec<f64> = (0..3)
+                .map(|j| 10.0 + f64::from(j) + rng.next_f64())
+                .collect();
+            t.fold(&x, &[], 1, &[], &mut means);
+            if b + 1 == 32 {
+                t.snapshot(&[0.0; 3]);
+            }
+        }
+        let run = t.diagnostics(1, 0.0);
+        let many = t.diagnostics_among(1, 0.0, 1_000_000);
+        assert!(run.fom_ratio.is_some(), "the FOM check runs");
+        assert!(run.deviation_bound < many.deviation_bound);
+        assert!(run.vov_bound < many.vov_bound, "{run:?} {many:?}");
+        assert!(many.vov_bound.is_finite(), "{many:?}");
+        // (The FOM range's lower end is held at 0.5 for both.)
+        assert!(many.fom_bounds.0 <= run.fom_bounds.0);
+        assert!(run.fom_bounds.1 < many.fom_bounds.1, "{run:?} {many:?}");
+        // Among 1 (or 0): the run's own 3 receivers, wider than a lone
+        // receiver's bounds.
+        let lone = Diagnostics::of(&t.estimated[1], 0.0, Some((32, t.snapshots[0].1[1])), 1);
+        assert!(lone.deviation_bound < run.deviation_bound);
+        for family in [0, 1, 3] {
+            assert_eq!(t.diagnostics_among(1, 0.0, family), run, "family {family}");
+        }
+    }
 }
