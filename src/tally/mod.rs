@@ -376,6 +376,11 @@ pub struct Diagnostics {
     /// The point sees the back of a surface in most directions (inside a
     /// solid, behind a wall, outside a closed room).
     pub enclosed: bool,
+    /// The batch count `B_h` of the FOM ratio's snapshot, if any.
+    pub half_batches: Option<u64>,
+    /// The receivers the bounds hold the false-alarm rate over (the run's,
+    /// or a gate's family, [`Self::among`]).
+    pub family: usize,
 }
 
 impl Diagnostics {
@@ -408,6 +413,27 @@ impl Diagnostics {
             indirect_zero: w.mean() == 0.0,
             near: false,
             enclosed: false,
+            half_batches: half.map(|h| h.0),
+            family: receivers.max(1),
+        }
+    }
+
+    /// The same checks with their bounds held over a family of `family`
+    /// receivers (never fewer than [`Self::family`]): a gate that judges
+    /// the rows of several runs together fails a sound set of runs in at
+    /// most [`check_bounds::FALSE_ALARM`] of its judgements per check,
+    /// however many runs it makes.
+    pub fn among(&self, family: usize) -> Self {
+        let family = family.max(self.family);
+        let bounds = check_bounds::CheckBounds::new(self.batches, self.half_batches, family);
+        Self {
+            deviation_bound: bounds.deviation,
+            vov_bound: bounds.vov,
+            fom_bounds: self.half_batches.map_or((0.0, f64::INFINITY), |b_h| {
+                check_bounds::fom_bounds(&bounds, self.rel_err, self.batches, b_h)
+            }),
+            family,
+            ..*self
         }
     }
 

@@ -138,16 +138,6 @@ impl Tallies {
     /// [`super::check_bounds::FALSE_ALARM`] per check over this run's
     /// receivers.
     pub fn diagnostics(&self, j: usize, direct: f64) -> Diagnostics {
-        self.diagnostics_among(j, direct, self.estimated.len())
-    }
-
-    /// [`Self::diagnostics`] with the false-alarm rate held over a family
-    /// of `family` receivers (at least this run's): a gate that judges the
-    /// rows of several runs together (`lumest validate daylight`) passes
-    /// them all, so that a sound gate fails in at most
-    /// [`super::check_bounds::FALSE_ALARM`] of its runs per check, however
-    /// many runs it makes.
-    pub fn diagnostics_among(&self, j: usize, direct: f64, family: usize) -> Diagnostics {
         let b = self.batches();
         let half = self
             .snapshots
@@ -155,8 +145,7 @@ impl Tallies {
             .rev()
             .find(|(n, _)| 2 * n <= b)
             .map(|(n, v)| (*n, v[j]));
-        let family = family.max(self.estimated.len());
-        let mut d = Diagnostics::of(&self.estimated[j], direct, half, family);
+        let mut d = Diagnostics::of(&self.estimated[j], direct, half, self.estimated.len());
         d.near_hits = self
             .watched
             .get(j)
@@ -169,6 +158,16 @@ impl Tallies {
             && self.near_vertices[j][0] > 0)
             .then(|| self.near_vertices[j][1]);
         d
+    }
+
+    /// [`Self::diagnostics`] with the false-alarm rate held over a family
+    /// of `family` receivers (at least this run's): a gate that judges the
+    /// rows of several runs together (`lumest validate daylight`) passes
+    /// them all, so that a sound gate fails in at most
+    /// [`super::check_bounds::FALSE_ALARM`] of its runs per check, however
+    /// many runs it makes.
+    pub fn diagnostics_among(&self, j: usize, direct: f64, family: usize) -> Diagnostics {
+        self.diagnostics(j, direct).among(family)
     }
 
     /// Mean sampled direct light at receiver `j` (0 when none is sampled).

@@ -77,6 +77,7 @@ impl Ctx<'_> {
             batches: 0,
             batch_chains: 0,
             flag: String::new(),
+            checks: (None, None),
             expected: None,
             bound: 0.0,
             verdict: Verdict::Fail,
@@ -140,7 +141,7 @@ impl Ctx<'_> {
                 std_error: 0.0,
                 exact: true,
                 batches: res.tallies.batches(),
-                flag: None,
+                checks: None,
             };
             self.rows.push(make_row(family, case, &p.label, &res, j, r));
         }
@@ -360,7 +361,7 @@ pub(super) fn family_near_wall(ctx: &mut Ctx) {
                 std_error: w.std_error(),
                 exact: false,
                 batches: back.tallies.batches(),
-                flag: Some(back.tallies.diagnostics(j, back.direct[j]).flag()),
+                checks: Some(back.tallies.diagnostics(j, back.direct[j])),
             };
             let t = format!("backward: {:.3} s, {} paths", back.wall, back.chains);
             let mut runs = vec![(&local, case.clone())];
@@ -470,7 +471,7 @@ pub(super) fn family_scaled(ctx: &mut Ctx) {
                     std_error: w.std_error() * k,
                     exact: false,
                     batches: unscaled.tallies.batches(),
-                    flag: Some(unscaled.tallies.diagnostics(j, unscaled.direct[j]).flag()),
+                    checks: Some(unscaled.tallies.diagnostics(j, unscaled.direct[j])),
                 };
                 let mut row = make_row("scaled", &case, label, &res, j, r);
                 // The direct part is exact in both: it must scale exactly (to rounding).

@@ -24,7 +24,10 @@
 //! each row's bound is the Sidak bound at family-wise rate `alpha` over `m`
 //! tests (Student t with the row's batches minus one degrees of freedom;
 //! for a Monte Carlo reference the fewer batches of the two). The
-//! verdicts, in the order of the summaries:
+//! statistical checks behind the flags (VOV, FOM, tail) hold their 0.1 %
+//! false-alarm rate over every tally of the matrix, not per run
+//! (`row::reflag`), since a flag can cost a row its excuse or its
+//! remedy. The verdicts, in the order of the summaries:
 //!
 //! - `pass`: every number finite, no flag, and `|z|` within the bound;
 //! - `expected-flag`: the row's flag is exactly its expected flag (for
@@ -145,6 +148,7 @@ pub fn stress_rows(opts: &StressOptions) -> StressReport {
     family_near_source(&mut ctx);
     family_scaled(&mut ctx);
     let mut rows = ctx.rows;
+    row::reflag(&mut rows);
     judge(&mut rows, opts.alpha);
     explain(&mut rows);
     StressReport {

@@ -6,7 +6,7 @@ use crate::cases::report::Checkpoint;
 use crate::io::csvio::to_csv;
 use crate::io::format_number;
 use crate::run::RunResult;
-use crate::tally::{figure_of_merit, zcheck};
+use crate::tally::{Diagnostics, figure_of_merit, zcheck};
 
 /// One row of the stress matrix: one point of one case.
 #[derive(Clone, Debug)]
@@ -49,6 +49,10 @@ pub struct StressRow {
     pub batch_chains: u64,
     /// `ok`, or the failed checks of the estimate's tally (and `ref:` those of a Monte Carlo reference).
     pub flag: String,
+    /// The statistical checks behind `flag`: the estimate's and a Monte
+    /// Carlo reference's tally, if any (`reflag` holds them over the
+    /// whole matrix before the rows are judged).
+    pub checks: (Option<Diagnostics>, Option<Diagnostics>),
     /// The flag that excuses this row from the z test, if any ([`expected_flag`]).
     pub expected: Option<ExpectedFlag>,
     /// Sidak bound the row's `|z|` is tested against (0 until judged).
@@ -82,7 +86,8 @@ pub(super) struct Reference {
     pub(super) std_error: f64,
     pub(super) exact: bool,
     pub(super) batches: u64,
-    pub(super) flag: Option<String>,
+    /// The statistical checks of a Monte Carlo reference's tally.
+    pub(super) checks: Option<Diagnostics>,
 }
 
 /// Build a row from point `j` of run `res` and its reference `r`.
@@ -97,14 +102,8 @@ pub(super) fn make_row(
     let w = &res.tallies.estimated[j];
     let estimate = res.direct[j] + w.mean();
     let se = w.std_error();
-    let mut flag = res.tallies.diagnostics(j, res.direct[j]).flag();
-    if let Some(rf) = r.flag.filter(|f| f != "ok") {
-        flag = if flag == "ok" {
-            format!("ref:{rf}")
-        } else {
-            format!("{flag};ref:{rf}")
-        };
-    }
+    let checks = (Some(res.tallies.diagnostics(j, res.direct[j])), r.checks);
+    let flag = joined_flag(checks);
     let diff = match r.parts {
         Some((d, refl)) => (res.direct[j] - d) + (w.mean() - refl),
         None => estimate - r.value,
@@ -153,10 +152,42 @@ pub(super) fn make_row(
         batches: res.tallies.batches().min(r.batches),
         batch_chains: res.chains / res.tallies.batches().max(1),
         flag,
+        checks,
         expected: expected_flag(family, case, label),
         bound: 0.0,
         verdict: Verdict::Pass,
         note,
+    }
+}
+
+/// A row's flag from its checks: the estimate's failed checks, then a
+/// Monte Carlo reference's prefixed `ref:`; `ok` when none fails.
+pub(super) fn joined_flag((own, reference): (Option<Diagnostics>, Option<Diagnostics>)) -> String {
+    let own = own.map_or_else(|| "ok".to_string(), |d| d.flag());
+    match reference.map(|d| d.flag()).filter(|f| f != "ok") {
+        Some(rf) if own == "ok" => format!("ref:{rf}"),
+        Some(rf) => format!("{own};ref:{rf}"),
+        None => own,
+    }
+}
+
+/// Hold the statistical checks of every row (and of its Monte Carlo
+/// reference) over the whole matrix, the family the verdicts judge: a
+/// flag can cost a row its excuse or its remedy ([`super::verdict`]), so
+/// per-run bounds would raise false alarms in about 0.1 % of the matrix's
+/// runs each, per check. Rows without checks (errors) keep their flag.
+pub(super) fn reflag(rows: &mut [StressRow]) {
+    let family = rows
+        .iter()
+        .map(|r| usize::from(r.checks.0.is_some()) + usize::from(r.checks.1.is_some()))
+        .sum();
+    for r in rows.iter_mut() {
+        if r.checks.0.is_none() && r.checks.1.is_none() {
+            continue;
+        }
+        let among = |d: Option<Diagnostics>| d.map(|d| d.among(family));
+        r.checks = (among(r.checks.0), among(r.checks.1));
+        r.flag = joined_flag(r.checks);
     }
 }
 

@@ -286,6 +286,7 @@ mod tests {
             batches: 128,
             batch_chains: 512,
             flag: flag.into(),
+            checks: (None, None),
             expected: expected_flag(family, case, point),
             bound: 0.0,
             verdict: Verdict::Pass,
@@ -295,6 +296,66 @@ mod tests {
 
     fn verdicts(rows: &[StressRow]) -> Vec<Verdict> {
         rows.iter().map(|r| r.verdict).collect()
+    }
+
+    /// The checks of 40 batch means, 39 at 10 +- 1 and one at `v`, alone
+    /// in their run.
+    fn outlier_checks(v: f64) -> crate::tally::Diagnostics {
+        let mut w = crate::tally::Welford::new();
+        for b in 0..40 {
+            w.push(match b {
+                17 => v,
+                b if b % 2 == 0 => 11.0,
+                _ => 9.0,
+            });
+        }
+        crate::tally::Diagnostics::of(&w, 0.0, None, 1)
+    }
+
+    /// A tail flagged by its own run's bounds is held over the matrix
+    /// before the rows are judged: among 1000 rows it is no false alarm,
+    /// the estimate's and the reference's alike, while a tail beyond every
+    /// bound stays flagged; a row without checks keeps its flag.
+    #[test]
+    fn flags_are_held_over_the_whole_matrix() {
+        // The smallest outlier flagged alone (the tail bound for 40 batches
+        // lies well below the largest deviation they can reach, 6.2).
+        let v = (0..4000)
+            .map(|i| 10.0 + 0.01 * f64::from(i))
+            .find(|&v| outlier_checks(v).flag() == "tail")
+            .expect("a flagged outlier");
+        let (d, huge) = (outlier_checks(v), outlier_checks(1e6));
+        assert!(d.among(2000).flag() == "ok" && huge.among(2000).flag().contains("tail"));
+        let mut rows: Vec<StressRow> = (0..1000)
+            .map(|k| {
+                let mut r = row(
+                    "sobolev",
+                    "rho1rho2=0.9 h1=0.5",
+                    &format!("p{k}"),
+                    0.0,
+                    "ok",
+                );
+                r.checks = (Some(outlier_checks(10.0)), None);
+                r
+            })
+            .collect();
+        rows[0].checks = (Some(d), None);
+        rows[1].checks = (Some(outlier_checks(10.0)), Some(d));
+        rows[2].checks = (Some(huge), None);
+        rows[3].checks = (None, None);
+        rows[3].flag = "kept".into();
+        for r in &mut rows {
+            r.flag = super::super::row::joined_flag(r.checks);
+        }
+        rows[3].flag = "kept".into();
+        assert_eq!(rows[0].flag, "tail");
+        assert_eq!(rows[1].flag, "ref:tail");
+        super::super::row::reflag(&mut rows);
+        assert_eq!(rows[0].flag, "ok");
+        assert_eq!(rows[1].flag, "ok");
+        assert!(rows[2].flag.contains("tail"), "{}", rows[2].flag);
+        assert_eq!(rows[3].flag, "kept");
+        assert_eq!(rows[0].checks.0.unwrap().family, 1000);
     }
 
     #[test]
