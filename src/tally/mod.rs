@@ -396,17 +396,15 @@ impl Diagnostics {
         // scored in the first B_h batches, then something) is an infinite
         // ratio, and a NaN stays a NaN ratio: both flag.
         let fom_ratio = half.map(|h| h.1).filter(|_| r2b != 0.0).map(|h| r2b / h);
-        let bounds = check_bounds::CheckBounds::new(w.count(), half.map(|h| h.0), receivers);
+        // The bounds are set by `among`, for the run's receivers.
         Self {
             rel_err,
             vov: w.vov(),
             fom_ratio,
             max_deviation: w.max_deviation(),
-            deviation_bound: bounds.deviation,
-            vov_bound: bounds.vov,
-            fom_bounds: half.map_or((0.0, f64::INFINITY), |h| {
-                check_bounds::fom_bounds(&bounds, rel_err, w.count(), h.0)
-            }),
+            deviation_bound: f64::NAN,
+            vov_bound: f64::NAN,
+            fom_bounds: (f64::NAN, f64::NAN),
             batches: w.count(),
             near_hits: None,
             near_reach: None,
@@ -414,8 +412,9 @@ impl Diagnostics {
             near: false,
             enclosed: false,
             half_batches: half.map(|h| h.0),
-            family: receivers.max(1),
+            family: 1,
         }
+        .among(receivers)
     }
 
     /// The same checks with their bounds held over a family of `family`
