@@ -739,11 +739,14 @@ pub fn scene_case(a: &BenchArgs, path: &std::path::Path) -> anyhow::Result<()> {
     let planes = crate::cases::sobolev::sobolev_scene(&problem);
     let (rp, _) = case_row(a, "planes", &planes, &grid, Some(&exact), t0)?;
     let (rate, rate_p) = (r.scores as f64 / r.wall, rp.scores as f64 / rp.wall);
-    // (Issue 15's target, within 4 times, is for the office at its
-    // 66-point work plane, data/office_grid.csv: see the README.)
+    // Issue 15's target for the office: within 4 times (README, "Fast
+    // rooms": met at its 66 work-plane points, not at the 506 planar grid
+    // points of its walls and ceiling).
+    let ratio = rate_p / rate;
     println!(
-        "        scores/s: the planes-only rate is {:.2} times the scene's",
-        rate_p / rate
+        "        scores/s: the planes-only rate is {ratio:.2} times the scene's (target for rooms: \
+         within 4, {})",
+        if ratio <= 4.0 { "met" } else { "not met" }
     );
     Ok(())
 }
