@@ -100,18 +100,23 @@ pub fn shard_state(
     super::illuminance::reserved_point_columns(table, cfg.orders, &a.points)?;
     cfg.shard = Some((i, m));
     cfg.share = share;
-    eprintln!("lumest: scene {}: {}", a.scene.display(), scene.summary());
+    // (Each line in one write: under `mpirun` the ranks share the stream.)
+    super::say(&format!(
+        "lumest: scene {}: {}",
+        a.scene.display(),
+        scene.summary()
+    ));
     let r = run_job(&scene, &job, &cfg, a.estimator, a.run.quiet, None);
     anyhow::ensure!(
         !crate::io::interrupt::interrupted(),
         "interrupted: a shard is written whole or not at all (run it again)"
     );
     if let Some(p) = r.pilot.as_ref().filter(|p| p.calibration > 0) {
-        eprintln!(
+        super::say(&format!(
             "lumest: shard {i}/{m}: traced {} of the {} batches the --rms-error plan was measured on \
              ({} batches planned)",
             p.calibration_traced, p.calibration, p.planned
-        );
+        ));
     }
     Ok(ShardState {
         run: RunIdentity {
