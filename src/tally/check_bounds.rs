@@ -33,8 +33,10 @@
 //!   its upper quantile at level `a` by the normal approximation of
 //!   Anscombe & Glynn (1983), inverted, and at least 0.1 (the transport
 //!   codes' bound). Where the level lies beyond what `b_2` of `B` values
-//!   can reach, no bound exists and the check is off (fewer than 32
-//!   batches are flagged `batches` anyway).
+//!   can reach, no bound exists and the check is off: below 8 batches, and
+//!   for many receivers at few batches (at 32 batches, beyond about 10^5
+//!   receivers). The heavy-tail check still applies there, and a run of
+//!   fewer than 32 batches is flagged `batches` whatever its VOV.
 
 use statrs::distribution::{Beta, ContinuousCDF, Normal, StudentsT};
 use std::cell::Cell;
