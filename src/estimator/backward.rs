@@ -729,20 +729,27 @@ impl VertexLight<'_> {
             ..
         } = *self;
         let l = &scene.lights[k];
-        if let Light::Gonio { frame, dist, .. } = l
-            && let Some((y, _)) = l.opening_point(rng.next_2d())
+        if let Light::Gonio {
+            frame,
+            dist,
+            opening: Some(_),
+            ..
+        } = l
         {
-            // One point of the luminous opening (uniform): each element
-            // emits I(w) dA / A, so the estimate is I(w) cos_x / t^2.
-            let v = y - h.p;
+            // One point of the luminous shape ([`Light::shape_point`]):
+            // the estimate is I(w) emit / pdf cos_x / t^2.
+            let Some(sp) = l.shape_point(h.p, rng.next_2d()) else {
+                return 0.0;
+            };
+            let v = sp.y - h.p;
             let t2 = v.length_squared();
-            if t2 <= 0.0 {
+            if t2 <= 0.0 || sp.emit <= 0.0 {
                 return 0.0;
             }
             let wi = v / t2.sqrt();
             let cos_x = h.n.dot(wi);
-            if cos_x > 0.0 && scene.visible(h.p, from, y) {
-                let i = dist.intensity_world(frame, -wi);
+            if cos_x > 0.0 && scene.visible(h.p, from, sp.y) {
+                let i = dist.intensity_world(frame, -wi) * (sp.emit / sp.pdf);
                 return m.eval(f_frame.to_local(wi), wo) * i * cos_x / t2;
             }
             return 0.0;

@@ -253,27 +253,31 @@ fn light_sample(
         let wi = (y - x).normalize();
         return (e * rec.weight(frame, wi), p_k, wi, false);
     }
-    if let (
-        Light::Gonio {
-            frame: lf, dist, ..
-        },
-        Some((y, area)),
-    ) = (light, light.opening_point(u))
+    if let Light::Gonio {
+        frame: lf,
+        dist,
+        opening: Some(_),
+        ..
+    } = light
     {
-        // Each element dA of the opening emits I(w) dA / A; y uniform (1/A).
-        let v = y - x;
+        // A point of the luminous shape ([`Light::shape_point`]): it sends
+        // `I(w) emit` per area towards x; `f` and `p_L` per area.
+        let Some(sp) = light.shape_point(x, u) else {
+            return (0.0, set.prob[k as usize], DVec3::Z, false);
+        };
+        let v = sp.y - x;
         let t2 = v.length_squared();
-        let p_a = set.prob[k as usize] / area;
-        if t2 <= 0.0 {
+        let p_a = set.prob[k as usize] * sp.pdf;
+        if t2 <= 0.0 || sp.emit <= 0.0 {
             return (0.0, p_a, DVec3::Z, false);
         }
         let wi = v / t2.sqrt();
         let (r, _) = response(rec, frame, wi);
-        if r <= 0.0 || !scene.visible(x, None, y) {
+        if r <= 0.0 || !scene.visible(x, None, sp.y) {
             return (0.0, p_a, wi, false);
         }
-        let i = dist.intensity_world(lf, -wi) * scene.pane_transmittance(x, y);
-        return (i / area * r / t2, p_a, wi, false);
+        let i = dist.intensity_world(lf, -wi) * scene.pane_transmittance(x, sp.y);
+        return (i * sp.emit * r / t2, p_a, wi, false);
     }
     let (f, p, wi) = match light {
         Light::Area(a) => {

@@ -30,7 +30,7 @@
 //! Luminous areas: a goniometric luminaire's from its file's luminous
 //! shape ([`crate::io::photometry::OpeningShape`]: every shape of LM-63-2002's
 //! table, EULUMDAT's rectangle and disc), each projected exactly along the
-//! direction of the eye ([`luminous_parts`] gives the closed forms): a
+//! direction of the eye ([`crate::light::luminous_parts`] gives the closed forms): a
 //! rectangle's or an ellipse's bottom `A |cos gamma|` when the eye lies
 //! below the luminaire's plane, plus its luminous sides (`h w |w_x| + h l
 //! |w_y|` for a rectangle, `h D sin gamma` for a disc of diameter `D`);
@@ -42,7 +42,6 @@
 //! calculation refuses them. Lights at infinity (sky, sun, environment)
 //! are not luminaires here; their reflected light is part of `E_ind`.
 
-pub mod luminous_parts;
 pub mod scene_observers;
 pub mod tabular;
 pub mod visible_part;
@@ -166,41 +165,25 @@ impl LuminousArea {
     /// dimensions [m]); an error when it gives none, or a shape with a
     /// zero or non-finite dimension.
     pub fn of_file(o: &crate::io::photometry::Opening) -> Result<Self, GlareError> {
-        let (w, l, h) = (o.width.abs(), o.length.abs(), o.height.abs());
-        let name = o.shape.name(w, l, h);
-        let ok = |v: f64| v > 0.0 && v.is_finite();
-        // Luminous sides of a non-finite height are left out, as before.
-        let sides = if h.is_finite() { h } else { 0.0 };
-        let (valid, whole) = match o.shape {
-            OpeningShape::Point => (false, DVec3::ZERO),
-            OpeningShape::Rectangle => (ok(w) && ok(l), DVec3::new(l, w, sides)),
-            OpeningShape::Ellipse => {
-                // Length 0: a disc of diameter `width`.
-                let l = if l == 0.0 { w } else { l };
-                (ok(w) && ok(l), DVec3::new(l, w, sides))
-            }
-            OpeningShape::Ellipsoid | OpeningShape::CylinderC0 | OpeningShape::CylinderC90 => {
-                (ok(w) && ok(l) && ok(h), DVec3::new(l, w, h))
-            }
-            OpeningShape::VerticalEllipseC0 => (ok(w) && ok(h), DVec3::new(0.0, w, h)),
-            OpeningShape::VerticalEllipseC90 => (ok(l) && ok(h), DVec3::new(l, 0.0, h)),
-        };
-        if !valid {
-            return Err(GlareError::NoArea(if o.shape == OpeningShape::Point {
-                "its photometric file gives no luminous area (width and length 0): \
-                 UGR needs the luminance of the luminous parts"
-                    .to_string()
-            } else {
-                format!(
-                    "its photometric file's luminous shape ({name}, width {w} m, length {l} m, \
-                     height {h} m) has no area: UGR needs the luminance of the luminous parts"
-                )
-            }));
+        // The luminous shape the near-field emission takes, too.
+        if let Some(s) = crate::light::LuminousShape::of(o) {
+            return Ok(LuminousArea::Gonio {
+                shape: s.shape,
+                half: s.half,
+            });
         }
-        Ok(LuminousArea::Gonio {
-            shape: o.shape,
-            half: whole * 0.5,
-        })
+        let (w, l, h) = (o.width.abs(), o.length.abs(), o.height.abs());
+        Err(GlareError::NoArea(if o.shape == OpeningShape::Point {
+            "its photometric file gives no luminous area (width and length 0): \
+             UGR needs the luminance of the luminous parts"
+                .to_string()
+        } else {
+            format!(
+                "its photometric file's luminous shape ({}, width {w} m, length {l} m, \
+                 height {h} m) has no area: UGR needs the luminance of the luminous parts",
+                o.shape.name(w, l, h)
+            )
+        }))
     }
 
     /// Projected luminous area [m^2] seen along unit world direction `w`
@@ -209,7 +192,7 @@ impl LuminousArea {
     pub fn projected(&self, w: DVec3, frame: &crate::light::LuminaireFrame) -> f64 {
         match self {
             LuminousArea::Gonio { shape, half } => {
-                luminous_parts::parts(*shape, *half, frame.to_local(w))
+                crate::light::luminous_parts::parts(*shape, *half, frame.to_local(w), false)
                     .iter()
                     .map(|p| p.0)
                     .sum()

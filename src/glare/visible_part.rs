@@ -19,7 +19,7 @@
 //! outline from the eye (an ellipsoid's half facing the eye, uniform in its
 //! projected ellipse; a horizontal cylinder's end and the half of its
 //! mantle facing the eye; a vertical ellipse), the points of
-//! [`super::luminous_parts`]; an area source's surface, its points in proportion to its
+//! [`crate::light::luminous_parts`]; an area source's surface, its points in proportion to its
 //! luminance; a sphere light's cap facing the eye, uniform in its
 //! projected disc.
 
@@ -68,7 +68,7 @@ pub fn visible_fraction(
         LuminousArea::Gonio { shape, half } => {
             let d = frame.to_local(w);
             let at = |p: DVec3| c + frame.x * p.x + frame.y * p.y + frame.z * p.z;
-            for (a, part) in super::luminous_parts::parts(*shape, *half, d) {
+            for (a, part) in crate::light::luminous_parts::parts(*shape, *half, d, false) {
                 if a > 0.0 {
                     parts.push((a, share(&|u| at(part.point(u)))));
                 }

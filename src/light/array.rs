@@ -275,7 +275,7 @@ pub fn target(light: &Light, x: DVec3, n: DVec3) -> f64 {
             opening: Some(o),
             ..
         } => {
-            let rho = o.half_x.hypot(o.half_y);
+            let rho = o.bounding_radius();
             let d2 = (*p - x).length_squared();
             let floor =
                 1e-3 * light.power() / (4.0 * PI) * cos_bound(x, n, *p, rho) / d2.max(rho * rho);

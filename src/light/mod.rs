@@ -20,6 +20,7 @@ pub mod distant;
 pub mod environment;
 pub mod goniometric;
 pub mod lambert;
+pub mod luminous_parts;
 pub mod median_cut;
 pub mod portal;
 pub mod radial_profile;
@@ -51,8 +52,9 @@ pub enum Light {
         p: DVec3,
         frame: LuminaireFrame,
         dist: std::sync::Arc<Goniometric>,
-        /// Emit from the luminous opening rather than from the point `p`.
-        opening: Option<LuminousOpening>,
+        /// Emit from the luminous shape (an opening or a solid) rather
+        /// than from the point `p`.
+        opening: Option<LuminousShape>,
     },
     /// Lambertian area source (also an opaque surface of the scene).
     Area(std::sync::Arc<AreaLight>),
@@ -64,81 +66,148 @@ pub enum Light {
     Environment(std::sync::Arc<Environment>),
 }
 
-/// The luminous opening of a goniometric luminaire, for near-field
-/// emission: a rectangle `length x width` [m] (length along the C0 axis,
-/// width along C90, as LM-63 and EULUMDAT give them) or an ellipse of
-/// diameters `length x width` (a disc of diameter `width`), centred on the
-/// luminaire's position in the plane normal to its nadir. Every element
-/// `dA` of it emits `I(w) dA / A` towards `w`: the far field is the file's
-/// distribution, and near the luminaire the light comes from the whole
-/// opening (the classic rule says the point approximation is about 1 %
-/// off at five times the opening's size). The height of luminous sides is
-/// not modelled; the solid LM-63 shapes (ellipsoid, horizontal cylinders)
-/// emit from their outline seen from below (an ellipse, a rectangle).
+/// The luminous shape of a goniometric luminaire, for near-field emission
+/// (`opening = true`): its file's LM-63 shape (EULUMDAT: a rectangle or a
+/// disc, with luminous sides of its height) with half its extents [m]
+/// along the local `x` (C0, the length), `y` (C90, the width) and `z` (the
+/// height) axes, centred on the luminaire's position (the photometric
+/// centre), taken as a closed solid ([`luminous_parts`]). Towards every
+/// direction `w` it has the uniform luminance `I(w) / A_p(w)`, `A_p(w)` its
+/// area projected normal to `w` (Radiance's `ies2rad` makes the same
+/// source): the far field is the file's distribution, and near the
+/// luminaire the light comes from the whole shape (the classic rule says
+/// the point approximation is about 1 % off at five times the shape's
+/// size). A flat opening (no luminous sides) emits `I(w) dA / A` from
+/// every element `dA` of its outline, downwards through its lower face and
+/// upwards through its upper one.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LuminousOpening {
-    /// Half the length along the local `x` (C0) axis [m] (an ellipse: its semi-axis).
-    pub half_x: f64,
-    /// Half the width along the local `y` (C90) axis [m] (an ellipse: its semi-axis).
-    pub half_y: f64,
-    /// An ellipse (a disc when `half_x == half_y`).
-    pub round: bool,
+pub struct LuminousShape {
+    /// The shape.
+    pub shape: crate::io::photometry::OpeningShape,
+    /// Half the extents [m] along local `x`, `y`, `z` (for a rectangle or
+    /// an ellipse, `z` is half the height of its luminous sides; 0: flat).
+    pub half: DVec3,
 }
 
-impl LuminousOpening {
-    /// The opening of a photometric file, its outline seen from below;
-    /// `None` when it gives none (a point, a zero width or length, a
-    /// vertical circle or ellipse).
+/// A point of a luminous shape drawn for a receiver ([`Light::shape_point`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShapePoint {
+    /// The point [m] (world).
+    pub y: DVec3,
+    /// Its density [1/m^2] over the shape's surface.
+    pub pdf: f64,
+    /// The intensity per area it sends towards the receiver, over the
+    /// intensity `I(w)` there [1/m^2]: `max(0, n . w) / A_p(w)`, `n` the
+    /// surface's normal at `y`, `w` the unit direction from `y` to the
+    /// receiver (`1 / A` on a flat opening).
+    pub emit: f64,
+}
+
+impl LuminousShape {
+    /// The luminous shape of a photometric file's opening; `None` when it
+    /// gives none with an area (a point, a zero or non-finite width or
+    /// length, or a solid with a zero or non-finite dimension). Luminous
+    /// sides of a non-finite height are left out.
     pub fn of(o: &crate::io::photometry::Opening) -> Option<Self> {
         use crate::io::photometry::OpeningShape as S;
-        let (w, l) = (o.width.abs(), o.length.abs());
+        let (w, l, h) = (o.width.abs(), o.length.abs(), o.height.abs());
         let ok = |v: f64| v > 0.0 && v.is_finite();
-        match o.shape {
+        let sides = if h.is_finite() { h } else { 0.0 };
+        let (valid, whole) = match o.shape {
+            S::Point => (false, DVec3::ZERO),
+            S::Rectangle => (ok(w) && ok(l), DVec3::new(l, w, sides)),
             S::Ellipse => {
                 // Length 0: a disc of diameter `width`.
                 let l = if l == 0.0 { w } else { l };
-                (ok(w) && ok(l)).then_some(Self {
-                    half_x: l / 2.0,
-                    half_y: w / 2.0,
-                    round: true,
-                })
+                (ok(w) && ok(l), DVec3::new(l, w, sides))
             }
-            S::Ellipsoid => (ok(w) && ok(l)).then_some(Self {
-                half_x: l / 2.0,
-                half_y: w / 2.0,
-                round: true,
-            }),
-            S::Rectangle | S::CylinderC0 | S::CylinderC90 => (ok(w) && ok(l)).then_some(Self {
-                half_x: l / 2.0,
-                half_y: w / 2.0,
-                round: false,
-            }),
-            S::Point | S::VerticalEllipseC0 | S::VerticalEllipseC90 => None,
+            S::Ellipsoid | S::CylinderC0 | S::CylinderC90 => {
+                (ok(w) && ok(l) && ok(h), DVec3::new(l, w, h))
+            }
+            S::VerticalEllipseC0 => (ok(w) && ok(h), DVec3::new(0.0, w, h)),
+            S::VerticalEllipseC90 => (ok(l) && ok(h), DVec3::new(l, 0.0, h)),
+        };
+        valid.then(|| Self {
+            shape: o.shape,
+            half: whole * 0.5,
+        })
+    }
+
+    /// Whether the shape is flat: one plane face towards any direction (an
+    /// opening without luminous sides, a vertical ellipse).
+    pub fn is_flat(&self) -> bool {
+        use crate::io::photometry::OpeningShape as S;
+        match self.shape {
+            S::Rectangle | S::Ellipse => self.half.z == 0.0,
+            S::VerticalEllipseC0 | S::VerticalEllipseC90 => true,
+            S::Point | S::Ellipsoid | S::CylinderC0 | S::CylinderC90 => false,
         }
     }
 
-    /// Area [m^2].
-    pub fn area(&self) -> f64 {
-        if self.round {
-            PI * self.half_x * self.half_y
-        } else {
-            4.0 * self.half_x * self.half_y
+    /// Area [m^2] of a flat shape's face ([`Self::is_flat`]).
+    pub fn flat_area(&self) -> f64 {
+        use crate::io::photometry::OpeningShape as S;
+        let h = self.half;
+        match self.shape {
+            S::Rectangle => 4.0 * h.x * h.y,
+            S::Ellipse => PI * h.x * h.y,
+            S::VerticalEllipseC0 => PI * h.y * h.z,
+            S::VerticalEllipseC90 => PI * h.x * h.z,
+            S::Point | S::Ellipsoid | S::CylinderC0 | S::CylinderC90 => f64::NAN,
         }
     }
 
-    /// A point of the opening, uniform by area, in the luminaire's local
-    /// `(x, y)` coordinates [m].
-    pub fn sample(&self, u: [f64; 2]) -> (f64, f64) {
-        if self.round {
-            let r = u[0].sqrt();
-            let (s, c) = crate::sampling::warp::sin_cos_turns(u[1]);
-            (self.half_x * r * c, self.half_y * r * s)
-        } else {
-            (
-                self.half_x * (2.0 * u[0] - 1.0),
-                self.half_y * (2.0 * u[1] - 1.0),
-            )
+    /// Radius [m] of the smallest sphere about the centre holding the shape.
+    pub fn bounding_radius(&self) -> f64 {
+        self.half.length()
+    }
+
+    /// Area [m^2] projected normal to unit local direction `d`.
+    pub fn projected(&self, d: DVec3) -> f64 {
+        luminous_parts::parts(self.shape, self.half, d, true)
+            .iter()
+            .map(|p| p.0)
+            .sum()
+    }
+
+    /// A point of the shape seen along unit local direction `d`, uniform
+    /// in its projected area (`u[0]` picks the part by its share of the
+    /// area, then is reused inside it): the point and the surface's unit
+    /// normal there (local), and the projected area [m^2]; `None` where
+    /// the shape shows no area along `d` (a flat one edge-on).
+    pub fn sample(&self, d: DVec3, u: [f64; 2]) -> Option<(DVec3, DVec3, f64)> {
+        let parts = luminous_parts::parts(self.shape, self.half, d, true);
+        let total: f64 = parts.iter().map(|p| p.0).sum();
+        if total.is_nan() || total <= 0.0 {
+            return None;
         }
+        let last = parts.iter().rposition(|p| p.0 > 0.0)?;
+        if parts.iter().filter(|p| p.0 > 0.0).count() == 1 {
+            // One part (a flat opening, a sphere): `u` as it is.
+            let (p, n) = parts[last].1.point_normal(u);
+            return Some((p, n, total));
+        }
+        let mut t = u[0] * total;
+        for (k, &(a, part)) in parts.iter().enumerate() {
+            if a <= 0.0 {
+                continue;
+            }
+            if t < a || k == last {
+                let u0 = (t / a).clamp(0.0, 1.0 - f64::EPSILON / 2.0);
+                let (p, n) = part.point_normal([u0, u[1]]);
+                return Some((p, n, total));
+            }
+            t -= a;
+        }
+        None
+    }
+
+    /// A short description for the scene summary: the shape's name and its
+    /// dimensions [m].
+    pub fn describe(&self) -> String {
+        let [l, w, h] = (self.half * 2.0).to_array();
+        let name = self.shape.name(w, l, h);
+        format!("{name}, {l} m (C0) x {w} m (C90) x {h} m high")
     }
 }
 
@@ -293,7 +362,7 @@ impl Light {
     }
 
     /// Whether the light is a goniometric luminaire emitting from its
-    /// luminous opening.
+    /// luminous shape ([`LuminousShape`]: an opening or a solid).
     pub fn emits_from_opening(&self) -> bool {
         matches!(
             self,
@@ -304,22 +373,50 @@ impl Light {
         )
     }
 
-    /// A point of a goniometric light's luminous opening [m] (uniform by
-    /// area, density `1 / A`) and the opening's area [m^2]; `None` for every
-    /// other light.
-    pub fn opening_point(&self, u: [f64; 2]) -> Option<(DVec3, f64)> {
-        match self {
-            Light::Gonio {
-                p,
-                frame,
-                opening: Some(o),
-                ..
-            } => {
-                let (a, b) = o.sample(u);
-                Some((*p + frame.x * a + frame.y * b, o.area()))
-            }
-            _ => None,
+    /// A point of a goniometric light's luminous shape drawn for the
+    /// receiver at `x` [m] ([`LuminousShape`]): uniform in the area the
+    /// shape projects towards `x` from its centre, `d0`, so that its
+    /// density over the surface is `(n . d0) / A_p(d0)`. Every point the
+    /// receiver can see is drawn (on a convex solid a face seen from `x`
+    /// faces `d0`), so the light from the shape at `x` is the mean of
+    /// `I(w) emit / pdf cos / t^2`; on a flat opening `emit / pdf` is 1.
+    /// `None` for every other light, or where the shape shows no area
+    /// towards `x` (a flat opening edge-on).
+    pub fn shape_point(&self, x: DVec3, u: [f64; 2]) -> Option<ShapePoint> {
+        let Light::Gonio {
+            p,
+            frame,
+            opening: Some(o),
+            ..
+        } = self
+        else {
+            return None;
+        };
+        let d0 = frame.to_local((x - *p).normalize_or(-frame.z));
+        let (yl, nl, a0) = o.sample(d0, u)?;
+        let y = *p + frame.to_world(yl);
+        if o.is_flat() {
+            // One plane face, the receiver in front of it: the point is
+            // uniform by area and every element sends `I(w) / A`.
+            let pdf = 1.0 / o.flat_area();
+            return Some(ShapePoint { y, pdf, emit: pdf });
         }
+        let c0 = nl.dot(d0);
+        let w = frame.to_local((x - y).normalize_or(d0));
+        let cw = nl.dot(w);
+        let aw = o.projected(w);
+        if c0 <= 0.0 || cw <= 0.0 || aw <= 0.0 {
+            return Some(ShapePoint {
+                y,
+                pdf: 1.0,
+                emit: 0.0,
+            });
+        }
+        Some(ShapePoint {
+            y,
+            pdf: c0 / a0,
+            emit: cw / aw,
+        })
     }
 
     /// Intensity [cd] of a point-like light towards unit world direction
@@ -402,10 +499,15 @@ impl Light {
                 ref dist,
                 opening,
             } => match dist.sample(u_dir, u_extra) {
-                // From the luminous opening: the point uniform on it, `le`
-                // the intensity per area.
+                // From the luminous shape: the point uniform in the area it
+                // projects along the direction, `le` the intensity per
+                // projected area. (A flat opening seen edge-on shows none:
+                // that direction has measure zero; it leaves the centre.)
                 Some(s) if opening.is_some() => {
-                    let (o, area) = self.opening_point(u_pos).expect("an opening");
+                    let (o, area) = match opening.and_then(|o| o.sample(s.d, u_pos)) {
+                        Some((y, _, area)) => (p + frame.to_world(y), area),
+                        None => (p, 1.0),
+                    };
                     EmissionSample {
                         o,
                         d: frame.to_world(s.d),

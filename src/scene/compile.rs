@@ -1755,18 +1755,21 @@ fn goniometric(
     );
     let opening = match &d.opening {
         Some(o) if *o.get_ref() => Some(
-            crate::light::LuminousOpening::of(&photometry.opening).ok_or_else(|| {
+            crate::light::LuminousShape::of(&photometry.opening).ok_or_else(|| {
                 ctx.invalid(
                     o.span(),
                     "opening",
                     format!(
-                        "`{}` gives no luminous opening facing down (its luminous shape: {}): it can only be a point",
+                        "`{}` gives no luminous shape with an area (its luminous shape: {}, width {} m, length {} m, height {} m): it can only be a point",
                         fs.get_ref(),
                         photometry.opening.shape.name(
                             photometry.opening.width,
                             photometry.opening.length,
                             photometry.opening.height
-                        )
+                        ),
+                        photometry.opening.width,
+                        photometry.opening.length,
+                        photometry.opening.height
                     ),
                 )
             })?,
@@ -1774,20 +1777,7 @@ fn goniometric(
         _ => None,
     };
     let note = match &opening {
-        Some(o) if o.round && o.half_x == o.half_y => format!(
-            "{note}; emitting from its opening, a disc of diameter {} m",
-            2.0 * o.half_x
-        ),
-        Some(o) if o.round => format!(
-            "{note}; emitting from its opening, an ellipse {} m (C0) x {} m (C90)",
-            2.0 * o.half_x,
-            2.0 * o.half_y
-        ),
-        Some(o) => format!(
-            "{note}; emitting from its opening, {} m (C0) x {} m (C90)",
-            2.0 * o.half_x,
-            2.0 * o.half_y
-        ),
+        Some(o) => format!("{note}; emitting from its luminous shape: {}", o.describe()),
         None => note,
     };
     Ok((

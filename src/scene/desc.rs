@@ -208,9 +208,9 @@ pub struct LightDesc {
     pub rotate: Option<Spanned<f64>>,
     /// Factor on a goniometric luminaire's candela values; default 1.
     pub multiplier: Option<Spanned<f64>>,
-    /// Emit a goniometric luminaire's light from the luminous opening its
-    /// file gives (near-field accuracy) instead of from its position alone;
-    /// default false.
+    /// Emit a goniometric luminaire's light from the luminous opening or
+    /// shape its file gives ([`crate::light::LuminousShape`], near-field
+    /// accuracy) instead of from its position alone; default false.
     pub opening: Option<Spanned<bool>>,
     /// Beam direction of a spot light, or the direction a distant light
     /// travels (from the sun towards the scene); normalised, non-zero.

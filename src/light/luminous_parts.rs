@@ -1,9 +1,11 @@
-//! The luminous parts of a goniometric luminaire's LM-63 shape as the eye
-//! sees them along a direction: each part's area projected on the plane
-//! normal to the direction, and a map from the unit square onto the part,
-//! uniform in that projected area. [`super::LuminousArea::projected`] is
-//! the sum of the parts' areas and [`super::visible_part`] samples their
-//! points, so the two cannot disagree.
+//! The luminous parts of a goniometric luminaire's LM-63 shape seen along
+//! a direction: each part's area projected on the plane normal to the
+//! direction, and a map from the unit square onto the part, uniform in
+//! that projected area, with the outward normal at each point. The glare
+//! model ([`crate::glare::LuminousArea::projected`],
+//! [`crate::glare::visible_part`]) and the near-field emission of a
+//! luminaire (`opening = true`, [`crate::light::LuminousShape`]) both take
+//! their areas and points from here, so the two cannot disagree.
 //!
 //! Coordinates are the luminaire's local ones [m] (`x` along C0, `y` along
 //! C90, `z` up, the nadir `-z`), centred on its photometric centre; `half`
@@ -13,10 +15,11 @@
 //! checked against ray casting through the solid in the tests):
 //! - rectangle `2a x 2b` (`a` along `x`) with sides `2c` tall: the bottom
 //!   `4ab max(-d_z, 0)` (it faces the nadir only), the sides `2c (2b |d_x|
-//!   + 2a |d_y|)`;
+//!   + 2a |d_y|)`; `closed` adds the top, `4ab max(d_z, 0)`;
 //! - ellipse of semi-axes `a, b` with sides `2c` tall (a vertical elliptical
 //!   cylinder): the bottom `pi a b max(-d_z, 0)`, the sides `2c 2 sqrt(a^2
-//!   d_y^2 + b^2 d_x^2)` (the ellipse's width across `d`);
+//!   d_y^2 + b^2 d_x^2)` (the ellipse's width across `d`); `closed` adds
+//!   the top, `pi a b max(d_z, 0)`;
 //! - ellipsoid of semi-axes `a, b, c`: `pi sqrt(b^2 c^2 d_x^2 + a^2 c^2 d_y^2
 //!   + a^2 b^2 d_z^2)` (`pi r^2` for a sphere);
 //! - horizontal cylinder along `x`, `2a` long, cross-section semi-axes `b,
@@ -24,6 +27,14 @@
 //!   d_z^2 + c^2 d_y^2)`; along `y` likewise with the axes exchanged;
 //! - vertical ellipse facing `x` (semi-axes `b, c`): `pi b c |d_x|` (both
 //!   faces luminous); facing `y` likewise.
+//!
+//! Glare leaves the top out (`closed = false`: UGR's eyes look up at
+//! luminaires, and LM-63 names luminous sides, not a luminous top). Emission
+//! takes the closed solid (`closed = true`): a luminaire with luminous sides
+//! whose file also sends light upwards emits it through its top, as
+//! Radiance's `ies2rad` builds such a source, and a flat opening emits its
+//! upward light through its upper face, so that every direction with light
+//! has a part to leave from.
 
 use crate::io::photometry::OpeningShape;
 use glam::DVec3;
@@ -34,10 +45,22 @@ use std::f64::consts::PI;
 pub enum Part {
     /// Nothing (a part turned away from the eye).
     None,
-    /// A rectangle: `c + e1 (2 u0 - 1) + e2 (2 u1 - 1)`.
-    Rectangle { c: DVec3, e1: DVec3, e2: DVec3 },
-    /// A flat ellipse of semi-axis vectors `e1`, `e2`, uniform by area.
-    Ellipse { c: DVec3, e1: DVec3, e2: DVec3 },
+    /// A rectangle: `c + e1 (2 u0 - 1) + e2 (2 u1 - 1)`, its unit normal
+    /// `n` the one facing the eye.
+    Rectangle {
+        c: DVec3,
+        e1: DVec3,
+        e2: DVec3,
+        n: DVec3,
+    },
+    /// A flat ellipse of semi-axis vectors `e1`, `e2`, uniform by area, its
+    /// unit normal `n` the one facing the eye.
+    Ellipse {
+        c: DVec3,
+        e1: DVec3,
+        e2: DVec3,
+        n: DVec3,
+    },
     /// The half of an elliptical cylinder's mantle that faces the eye:
     /// cross-section `c + e1 cos phi + e2 sin phi`, `axis` half its length;
     /// `phi0` the facing direction in the unit-circle parameter (points
@@ -58,13 +81,22 @@ pub enum Part {
 impl Part {
     /// The point of the part at `u` (local coordinates [m]).
     pub fn point(&self, u: [f64; 2]) -> DVec3 {
+        self.point_normal(u).0
+    }
+
+    /// The point of the part at `u` (local coordinates [m]) and the unit
+    /// normal of the surface there, on the side facing the eye (outward on
+    /// a solid).
+    pub fn point_normal(&self, u: [f64; 2]) -> (DVec3, DVec3) {
         match *self {
-            Part::None => DVec3::ZERO,
-            Part::Rectangle { c, e1, e2 } => c + e1 * (2.0 * u[0] - 1.0) + e2 * (2.0 * u[1] - 1.0),
-            Part::Ellipse { c, e1, e2 } => {
+            Part::None => (DVec3::ZERO, DVec3::Z),
+            Part::Rectangle { c, e1, e2, n } => {
+                (c + e1 * (2.0 * u[0] - 1.0) + e2 * (2.0 * u[1] - 1.0), n)
+            }
+            Part::Ellipse { c, e1, e2, n } => {
                 let r = u[0].sqrt();
                 let (s, co) = crate::sampling::warp::sin_cos_turns(u[1]);
-                c + e1 * (r * co) + e2 * (r * s)
+                (c + e1 * (r * co) + e2 * (r * s), n)
             }
             Part::Mantle {
                 c,
@@ -74,14 +106,21 @@ impl Part {
                 phi0,
             } => {
                 let phi = phi0 + (2.0 * u[0] - 1.0).asin();
-                c + e1 * phi.cos() + e2 * phi.sin() + axis * (2.0 * u[1] - 1.0)
+                let (s, co) = phi.sin_cos();
+                // The cross-section's outward normal: the gradient of
+                // (p.e1 / |e1|^2)^2 + (p.e2 / |e2|^2)^2 at the point.
+                let n = (e1 * (co / e1.length_squared()) + e2 * (s / e2.length_squared()))
+                    .normalize_or(e1.normalize_or_zero());
+                (c + e1 * co + e2 * s + axis * (2.0 * u[1] - 1.0), n)
             }
             Part::Cap { half, dir } => {
                 let f = crate::sampling::warp::Frame::from_normal(dir);
                 let rho = u[0].sqrt();
                 let (s, co) = crate::sampling::warp::sin_cos_turns(u[1]);
                 let z = (1.0 - rho * rho).max(0.0).sqrt();
-                f.to_world(DVec3::new(rho * co, rho * s, z)) * half
+                let unit = f.to_world(DVec3::new(rho * co, rho * s, z));
+                // The ellipsoid's normal: the unit sphere's, scaled by 1 / half.
+                (unit * half, (unit / half).normalize_or(dir))
             }
         }
     }
@@ -90,7 +129,9 @@ impl Part {
 /// The luminous parts of `shape` with half-extents `half` [m] seen along
 /// unit local direction `d` (from the luminaire towards the eye): up to
 /// three, each with its projected area [m^2] (0 with [`Part::None`]).
-pub fn parts(shape: OpeningShape, half: DVec3, d: DVec3) -> [(f64, Part); 3] {
+/// With `closed`, a rectangle or an ellipse (flat, or with luminous sides)
+/// also has its top, facing up (module docs).
+pub fn parts(shape: OpeningShape, half: DVec3, d: DVec3, closed: bool) -> [(f64, Part); 3] {
     let none = (0.0, Part::None);
     let mut out = [none; 3];
     let (a, b, c) = (half.x, half.y, half.z);
@@ -99,25 +140,31 @@ pub fn parts(shape: OpeningShape, half: DVec3, d: DVec3) -> [(f64, Part); 3] {
         OpeningShape::Point => {}
         OpeningShape::Rectangle | OpeningShape::Ellipse => {
             let round = shape == OpeningShape::Ellipse;
-            // The bottom, `c` below the centre, faces the nadir.
-            let bottom_c = -c * z;
-            let down = (-d.z).max(0.0);
+            // The bottom, `c` below the centre, faces the nadir; the top,
+            // `c` above it, the zenith (closed solids only).
+            let (cap_c, facing, n) = if d.z < 0.0 || !closed {
+                (-c * z, (-d.z).max(0.0), -z)
+            } else {
+                (c * z, d.z, z)
+            };
             out[0] = if round {
                 (
-                    PI * a * b * down,
+                    PI * a * b * facing,
                     Part::Ellipse {
-                        c: bottom_c,
+                        c: cap_c,
                         e1: a * x,
                         e2: b * y,
+                        n,
                     },
                 )
             } else {
                 (
-                    4.0 * a * b * down,
+                    4.0 * a * b * facing,
                     Part::Rectangle {
-                        c: bottom_c,
+                        c: cap_c,
                         e1: a * x,
                         e2: b * y,
+                        n,
                     },
                 )
             };
@@ -146,6 +193,7 @@ pub fn parts(shape: OpeningShape, half: DVec3, d: DVec3) -> [(f64, Part); 3] {
                             c: a * d.x.signum() * x,
                             e1: b * y,
                             e2: c * z,
+                            n: d.x.signum() * x,
                         },
                     );
                     out[2] = (
@@ -154,6 +202,7 @@ pub fn parts(shape: OpeningShape, half: DVec3, d: DVec3) -> [(f64, Part); 3] {
                             c: b * d.y.signum() * y,
                             e1: a * x,
                             e2: c * z,
+                            n: d.y.signum() * y,
                         },
                     );
                 }
@@ -169,22 +218,28 @@ pub fn parts(shape: OpeningShape, half: DVec3, d: DVec3) -> [(f64, Part); 3] {
             // Axis along y: the same with (x, y) exchanged.
             out = cylinder(DVec3::new(d.y, d.x, d.z), b, a, c, [y, x, z]);
         }
-        OpeningShape::VerticalEllipseC0 => out[0] = vertical_ellipse(d.x, (b, y), (c, z)),
-        OpeningShape::VerticalEllipseC90 => out[0] = vertical_ellipse(d.y, (a, x), (c, z)),
+        OpeningShape::VerticalEllipseC0 => out[0] = vertical_ellipse(d.x, x, (b, y), (c, z)),
+        OpeningShape::VerticalEllipseC90 => out[0] = vertical_ellipse(d.y, y, (a, x), (c, z)),
     }
     out
 }
 
 /// A vertical ellipse through the centre, luminous on both faces, of
 /// semi-axes `s1` along unit `e1` and `s2` along unit `e2`, seen with
-/// `facing` the direction's component along its normal.
-fn vertical_ellipse(facing: f64, (s1, e1): (f64, DVec3), (s2, e2): (f64, DVec3)) -> (f64, Part) {
+/// `facing` the direction's component along its unit normal `normal`.
+fn vertical_ellipse(
+    facing: f64,
+    normal: DVec3,
+    (s1, e1): (f64, DVec3),
+    (s2, e2): (f64, DVec3),
+) -> (f64, Part) {
     (
         PI * s1 * s2 * facing.abs(),
         Part::Ellipse {
             c: DVec3::ZERO,
             e1: s1 * e1,
             e2: s2 * e2,
+            n: normal * facing.signum(),
         },
     )
 }
@@ -199,6 +254,7 @@ fn cylinder(d: DVec3, a: f64, b: f64, c: f64, [ex, ey, ez]: [DVec3; 3]) -> [(f64
             c: a * d.x.signum() * ex,
             e1: b * ey,
             e2: c * ez,
+            n: d.x.signum() * ex,
         },
     );
     let mantle = (
@@ -296,8 +352,9 @@ mod tests {
     /// Whether the line from far out towards the eye side, `o + t v` with
     /// `v = -d` travelling away from the eye, first meets a luminous
     /// surface of the shape (computed from the solid itself, sharing no
-    /// code with [`parts`]).
-    fn hits(shape: OpeningShape, h: DVec3, o: DVec3, v: DVec3) -> bool {
+    /// code with [`parts`]); with `closed`, the top of a rectangle or an
+    /// ellipse is luminous too.
+    fn hits(shape: OpeningShape, h: DVec3, o: DVec3, v: DVec3, closed: bool) -> bool {
         use OpeningShape as S;
         let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
         match shape {
@@ -309,21 +366,22 @@ mod tests {
                     ecyl(o, v, (x, h.x), (y, h.y))
                 };
                 if h.z == 0.0 {
-                    // A flat opening at z = 0, luminous towards -z: the eye
-                    // (at -v) must be below it.
+                    // A flat opening at z = 0, luminous towards -z (and +z
+                    // when closed): the eye (at -v) must be below it.
                     let inside = lateral.is_some_and(|(t0, t1)| {
                         let t = -o.z / v.z;
                         v.z.abs() > 1e-300 && t0 <= t && t <= t1
                     });
-                    return inside && v.z > 0.0;
+                    return inside && (v.z > 0.0 || closed);
                 }
-                // The solid from z = -h.z to +h.z; its top is not luminous:
-                // a line entering through the top does not count.
+                // The solid from z = -h.z to +h.z; its top is luminous only
+                // when closed: else a line entering through the top does
+                // not count.
                 let Some((t0, _)) = meet(lateral, slab(o, v, z, h.z)) else {
                     return false;
                 };
                 let p = o + v * t0;
-                !((p.z - h.z).abs() < 1e-12 && v.z < 0.0)
+                closed || !((p.z - h.z).abs() < 1e-12 && v.z < 0.0)
             }
             S::Ellipsoid => {
                 let (o1, v1) = (o / h, v / h);
@@ -348,7 +406,7 @@ mod tests {
     /// The projected luminous area by ray casting: parallel lines along
     /// `-d` through the cell centres of an `n x n` grid over a square that
     /// covers the shape, on the plane normal to `d`.
-    fn ray_cast(shape: OpeningShape, h: DVec3, d: DVec3, n: usize) -> f64 {
+    fn ray_cast(shape: OpeningShape, h: DVec3, d: DVec3, n: usize, closed: bool) -> f64 {
         let r = h.length() * 1.5;
         let f = crate::sampling::warp::Frame::from_normal(d);
         let mut k = 0usize;
@@ -361,7 +419,7 @@ mod tests {
                 let (sn, cs) = 0.3f64.sin_cos();
                 let q = DVec3::new(cs * s - sn * t, sn * s + cs * t, 0.0);
                 let o = f.to_world(q) + d * (4.0 * r);
-                k += hits(shape, h, o, -d) as usize;
+                k += hits(shape, h, o, -d, closed) as usize;
             }
         }
         k as f64 * (2.0 * r / n as f64).powi(2)
@@ -373,19 +431,21 @@ mod tests {
     /// The sphere seen from anywhere is `pi r^2`, by hand.
     #[test]
     fn projected_areas_match_ray_casting() {
-        for (shape, h) in shapes() {
-            for d in directions() {
-                let a: f64 = parts(shape, h, d).iter().map(|p| p.0).sum();
-                let want = ray_cast(shape, h, d, 600);
-                let scale = 4.0 * h.max_element() * h.max_element();
-                assert!(
-                    (a - want).abs() <= 0.005 * want + 1e-6 * scale,
-                    "{shape:?} {h} along {d}: {a} vs ray casting {want}"
-                );
+        for closed in [false, true] {
+            for (shape, h) in shapes() {
+                for d in directions() {
+                    let a: f64 = parts(shape, h, d, closed).iter().map(|p| p.0).sum();
+                    let want = ray_cast(shape, h, d, 600, closed);
+                    let scale = 4.0 * h.max_element() * h.max_element();
+                    assert!(
+                        (a - want).abs() <= 0.005 * want + 1e-6 * scale,
+                        "{shape:?} {h} along {d} (closed {closed}): {a} vs ray casting {want}"
+                    );
+                }
             }
         }
         for d in directions() {
-            let a: f64 = parts(OpeningShape::Ellipsoid, DVec3::splat(0.2), d)
+            let a: f64 = parts(OpeningShape::Ellipsoid, DVec3::splat(0.2), d, false)
                 .iter()
                 .map(|p| p.0)
                 .sum();
@@ -398,6 +458,12 @@ mod tests {
     /// view, matches the ray-cast share of the outline to 1 %.
     #[test]
     fn part_points_cover_the_visible_outline_uniformly() {
+        for closed in [false, true] {
+            points_cover_the_outline(closed);
+        }
+    }
+
+    fn points_cover_the_outline(closed: bool) {
         let n = 64;
         for (shape, h) in shapes() {
             for d in directions() {
@@ -405,7 +471,7 @@ mod tests {
                 // A split direction in the view plane.
                 let split = (f.to_world(DVec3::X) + f.to_world(DVec3::Y) * 0.37).normalize();
                 let (mut total, mut left) = (0.0, 0.0);
-                for (a, part) in parts(shape, h, d) {
+                for (a, part) in parts(shape, h, d, closed) {
                     if a <= 0.0 {
                         continue;
                     }
@@ -418,7 +484,7 @@ mod tests {
                             // the view meets a luminous surface.
                             let o = p + d * (4.0 * h.length());
                             assert!(
-                                hits(shape, h, o, -d),
+                                hits(shape, h, o, -d, closed),
                                 "{shape:?} {h} along {d}: {p} not in the outline"
                             );
                             k += (p.dot(split) < 0.0) as usize;
@@ -427,7 +493,7 @@ mod tests {
                     total += a;
                     left += a * k as f64 / (n * n) as f64;
                 }
-                let all = ray_cast(shape, h, d, 400);
+                let all = ray_cast(shape, h, d, 400, closed);
                 if all == 0.0 {
                     assert_eq!(total, 0.0);
                     continue;
@@ -442,7 +508,7 @@ mod tests {
                         let s = r * (2.0 * (i as f64 + 0.5) / m as f64 - 1.0);
                         let t = r * (2.0 * (j as f64 + 0.5) / m as f64 - 1.0);
                         let q = f.to_world(DVec3::new(s, t, 0.0));
-                        if hits(shape, h, q + d * (4.0 * r), -d) {
+                        if hits(shape, h, q + d * (4.0 * r), -d, closed) {
                             kall += 1;
                             kl += (q.dot(split) < 0.0) as usize;
                         }
@@ -454,6 +520,47 @@ mod tests {
                     "{shape:?} {h} along {d}: share {} vs {want}",
                     left / total
                 );
+            }
+        }
+    }
+
+    /// Every part's normal is a unit vector facing the eye, normal to the
+    /// surface (orthogonal to the part's tangents, by central differences
+    /// of its points) and outward (`n . p >= 0` on these convex shapes
+    /// centred on the origin).
+    #[test]
+    fn part_normals_are_the_surfaces_facing_the_eye() {
+        let n = 9;
+        for closed in [false, true] {
+            for (shape, h) in shapes() {
+                for d in directions() {
+                    for (a, part) in parts(shape, h, d, closed) {
+                        if a <= 0.0 {
+                            continue;
+                        }
+                        for i in 0..n {
+                            for j in 0..n {
+                                let u = [(i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64];
+                                let (p, nn) = part.point_normal(u);
+                                let what = format!("{shape:?} {h} along {d} at {u:?}: n {nn}");
+                                assert!((nn.length() - 1.0).abs() < 1e-12, "{what}");
+                                assert!(nn.dot(d) > 0.0, "{what} faces away");
+                                assert!(nn.dot(p) >= -1e-12, "{what} points inwards at {p}");
+                                let e = 1e-6;
+                                for k in 0..2 {
+                                    let (mut lo, mut hi) = (u, u);
+                                    lo[k] -= e;
+                                    hi[k] += e;
+                                    let t = part.point(hi) - part.point(lo);
+                                    assert!(
+                                        t.dot(nn).abs() <= 1e-6 * t.length() + 1e-15,
+                                        "{what}: tangent {t} along u{k}"
+                                    );
+                                }
+                            }
+                        }
+                    }
+                }
             }
         }
     }

@@ -1,0 +1,379 @@
+//! Near-field emission from a luminaire's luminous shape (`opening = true`
+//! on a solid LM-63 shape): the luminaire has the luminance `I(w) / A_p(w)`
+//! towards every direction, `A_p(w)` the shape's projected area. Checked
+//! against references sharing no code with `lumest::light`: a Lambertian
+//! sphere by quadrature over its cone and by the sphere light's own
+//! emission, and a box and a vertical cylinder with luminous sides (and top)
+//! by quadrature over their faces.
+
+mod common;
+
+use glam::DVec3;
+use lumest::estimator::Receivers;
+use lumest::estimator::direct::{self, Strategy};
+use lumest::sampling::Philox4x32;
+use lumest::sampling::warp::Frame;
+use lumest::scene::{Scene, parse};
+use statrs::distribution::{ContinuousCDF, Normal};
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// Two-sided z bound holding a 1e-3 false-alarm rate over `m` tests (Sidak).
+fn sidak(m: usize) -> f64 {
+    let alpha = 1.0 - (1.0 - 1e-3f64).powf(1.0 / m as f64);
+    Normal::new(0.0, 1.0)
+        .unwrap()
+        .inverse_cdf(1.0 - alpha / 2.0)
+}
+
+const I0: f64 = 100.0;
+
+/// An LM-63-2002 file of `I0` cd in every direction with the luminous
+/// dimensions `width length height` (signed, metres).
+fn isotropic_ies(width: f64, length: f64, height: f64) -> String {
+    let gammas: Vec<String> = (0..=36).map(|k| (k as f64 * 5.0).to_string()).collect();
+    let cd = vec![format!("{I0}"); gammas.len()];
+    format!(
+        "IESNA:LM-63-2002\n[TEST] isotropic\nTILT=NONE\n1 -1 1 {} 1 1 2 {width} {length} {height}\n1 1 0\n{}\n0\n{}\n",
+        gammas.len(),
+        gammas.join(" "),
+        cd.join(" ")
+    )
+}
+
+/// A scene in `dir`: a floor of reflectance 0.5 (and a far box, so that no
+/// direct light is taken as exact) and `light`.
+fn scene_in(dir: &Path, light: &str) -> Scene {
+    let src = format!(
+        "[[surface]]\nname = \"floor\"\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+         material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\n\
+         [[surface]]\nname = \"far\"\ntype = \"box\"\nmin = [50, 50, 0.5]\nmax = [51, 51, 1]\n\
+         material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\n[[light]]\n{light}\n"
+    );
+    parse(&src, &dir.join("scene.toml")).unwrap()
+}
+
+/// Mean and standard error of `n` direct-light samples at receiver `j`.
+fn sample_mean(s: &Scene, rec: &Receivers, j: usize, n: u64, seed: u64) -> (f64, f64) {
+    let set = rec.direct_set(j).expect("sampled here");
+    let r = &rec.receivers()[j];
+    let frame = Frame::from_normal(r.n);
+    let (mut sum, mut sum2) = (0.0, 0.0);
+    for i in 0..n {
+        let mut rng = Philox4x32::new(seed, i);
+        let v = direct::sample(s, set, r, &frame, Strategy::Balance, &mut rng);
+        sum += v;
+        sum2 += v * v;
+    }
+    let mean = sum / n as f64;
+    let var = (sum2 / n as f64 - mean * mean).max(0.0);
+    (mean, (var / n as f64).sqrt())
+}
+
+/// Illuminance [lx] at `x` (unit normal `n`) from a Lambertian sphere of
+/// luminance `l`, centre `c`, radius `r`: `l int_cone max(0, n . w) dw` by
+/// the midpoint rule over the cone (polar angle from its axis, azimuth).
+fn sphere_quadrature(x: DVec3, n: DVec3, c: DVec3, r: f64, l: f64) -> f64 {
+    let d = c - x;
+    let dist = d.length();
+    let alpha = (r / dist).asin();
+    let f = Frame::from_normal(d / dist);
+    let (nt, np) = (600, 1200);
+    let mut sum = 0.0;
+    for i in 0..nt {
+        let t = alpha * (i as f64 + 0.5) / nt as f64;
+        let (st, ct) = t.sin_cos();
+        for k in 0..np {
+            let p = 2.0 * PI * (k as f64 + 0.5) / np as f64;
+            let w = f.to_world(DVec3::new(st * p.cos(), st * p.sin(), ct));
+            sum += n.dot(w).max(0.0) * st;
+        }
+    }
+    l * sum * (alpha / nt as f64) * (2.0 * PI / np as f64)
+}
+
+#[test]
+fn an_isotropic_luminaire_with_a_spherical_shape_is_the_lambertian_sphere() {
+    // I0 cd everywhere from a sphere of radius 0.2 m: luminance I0 / (pi r^2)
+    // everywhere on it, the sphere light of intensity I0.
+    let dir = std::env::temp_dir().join(format!("lumest-shape-sphere-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("sphere.ies"), isotropic_ies(-0.4, -0.4, -0.4)).unwrap();
+    let c = DVec3::new(0.0, 0.0, 3.0);
+    let gonio = |opening: bool| {
+        scene_in(
+            &dir,
+            &format!(
+                "type = \"ies\"\nfile = \"sphere.ies\"\nposition = [0, 0, 3]\nopening = {opening}"
+            ),
+        )
+    };
+    let (s_shape, s_point) = (gonio(true), gonio(false));
+    let l = I0 / (PI * 0.04);
+    let points = [
+        (DVec3::new(0.0, 0.0, 2.5), DVec3::Z),
+        // The receiver's horizon cuts the sphere.
+        (DVec3::new(0.5, 0.2, 2.9), DVec3::Z),
+        (DVec3::new(0.35, 0.0, 3.0), -DVec3::X),
+        (DVec3::new(0.1, 0.1, 3.3), -DVec3::Z),
+        (DVec3::new(1.0, -0.5, 0.0), DVec3::Z),
+        // Beside it, facing up: the horizon cuts most of it.
+        (DVec3::new(0.3, 0.0, 3.05), DVec3::Z),
+    ];
+    let rec = Receivers::new(&s_shape, &points).unwrap();
+    let rec_point = Receivers::new(&s_point, &points).unwrap();
+    let bound = sidak(points.len());
+    for (j, &(x, n)) in points.iter().enumerate() {
+        let exact = sphere_quadrature(x, n, c, 0.2, l);
+        assert_eq!(rec.direct()[j], 0.0, "the shape's light is sampled");
+        let (m, se) = sample_mean(&s_shape, &rec, j, 100_000, 21);
+        let z = (m - exact) / se;
+        assert!(
+            z.abs() < bound && se < 0.01 * exact,
+            "point {j}: shape {m} +- {se} vs sphere {exact} (z = {z:.2})"
+        );
+        // A Lambertian sphere wholly above the horizon gives I cos / d^2
+        // exactly, as the point; where the horizon cuts it, it does not.
+        let point = rec_point.direct()[j];
+        if j == 1 || j == 5 {
+            assert!(
+                ((m - point) / se).abs() > bound,
+                "point {j}: {point} vs {m} +- {se}"
+            );
+        } else {
+            assert!(
+                ((exact - point) / point).abs() < 1e-4,
+                "point {j}: {exact} vs {point}"
+            );
+        }
+    }
+    // The chains: light reflected by the floor into points facing down, the
+    // luminaire 0.25 m above it, from the shape's emission and from the
+    // sphere light's (its own code: a point uniform on the sphere, a
+    // cosine-weighted direction).
+    let low = |s: &str| s.replace("position = [0, 0, 3]", "position = [0, 0, 0.25]");
+    let low_shape = scene_in(
+        &dir,
+        &low("type = \"ies\"\nfile = \"sphere.ies\"\nposition = [0, 0, 3]\nopening = true"),
+    );
+    let low_sphere = scene_in(
+        &dir,
+        "type = \"sphere\"\ncenter = [0, 0, 0.25]\nradius = 0.2\nintensity = 100",
+    );
+    let down = [
+        (DVec3::new(0.3, 0.0, 0.1), -DVec3::Z),
+        (DVec3::new(0.0, 0.6, 0.2), -DVec3::Z),
+        (DVec3::new(1.5, 0.5, 0.5), -DVec3::Z),
+    ];
+    let cfg = common::chains_cfg(200_000, 23, 2);
+    let run = |s: &Scene| {
+        lumest::estimator::local::run(s, &Receivers::new(s, &down).unwrap(), &cfg, &mut |_| true)
+    };
+    let (a, b) = (run(&low_shape), run(&low_sphere));
+    for j in 0..down.len() {
+        let (ea, eb) = (a.tallies.estimated[j].mean(), b.tallies.estimated[j].mean());
+        let se = (a.tallies.estimated[j].std_error().powi(2)
+            + b.tallies.estimated[j].std_error().powi(2))
+        .sqrt();
+        assert!(
+            ea > 0.0 && se < 0.01 * ea && ((ea - eb) / se).abs() < sidak(down.len()),
+            "point {j}: shape {ea} vs sphere {eb} +- {se}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A convex solid's face for the quadrature: `point(s, t)` over the unit
+/// square, its outward unit normal and the area element [m^2] there.
+type Face = Box<dyn Fn(f64, f64) -> (DVec3, DVec3, f64)>;
+
+/// The faces of a box of half-extents `h` centred on `c`.
+fn box_faces(c: DVec3, h: DVec3) -> Vec<Face> {
+    let mut faces: Vec<Face> = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0, 1.0] {
+            let (i, j) = ((axis + 1) % 3, (axis + 2) % 3);
+            faces.push(Box::new(move |s, t| {
+                let mut p = [0.0; 3];
+                p[axis] = sign * h[axis];
+                p[i] = h[i] * (2.0 * s - 1.0);
+                p[j] = h[j] * (2.0 * t - 1.0);
+                let mut n = [0.0; 3];
+                n[axis] = sign;
+                (
+                    c + DVec3::from_array(p),
+                    DVec3::from_array(n),
+                    4.0 * h[i] * h[j],
+                )
+            }));
+        }
+    }
+    faces
+}
+
+/// The faces of a vertical cylinder of radius `r` and half-height `hz`
+/// centred on `c`: the mantle, the bottom and the top.
+fn cylinder_faces(c: DVec3, r: f64, hz: f64) -> Vec<Face> {
+    let mut faces: Vec<Face> = vec![Box::new(move |s, t| {
+        let p = 2.0 * PI * s;
+        let n = DVec3::new(p.cos(), p.sin(), 0.0);
+        (
+            c + n * r + DVec3::Z * (hz * (2.0 * t - 1.0)),
+            n,
+            2.0 * PI * r * 2.0 * hz,
+        )
+    })];
+    for sign in [-1.0, 1.0] {
+        faces.push(Box::new(move |s, t| {
+            // Polar: radius r sqrt(s) would be uniform; the midpoint rule
+            // takes radius r s with the Jacobian.
+            let (rr, p) = (r * s, 2.0 * PI * t);
+            let y = c + DVec3::new(rr * p.cos(), rr * p.sin(), sign * hz);
+            (y, DVec3::Z * sign, 2.0 * PI * r * rr)
+        }));
+    }
+    faces
+}
+
+/// Illuminance [lx] at `x` (unit normal `n`) from a convex luminous solid
+/// of luminance `I0 / a_p(w)` towards every direction `w`, by the midpoint
+/// rule over its faces (`m x m` cells each).
+fn solid_quadrature(
+    x: DVec3,
+    n: DVec3,
+    faces: &[Face],
+    a_p: &dyn Fn(DVec3) -> f64,
+    m: usize,
+) -> f64 {
+    let mut e = 0.0;
+    for face in faces {
+        for i in 0..m {
+            for k in 0..m {
+                let (s, t) = ((i as f64 + 0.5) / m as f64, (k as f64 + 0.5) / m as f64);
+                let (y, ny, da) = face(s, t);
+                let v = x - y;
+                let d2 = v.length_squared();
+                let w = v / d2.sqrt();
+                let (cy, cx) = (ny.dot(w), -n.dot(w));
+                if cy > 0.0 && cx > 0.0 {
+                    e += I0 / a_p(w) * cy * cx / d2 * da / (m * m) as f64;
+                }
+            }
+        }
+    }
+    e
+}
+
+#[test]
+fn a_box_and_a_cylinder_with_luminous_sides_and_top_against_quadrature() {
+    let dir = std::env::temp_dir().join(format!("lumest-shape-solids-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // A box 0.6 m (C0, x) x 0.3 m (C90, y) x 0.2 m high, and a vertical
+    // cylinder 0.3 m across and 0.4 m high, both centred 3 m up.
+    std::fs::write(dir.join("box.ies"), isotropic_ies(0.3, 0.6, 0.2)).unwrap();
+    std::fs::write(dir.join("cyl.ies"), isotropic_ies(-0.3, -0.3, 0.4)).unwrap();
+    let c = DVec3::new(0.0, 0.0, 3.0);
+    let (bh, (cr, chz)) = (DVec3::new(0.3, 0.15, 0.1), (0.15, 0.2));
+    let box_ap = move |w: DVec3| {
+        4.0 * (bh.x * bh.y * w.z.abs() + bh.y * bh.z * w.x.abs() + bh.x * bh.z * w.y.abs())
+    };
+    let cyl_ap = move |w: DVec3| {
+        PI * cr * cr * w.z.abs() + 2.0 * cr * 2.0 * chz * (1.0 - w.z * w.z).max(0.0).sqrt()
+    };
+    type Case<'a> = (&'a str, Vec<Face>, &'a dyn Fn(DVec3) -> f64);
+    let cases: [Case; 2] = [
+        ("box.ies", box_faces(c, bh), &box_ap),
+        ("cyl.ies", cylinder_faces(c, cr, chz), &cyl_ap),
+    ];
+    let points = [
+        // Below, close to the bottom.
+        (DVec3::new(0.1, 0.05, 2.75), DVec3::Z),
+        // Beside, facing the side, below the top's plane.
+        (DVec3::new(0.45, 0.1, 3.05), -DVec3::X),
+        // Above, facing down at the top and the sides.
+        (DVec3::new(0.2, 0.1, 3.4), -DVec3::Z),
+        // Oblique, tilted.
+        (
+            DVec3::new(-0.4, 0.5, 2.6),
+            DVec3::new(0.5, -0.4, 0.7).normalize(),
+        ),
+        // Far off (about 20 times the size): the far field, I0 cos / d^2.
+        (
+            DVec3::new(12.0, 6.0, 3.5),
+            DVec3::new(-0.8, -0.4, -0.2).normalize(),
+        ),
+    ];
+    let bound = sidak(2 * points.len());
+    for (k, (file, faces, a_p)) in cases.iter().enumerate() {
+        let gonio = |opening: bool| {
+            scene_in(
+                &dir,
+                &format!(
+                    "type = \"ies\"\nfile = \"{file}\"\nposition = [0, 0, 3]\nopening = {opening}"
+                ),
+            )
+        };
+        let (s_shape, s_point) = (gonio(true), gonio(false));
+        let rec = Receivers::new(&s_shape, &points).unwrap();
+        let rec_point = Receivers::new(&s_point, &points).unwrap();
+        for (j, &(x, n)) in points.iter().enumerate() {
+            let exact = solid_quadrature(x, n, faces, *a_p, 300);
+            let (m, se) = sample_mean(&s_shape, &rec, j, 400_000, 31 + k as u64);
+            let z = (m - exact) / se;
+            assert!(
+                z.abs() < bound && se < 0.01 * exact,
+                "{file} point {j}: shape {m} +- {se} vs quadrature {exact} (z = {z:.2})"
+            );
+            let point = rec_point.direct()[j];
+            if j < 4 {
+                assert!(
+                    ((m - point) / se).abs() > bound,
+                    "{file} point {j}: {point} vs {m} +- {se}"
+                );
+            } else {
+                // Far off the shape is the point.
+                assert!(
+                    ((exact - point) / point).abs() < 2e-3,
+                    "{file}: {exact} vs {point}"
+                );
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_chains_and_the_backward_paths_agree_beside_a_box_luminaire_near_a_floor() {
+    // The light tracing emits from the box (a direction from the table, then
+    // a point uniform in the area the box projects along it); the backward
+    // paths' next-event estimates draw points of the box towards each
+    // vertex. Their light reflected by the floor into points facing down
+    // agrees.
+    let dir = std::env::temp_dir().join(format!("lumest-shape-chains-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("box.ies"), isotropic_ies(0.3, 0.6, 0.2)).unwrap();
+    let s = scene_in(
+        &dir,
+        "type = \"ies\"\nfile = \"box.ies\"\nposition = [0, 0, 0.3]\nopening = true",
+    );
+    let down = [
+        (DVec3::new(0.5, 0.0, 0.15), -DVec3::Z),
+        (DVec3::new(0.0, 0.4, 0.1), -DVec3::Z),
+        (DVec3::new(1.2, 0.8, 0.6), -DVec3::Z),
+    ];
+    let rec = Receivers::new(&s, &down).unwrap();
+    let a =
+        lumest::estimator::local::run(&s, &rec, &common::chains_cfg(200_000, 41, 2), &mut |_| true);
+    let b = lumest::backward::run(&s, &rec, &common::chains_cfg(20_000, 43, 2), &mut |_| true);
+    for j in 0..down.len() {
+        let (ea, eb) = (a.tallies.estimated[j].mean(), b.tallies.estimated[j].mean());
+        let se = (a.tallies.estimated[j].std_error().powi(2)
+            + b.tallies.estimated[j].std_error().powi(2))
+        .sqrt();
+        assert!(
+            ea > 0.0 && se < 0.02 * ea && ((ea - eb) / se).abs() < sidak(down.len()),
+            "point {j}: chains {ea} vs backward {eb} +- {se}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
