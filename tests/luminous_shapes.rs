@@ -552,3 +552,53 @@ fn an_ellipsoid_and_a_horizontal_elliptic_cylinder_with_a_sloped_distribution_ag
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_flat_opening_lights_a_receiver_in_its_own_plane_as_just_beside_it() {
+    // A flat opening emits `I(w) dA / A` from every element towards every
+    // direction, the horizontal included: a receiver exactly in its plane
+    // gets the limit from above and from below (the model before the
+    // luminous shapes gave it too), not nothing.
+    let dir = std::env::temp_dir().join(format!("lumest-shape-edge-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // 0.6 m (C0, x) x 0.3 m (C90, y), flat, 3 m up.
+    std::fs::write(dir.join("flat.ies"), isotropic_ies(0.3, 0.6, 0.0)).unwrap();
+    let s = scene_in(
+        &dir,
+        "type = \"ies\"\nfile = \"flat.ies\"\nposition = [0, 0, 3]\nopening = true",
+    );
+    // The opening's own plane, facing it from beside its end, and a
+    // nanometre above and below.
+    let points = [
+        (DVec3::new(0.5, 0.1, 3.0), -DVec3::X),
+        (DVec3::new(0.5, 0.1, 3.0 + 1e-9), -DVec3::X),
+        (DVec3::new(0.5, 0.1, 3.0 - 1e-9), -DVec3::X),
+    ];
+    let rec = Receivers::new(&s, &points).unwrap();
+    // E = (I0 / A) int cos_x / t^2 dA over the opening (midpoint rule).
+    let m = 600;
+    let (a, b) = (0.3, 0.15);
+    let mut exact = 0.0;
+    for i in 0..m {
+        for k in 0..m {
+            let y = DVec3::new(
+                a * (2.0 * (i as f64 + 0.5) / m as f64 - 1.0),
+                b * (2.0 * (k as f64 + 0.5) / m as f64 - 1.0),
+                3.0,
+            );
+            let v = points[0].0 - y;
+            let t2 = v.length_squared();
+            exact += I0 / (4.0 * a * b) * (v.x / t2.sqrt()) / t2 * (4.0 * a * b) / (m * m) as f64;
+        }
+    }
+    let bound = sidak(points.len());
+    for j in 0..points.len() {
+        let (mean, se) = sample_mean(&s, &rec, j, 100_000, 61);
+        let z = (mean - exact) / se;
+        assert!(
+            z.abs() < bound && se < 0.01 * exact,
+            "point {j}: opening {mean} +- {se} vs quadrature {exact} (z = {z:.2})"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -144,6 +144,18 @@ impl LuminousShape {
         }
     }
 
+    /// The unit normal (local) of a flat shape's face ([`Self::is_flat`]):
+    /// the nadir for an opening, `x` or `y` for a vertical ellipse facing
+    /// C0 or C90.
+    pub fn flat_normal(&self) -> DVec3 {
+        use crate::io::photometry::OpeningShape as S;
+        match self.shape {
+            S::VerticalEllipseC0 => DVec3::X,
+            S::VerticalEllipseC90 => DVec3::Y,
+            _ => -DVec3::Z,
+        }
+    }
+
     /// Area [m^2] of a flat shape's face ([`Self::is_flat`]).
     pub fn flat_area(&self) -> f64 {
         use crate::io::photometry::OpeningShape as S;
@@ -380,8 +392,7 @@ impl Light {
     /// receiver can see is drawn (on a convex solid a face seen from `x`
     /// faces `d0`), so the light from the shape at `x` is the mean of
     /// `I(w) emit / pdf cos / t^2`; on a flat opening `emit / pdf` is 1.
-    /// `None` for every other light, or where the shape shows no area
-    /// towards `x` (a flat opening edge-on).
+    /// `None` for every other light.
     pub fn shape_point(&self, x: DVec3, u: [f64; 2]) -> Option<ShapePoint> {
         let Light::Gonio {
             p,
@@ -393,14 +404,22 @@ impl Light {
             return None;
         };
         let d0 = frame.to_local((x - *p).normalize_or(-frame.z));
+        if o.is_flat() {
+            // One plane face: the point is uniform by area and every
+            // element sends `I(w) / A` towards the receiver, on either side
+            // of the face and in its plane too (the limit from both sides),
+            // where `d0` shows no area: the face's normal draws the same
+            // points there.
+            let (yl, _, _) = o.sample(d0, u).or_else(|| o.sample(o.flat_normal(), u))?;
+            let pdf = 1.0 / o.flat_area();
+            return Some(ShapePoint {
+                y: *p + frame.to_world(yl),
+                pdf,
+                emit: pdf,
+            });
+        }
         let (yl, nl, a0) = o.sample(d0, u)?;
         let y = *p + frame.to_world(yl);
-        if o.is_flat() {
-            // One plane face, the receiver in front of it: the point is
-            // uniform by area and every element sends `I(w) / A`.
-            let pdf = 1.0 / o.flat_area();
-            return Some(ShapePoint { y, pdf, emit: pdf });
-        }
         let c0 = nl.dot(d0);
         let w = frame.to_local((x - y).normalize_or(d0));
         let cw = nl.dot(w);
