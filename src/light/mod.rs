@@ -421,7 +421,7 @@ impl Light {
         let (yl, nl, a0) = o.sample(d0, u)?;
         let y = *p + frame.to_world(yl);
         let c0 = nl.dot(d0);
-        let w = frame.to_local((x - y).normalize_or(d0));
+        let w = frame.to_local((x - y).normalize_or(frame.to_world(d0)));
         let cw = nl.dot(w);
         let aw = o.projected(w);
         if c0 <= 0.0 || cw <= 0.0 || aw <= 0.0 {
