@@ -350,32 +350,42 @@ fn the_chains_and_the_backward_paths_agree_beside_a_box_luminaire_near_a_floor()
     // a point uniform in the area the box projects along it); the backward
     // paths' next-event estimates draw points of the box towards each
     // vertex. Their light reflected by the floor into points facing down
-    // agrees.
+    // agrees. The same beside a vertical ellipse (luminous on both faces).
     let dir = std::env::temp_dir().join(format!("lumest-shape-chains-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("box.ies"), isotropic_ies(0.3, 0.6, 0.2)).unwrap();
-    let s = scene_in(
-        &dir,
-        "type = \"ies\"\nfile = \"box.ies\"\nposition = [0, 0, 0.3]\nopening = true",
-    );
+    std::fs::write(dir.join("vertical.ies"), isotropic_ies(-0.4, 0.0, -0.3)).unwrap();
     let down = [
         (DVec3::new(0.5, 0.0, 0.15), -DVec3::Z),
         (DVec3::new(0.0, 0.4, 0.1), -DVec3::Z),
         (DVec3::new(1.2, 0.8, 0.6), -DVec3::Z),
     ];
-    let rec = Receivers::new(&s, &down).unwrap();
-    let a =
-        lumest::estimator::local::run(&s, &rec, &common::chains_cfg(200_000, 41, 2), &mut |_| true);
-    let b = lumest::backward::run(&s, &rec, &common::chains_cfg(20_000, 43, 2), &mut |_| true);
-    for j in 0..down.len() {
-        let (ea, eb) = (a.tallies.estimated[j].mean(), b.tallies.estimated[j].mean());
-        let se = (a.tallies.estimated[j].std_error().powi(2)
-            + b.tallies.estimated[j].std_error().powi(2))
-        .sqrt();
-        assert!(
-            ea > 0.0 && se < 0.02 * ea && ((ea - eb) / se).abs() < sidak(down.len()),
-            "point {j}: chains {ea} vs backward {eb} +- {se}"
+    let bound = sidak(2 * down.len());
+    for (k, file) in ["box.ies", "vertical.ies"].iter().enumerate() {
+        let s = scene_in(
+            &dir,
+            &format!("type = \"ies\"\nfile = \"{file}\"\nposition = [0, 0, 0.3]\nopening = true"),
         );
+        let rec = Receivers::new(&s, &down).unwrap();
+        let seed = 41 + 2 * k as u64;
+        let cfg_a = common::chains_cfg(200_000, seed, 2);
+        let a = lumest::estimator::local::run(&s, &rec, &cfg_a, &mut |_| true);
+        let b = lumest::backward::run(
+            &s,
+            &rec,
+            &common::chains_cfg(40_000, seed + 1, 2),
+            &mut |_| true,
+        );
+        for j in 0..down.len() {
+            let (ea, eb) = (a.tallies.estimated[j].mean(), b.tallies.estimated[j].mean());
+            let se = (a.tallies.estimated[j].std_error().powi(2)
+                + b.tallies.estimated[j].std_error().powi(2))
+            .sqrt();
+            assert!(
+                ea > 0.0 && se < 0.02 * ea && ((ea - eb) / se).abs() < bound,
+                "{file} point {j}: chains {ea} vs backward {eb} +- {se}"
+            );
+        }
     }
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -599,6 +609,99 @@ fn a_flat_opening_lights_a_receiver_in_its_own_plane_as_just_beside_it() {
             z.abs() < bound && se < 0.01 * exact,
             "point {j}: opening {mean} +- {se} vs quadrature {exact} (z = {z:.2})"
         );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Illuminance [lx] at `x` (unit normal `n`) from a flat face emitting
+/// `I0 dA / A` from every element `dA` towards both sides: the midpoint rule
+/// over the rectangle `c + s e1 + t e2` (`s, t` in `[-1, 1]`) or, with
+/// `round`, over the ellipse of semi-axis vectors `e1`, `e2` in polar
+/// coordinates.
+fn flat_quadrature(x: DVec3, n: DVec3, c: DVec3, e1: DVec3, e2: DVec3, round: bool) -> f64 {
+    let m = 600;
+    let area = if round { PI } else { 4.0 } * e1.length() * e2.length();
+    let mut e = 0.0;
+    for i in 0..m {
+        for k in 0..m {
+            let (s, t) = ((i as f64 + 0.5) / m as f64, (k as f64 + 0.5) / m as f64);
+            let (y, da) = if round {
+                let (r, p) = (s, 2.0 * PI * t);
+                (
+                    c + e1 * (r * p.cos()) + e2 * (r * p.sin()),
+                    area * 2.0 * r / (m * m) as f64,
+                )
+            } else {
+                (
+                    c + e1 * (2.0 * s - 1.0) + e2 * (2.0 * t - 1.0),
+                    area / (m * m) as f64,
+                )
+            };
+            let v = y - x;
+            let t2 = v.length_squared();
+            let cx = n.dot(v) / t2.sqrt();
+            if cx > 0.0 {
+                e += I0 / area * cx / t2 * da;
+            }
+        }
+    }
+    e
+}
+
+#[test]
+fn a_flat_opening_from_above_and_a_vertical_ellipse_from_both_sides_against_quadrature() {
+    // The faces no other test lights from: a flat opening's upper face (its
+    // file sends light upwards too) and a vertical ellipse, luminous on both
+    // faces; every element emits `I0 dA / A`.
+    let dir = std::env::temp_dir().join(format!("lumest-shape-flat-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // 0.6 m (C0, x) x 0.3 m (C90, y), flat; a vertical ellipse facing C0,
+    // 0.4 m wide (y) and 0.3 m high.
+    std::fs::write(dir.join("flat.ies"), isotropic_ies(0.3, 0.6, 0.0)).unwrap();
+    std::fs::write(dir.join("vertical.ies"), isotropic_ies(-0.4, 0.0, -0.3)).unwrap();
+    let c = DVec3::new(0.0, 0.0, 3.0);
+    let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+    let cases = [
+        (
+            "flat.ies",
+            (x * 0.3, y * 0.15, false),
+            vec![
+                (DVec3::new(0.1, 0.05, 3.3), -z),
+                (
+                    DVec3::new(0.5, -0.2, 3.1),
+                    DVec3::new(-0.6, 0.3, -0.5).normalize(),
+                ),
+            ],
+        ),
+        (
+            "vertical.ies",
+            (y * 0.2, z * 0.15, true),
+            vec![
+                (DVec3::new(0.3, 0.1, 3.05), -x),
+                (DVec3::new(-0.25, -0.1, 2.9), x),
+                (
+                    DVec3::new(0.2, 0.5, 3.0),
+                    DVec3::new(-0.3, -1.0, 0.0).normalize(),
+                ),
+            ],
+        ),
+    ];
+    let bound = sidak(5);
+    for (k, (file, (e1, e2, round), points)) in cases.iter().enumerate() {
+        let s = scene_in(
+            &dir,
+            &format!("type = \"ies\"\nfile = \"{file}\"\nposition = [0, 0, 3]\nopening = true"),
+        );
+        let rec = Receivers::new(&s, points).unwrap();
+        for (j, &(p, n)) in points.iter().enumerate() {
+            let exact = flat_quadrature(p, n, c, *e1, *e2, *round);
+            let (mean, se) = sample_mean(&s, &rec, j, 200_000, 71 + k as u64);
+            let z = (mean - exact) / se;
+            assert!(
+                z.abs() < bound && se < 0.01 * exact,
+                "{file} point {j}: shape {mean} +- {se} vs quadrature {exact} (z = {z:.2})"
+            );
+        }
     }
     std::fs::remove_dir_all(&dir).ok();
 }
