@@ -55,6 +55,27 @@ fn scene_in(dir: &Path, light: &str) -> Scene {
     parse(&src, &dir.join("scene.toml")).unwrap()
 }
 
+/// Mean and standard error of `n` direct-light samples at receiver `j`,
+/// asserted to agree with `exact` [lx] within `bound` standard errors and
+/// to carry a standard error under 1 % of it (so a 2 % error shows).
+fn sampled_matches(
+    s: &Scene,
+    rec: &Receivers,
+    j: usize,
+    (n, seed): (u64, u64),
+    exact: f64,
+    bound: f64,
+    what: &str,
+) -> (f64, f64) {
+    let (m, se) = sample_mean(s, rec, j, n, seed);
+    let z = (m - exact) / se;
+    assert!(
+        z.abs() < bound && se < 0.01 * exact,
+        "{what}: sampled {m} +- {se} vs reference {exact} (z = {z:.2})"
+    );
+    (m, se)
+}
+
 /// Mean and standard error of `n` direct-light samples at receiver `j`.
 fn sample_mean(s: &Scene, rec: &Receivers, j: usize, n: u64, seed: u64) -> (f64, f64) {
     let set = rec.direct_set(j).expect("sampled here");
@@ -128,11 +149,14 @@ fn an_isotropic_luminaire_with_a_spherical_shape_is_the_lambertian_sphere() {
     for (j, &(x, n)) in points.iter().enumerate() {
         let exact = sphere_quadrature(x, n, c, 0.2, l);
         assert_eq!(rec.direct()[j], 0.0, "the shape's light is sampled");
-        let (m, se) = sample_mean(&s_shape, &rec, j, 100_000, 21);
-        let z = (m - exact) / se;
-        assert!(
-            z.abs() < bound && se < 0.01 * exact,
-            "point {j}: shape {m} +- {se} vs sphere {exact} (z = {z:.2})"
+        let (m, se) = sampled_matches(
+            &s_shape,
+            &rec,
+            j,
+            (100_000, 21),
+            exact,
+            bound,
+            &format!("point {j}"),
         );
         // A Lambertian sphere wholly above the horizon gives I cos / d^2
         // exactly, as the point; where the horizon cuts it, it does not.
@@ -173,10 +197,7 @@ fn an_isotropic_luminaire_with_a_spherical_shape_is_the_lambertian_sphere() {
     };
     let (a, b) = (run(&low_shape), run(&low_sphere));
     for j in 0..down.len() {
-        let (ea, eb) = (a.tallies.estimated[j].mean(), b.tallies.estimated[j].mean());
-        let se = (a.tallies.estimated[j].std_error().powi(2)
-            + b.tallies.estimated[j].std_error().powi(2))
-        .sqrt();
+        let (ea, eb, se) = common::apart(&a, &b, j);
         assert!(
             ea > 0.0 && se < 0.01 * ea && ((ea - eb) / se).abs() < sidak(down.len()),
             "point {j}: shape {ea} vs sphere {eb} +- {se}"
@@ -238,13 +259,13 @@ fn cylinder_faces(c: DVec3, r: f64, hz: f64) -> Vec<Face> {
 }
 
 /// Illuminance [lx] at `x` (unit normal `n`) from a convex luminous solid
-/// of luminance `I0 / a_p(w)` towards every direction `w`, by the midpoint
-/// rule over its faces (`m x m` cells each).
+/// of luminance `lum(w)` [cd/m^2] towards every direction `w`, by the
+/// midpoint rule over its faces (`m x m` cells each).
 fn solid_quadrature(
     x: DVec3,
     n: DVec3,
     faces: &[Face],
-    a_p: &dyn Fn(DVec3) -> f64,
+    lum: &dyn Fn(DVec3) -> f64,
     m: usize,
 ) -> f64 {
     let mut e = 0.0;
@@ -258,7 +279,7 @@ fn solid_quadrature(
                 let w = v / d2.sqrt();
                 let (cy, cx) = (ny.dot(w), -n.dot(w));
                 if cy > 0.0 && cx > 0.0 {
-                    e += I0 / a_p(w) * cy * cx / d2 * da / (m * m) as f64;
+                    e += lum(w) * cy * cx / d2 * da / (m * m) as f64;
                 }
             }
         }
@@ -319,12 +340,15 @@ fn a_box_and_a_cylinder_with_luminous_sides_and_top_against_quadrature() {
         let rec = Receivers::new(&s_shape, &points).unwrap();
         let rec_point = Receivers::new(&s_point, &points).unwrap();
         for (j, &(x, n)) in points.iter().enumerate() {
-            let exact = solid_quadrature(x, n, faces, *a_p, 300);
-            let (m, se) = sample_mean(&s_shape, &rec, j, 400_000, 31 + k as u64);
-            let z = (m - exact) / se;
-            assert!(
-                z.abs() < bound && se < 0.01 * exact,
-                "{file} point {j}: shape {m} +- {se} vs quadrature {exact} (z = {z:.2})"
+            let exact = solid_quadrature(x, n, faces, &|w| I0 / a_p(w), 300);
+            let (m, se) = sampled_matches(
+                &s_shape,
+                &rec,
+                j,
+                (400_000, 31 + k as u64),
+                exact,
+                bound,
+                &format!("{file} point {j}"),
             );
             let point = rec_point.direct()[j];
             if j < 4 {
@@ -377,10 +401,7 @@ fn the_chains_and_the_backward_paths_agree_beside_a_box_luminaire_near_a_floor()
             &mut |_| true,
         );
         for j in 0..down.len() {
-            let (ea, eb) = (a.tallies.estimated[j].mean(), b.tallies.estimated[j].mean());
-            let se = (a.tallies.estimated[j].std_error().powi(2)
-                + b.tallies.estimated[j].std_error().powi(2))
-            .sqrt();
+            let (ea, eb, se) = common::apart(&a, &b, j);
             assert!(
                 ea > 0.0 && se < 0.02 * ea && ((ea - eb) / se).abs() < bound,
                 "{file} point {j}: chains {ea} vs backward {eb} +- {se}"
@@ -452,35 +473,6 @@ fn x_cylinder_faces(c: DVec3, a: f64, b: f64, hz: f64) -> Vec<Face> {
     faces
 }
 
-/// Illuminance [lx] at `x` (unit normal `n`) from a convex luminous solid
-/// of luminance `lum(w)` towards every direction `w`, by the midpoint rule
-/// over its faces (`m x m` cells each).
-fn solid_quadrature_lum(
-    x: DVec3,
-    n: DVec3,
-    faces: &[Face],
-    lum: &dyn Fn(DVec3) -> f64,
-    m: usize,
-) -> f64 {
-    let mut e = 0.0;
-    for face in faces {
-        for i in 0..m {
-            for k in 0..m {
-                let (s, t) = ((i as f64 + 0.5) / m as f64, (k as f64 + 0.5) / m as f64);
-                let (y, ny, da) = face(s, t);
-                let v = x - y;
-                let d2 = v.length_squared();
-                let w = v / d2.sqrt();
-                let (cy, cx) = (ny.dot(w), -n.dot(w));
-                if cy > 0.0 && cx > 0.0 {
-                    e += lum(w) * cy * cx / d2 * da / (m * m) as f64;
-                }
-            }
-        }
-    }
-    e
-}
-
 #[test]
 fn an_ellipsoid_and_a_horizontal_elliptic_cylinder_with_a_sloped_distribution_against_quadrature() {
     // Solids with unequal semi-axes (the cap's and the mantle's normals and
@@ -543,14 +535,17 @@ fn an_ellipsoid_and_a_horizontal_elliptic_cylinder_with_a_sloped_distribution_ag
         let rec = Receivers::new(&s_shape, &points).unwrap();
         let rec_point = Receivers::new(&s_point, &points).unwrap();
         for (j, &(x, n)) in points.iter().enumerate() {
-            let exact = solid_quadrature_lum(x, n, faces, *lum, 400);
-            let (m, se) = sample_mean(&s_shape, &rec, j, 400_000, 51 + k as u64);
-            let z = (m - exact) / se;
-            let point = rec_point.direct()[j];
-            assert!(
-                z.abs() < bound && se < 0.01 * exact,
-                "{file} point {j}: shape {m} +- {se} vs quadrature {exact} (z = {z:.2})"
+            let exact = solid_quadrature(x, n, faces, *lum, 400);
+            sampled_matches(
+                &s_shape,
+                &rec,
+                j,
+                (400_000, 51 + k as u64),
+                exact,
+                bound,
+                &format!("{file} point {j}"),
             );
+            let point = rec_point.direct()[j];
             // Near the solid the point is off (5 % to 55 % here): the test
             // tells them apart. (At the oblique point, 0.8 m off, it is
             // 0.5 % and 4 % off.)
@@ -603,11 +598,14 @@ fn a_flat_opening_lights_a_receiver_in_its_own_plane_as_just_beside_it() {
     }
     let bound = sidak(points.len());
     for j in 0..points.len() {
-        let (mean, se) = sample_mean(&s, &rec, j, 100_000, 61);
-        let z = (mean - exact) / se;
-        assert!(
-            z.abs() < bound && se < 0.01 * exact,
-            "point {j}: opening {mean} +- {se} vs quadrature {exact} (z = {z:.2})"
+        sampled_matches(
+            &s,
+            &rec,
+            j,
+            (100_000, 61),
+            exact,
+            bound,
+            &format!("point {j}"),
         );
     }
     std::fs::remove_dir_all(&dir).ok();
@@ -695,11 +693,14 @@ fn a_flat_opening_from_above_and_a_vertical_ellipse_from_both_sides_against_quad
         let rec = Receivers::new(&s, points).unwrap();
         for (j, &(p, n)) in points.iter().enumerate() {
             let exact = flat_quadrature(p, n, c, *e1, *e2, *round);
-            let (mean, se) = sample_mean(&s, &rec, j, 200_000, 71 + k as u64);
-            let z = (mean - exact) / se;
-            assert!(
-                z.abs() < bound && se < 0.01 * exact,
-                "{file} point {j}: shape {mean} +- {se} vs quadrature {exact} (z = {z:.2})"
+            sampled_matches(
+                &s,
+                &rec,
+                j,
+                (200_000, 71 + k as u64),
+                exact,
+                bound,
+                &format!("{file} point {j}"),
             );
         }
     }

@@ -186,25 +186,22 @@ pub fn parts(shape: OpeningShape, half: DVec3, d: DVec3, closed: bool) -> [(f64,
                         },
                     );
                 } else {
-                    // The face normal to x towards the eye, then y.
-                    out[1] = (
-                        2.0 * c * 2.0 * b * d.x.abs(),
-                        Part::Rectangle {
-                            c: a * d.x.signum() * x,
-                            e1: b * y,
-                            e2: c * z,
-                            n: d.x.signum() * x,
-                        },
-                    );
-                    out[2] = (
-                        2.0 * c * 2.0 * a * d.y.abs(),
-                        Part::Rectangle {
-                            c: b * d.y.signum() * y,
-                            e1: a * x,
-                            e2: c * z,
-                            n: d.y.signum() * y,
-                        },
-                    );
+                    // The side normal to unit `e` (half-extent `h`, the
+                    // direction's component `de` along it) that faces the
+                    // eye, spanned by `o` (half-extent `ho`) and z.
+                    let side = |e: DVec3, h: f64, de: f64, o: DVec3, ho: f64| {
+                        (
+                            2.0 * c * 2.0 * ho * de.abs(),
+                            Part::Rectangle {
+                                c: h * de.signum() * e,
+                                e1: ho * o,
+                                e2: c * z,
+                                n: de.signum() * e,
+                            },
+                        )
+                    };
+                    out[1] = side(x, a, d.x, y, b);
+                    out[2] = side(y, b, d.y, x, a);
                 }
             }
         }

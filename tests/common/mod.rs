@@ -47,6 +47,16 @@ pub fn z(r: &RunResult, j: usize, exact: f64) -> f64 {
     zcheck::z_score(r.direct[j] + w.mean(), w.std_error(), exact)
 }
 
+/// Two runs' estimates at point `j` [lx] (exact direct plus tallied, each)
+/// and the standard error of their difference, for a z test of agreement.
+pub fn apart(a: &RunResult, b: &RunResult, j: usize) -> (f64, f64, f64) {
+    let e = |r: &RunResult| r.direct[j] + r.tallies.estimated[j].mean();
+    let se = (a.tallies.estimated[j].std_error().powi(2)
+        + b.tallies.estimated[j].std_error().powi(2))
+    .sqrt();
+    (e(a), e(b), se)
+}
+
 /// Largest `|z|` over `zs`, NaN if any is NaN ([`zcheck::max_abs_z`];
 /// `f64::max` would drop a NaN); test it with [`zcheck::within`].
 pub fn max_abs_z(zs: impl IntoIterator<Item = f64>) -> f64 {
