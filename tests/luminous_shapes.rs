@@ -707,3 +707,35 @@ fn a_flat_opening_from_above_and_a_vertical_ellipse_from_both_sides_against_quad
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_luminous_solid_cut_by_the_ceiling_is_reported() {
+    // A box luminaire with luminous sides (0.2 m high) whose photometric
+    // centre lies in the ceiling plane has its upper half above the ceiling;
+    // mounted on the ceiling (centre 0.1 m below it, its top in the ceiling's
+    // plane) and hanging free it has none, nor has a flat opening in the
+    // ceiling.
+    let dir = std::env::temp_dir().join(format!("lumest-shape-cut-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("box.ies"), isotropic_ies(0.3, 0.6, 0.2)).unwrap();
+    std::fs::write(dir.join("flat.ies"), isotropic_ies(0.3, 0.6, 0.0)).unwrap();
+    let with = |file: &str, z: f64| {
+        let src = format!(
+            "[[surface]]\nname = \"ceiling\"\ntype = \"plane\"\npoint = [0, 0, 3]\nnormal = [0, 0, -1]\n\
+             material = {{ type = \"lambertian\", reflectance = 0.8 }}\n\n\
+             [[light]]\nname = \"lum\"\ntype = \"ies\"\nfile = \"{file}\"\nposition = [0, 0, {z}]\nopening = true\n"
+        );
+        let s = parse(&src, &dir.join("scene.toml")).unwrap();
+        (
+            s.luminous_shape_cut(0),
+            s.notes.iter().any(|n| n.contains("WARNING: lum: about")),
+        )
+    };
+    let (cut, warned) = with("box.ies", 3.0);
+    // Half the box: its top and the upper halves of its sides.
+    assert!((cut - 0.5).abs() < 0.05 && warned, "{cut}");
+    assert_eq!(with("box.ies", 2.9), (0.0, false));
+    assert_eq!(with("box.ies", 2.0), (0.0, false));
+    assert_eq!(with("flat.ies", 3.0), (0.0, false));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -219,6 +219,13 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
                 "WARNING: {name} is sealed inside a solid: most rays from it meet the back of a surface, so its light hardly reaches a point in front of one"
             ));
         }
+        let cut = scene.luminous_shape_cut(k);
+        if cut >= 0.01 {
+            scene.notes.push(format!(
+                "WARNING: {name}: about {:.0} % of its luminous shape lies beyond a surface, whose light meets that surface at once; the shape is centred on `position`, the photometric centre (a luminaire with luminous sides mounted on a ceiling has its centre half the sides' height below it)",
+                100.0 * cut
+            ));
+        }
     }
     if !desc.portal.is_empty() {
         let mut list = Vec::with_capacity(desc.portal.len());

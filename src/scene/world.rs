@@ -899,6 +899,64 @@ impl Scene {
         back >= PROBES * 7 / 8
     }
 
+    /// The share of light `k`'s luminous solid (`opening = true` on a
+    /// solid shape, [`crate::light::LuminousShape`]) that lies beyond a
+    /// surface: of points drawn over the shape (8 x 8 per direction, over
+    /// 64 directions of a Fibonacci sphere, each uniform in the area the
+    /// shape projects along it), those a surface hides from a point just
+    /// inside the shape's bottom (its lowest luminous point seen from the
+    /// nadir, which a luminaire's room holds). Such a part's light meets
+    /// the surface at once: a luminaire with luminous sides placed with its
+    /// photometric centre (`position`) in a ceiling sends half its sides'
+    /// light into the ceiling. 0 for every other light.
+    pub fn luminous_shape_cut(&self, k: usize) -> f64 {
+        const DIRS: usize = 64;
+        const GRID: usize = 8;
+        let Light::Gonio {
+            p,
+            frame,
+            opening: Some(o),
+            ..
+        } = &self.lights[k]
+        else {
+            return 0.0;
+        };
+        if o.is_flat() {
+            return 0.0;
+        }
+        let inside = *p + frame.to_world(DVec3::new(0.0, 0.0, -0.999 * o.half.z));
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        let (mut hidden, mut total) = (0usize, 0usize);
+        for i in 0..DIRS {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / DIRS as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let (sp, cp) = (golden * i as f64).sin_cos();
+            let d = DVec3::new(r * cp, r * sp, z);
+            for a in 0..GRID {
+                for b in 0..GRID {
+                    let u = [
+                        (a as f64 + 0.5) / GRID as f64,
+                        (b as f64 + 0.5) / GRID as f64,
+                    ];
+                    if let Some((y, _, _)) = o.sample(d, u) {
+                        // A hair inside the shape: a face lying in a
+                        // surface's plane (a top against the ceiling) is
+                        // not beyond it.
+                        let y = *p + frame.to_world(y);
+                        let y = inside + (y - inside) * (1.0 - 1e-9);
+                        total += 1;
+                        hidden += !self.visible(inside, None, y) as usize;
+                    }
+                }
+            }
+        }
+        if total == 0 {
+            0.0
+        } else {
+            hidden as f64 / total as f64
+        }
+    }
+
     /// True when light from light `k` is never absorbed: every surface
     /// reflects all the light it receives (Lambertian reflectance 1, or Phong
     /// `kd + ks = 1`) and each of 32 probe rays from the light meets a
