@@ -349,7 +349,7 @@ fn box_room_error_bars_are_calibrated() {
     // The default path really splits the points close to a surface.
     let split = Receivers::new(&scene, &points)
         .unwrap()
-        .with_auto_near_field(16);
+        .with_auto_near_field(&scene, 16);
     let radii = split.near_field().1;
     let split: Vec<bool> = radii.iter().map(|&r| r > 0.0).collect();
     assert_eq!(

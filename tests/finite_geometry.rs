@@ -453,7 +453,7 @@ fn near_field_split_fixes_the_corner_point() {
     let (scene, recs) = all_shapes_room(1.0);
     let recs = vec![recs[6]];
     let rec = Receivers::from_receivers(&scene, &recs).unwrap();
-    let split = rec.clone().with_auto_near_field(64);
+    let split = rec.clone().with_auto_near_field(&scene, 64);
     let radius = split.near_field().1[0];
     assert!((0.3..0.4).contains(&radius), "auto radius {radius}");
     let cfg = lumest::run::RunConfig {

@@ -127,7 +127,7 @@ fn automatic_near_field_splits_only_where_a_surface_is_close() {
         (DVec3::new(0.3, 0.0, 0.5), DVec3::Z),
     ];
     let rec = Receivers::new(&case.scene, &pts).unwrap();
-    let auto = rec.clone().with_auto_near_field(16);
+    let auto = rec.clone().with_auto_near_field(&case.scene, 16);
     let (paths, radii) = auto.near_field();
     assert_eq!(paths, 16);
     assert!(

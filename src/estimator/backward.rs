@@ -26,6 +26,7 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::run::{Batch, BatchWork, Checks, Progress, RunConfig, RunResult, cap_batch_size, drive};
 use crate::sampling::Philox4x32;
+use crate::sampling::grazing::GrazingTable;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sample_uniform_sphere};
 use crate::scene::Scene;
 use crate::tally::bucket;
@@ -149,6 +150,8 @@ impl BatchWork for BackwardWork<'_> {
                 let mut rng = Philox4x32::new(PILOT_KEY, s * n + j as u64);
                 let path = PathSetup {
                     first_max: f64::INFINITY,
+                    vertex_r: f64::INFINITY,
+                    grazing: None,
                     pool: None,
                     reach: &[],
                 };
@@ -176,6 +179,8 @@ impl BatchWork for BackwardWork<'_> {
         let mut vertices = 0u64;
         let path = PathSetup {
             first_max: f64::INFINITY,
+            vertex_r: f64::INFINITY,
+            grazing: None,
             pool: None,
             reach: &self.reach,
         };
@@ -282,6 +287,15 @@ pub(crate) struct PathSetup<'a> {
     /// the receiver contributes nothing (the near part of the local
     /// estimator's near/far split); `f64::INFINITY` for a full path.
     pub(crate) first_max: f64,
+    /// With a pool: the receiver's share of the split radius at the path's
+    /// vertices (see [`split_radius`]); `first_max` but for a receiver in a
+    /// slot ([`crate::estimator::slot_table`]), whose first segment reaches
+    /// farther than the radius it needs.
+    pub(crate) vertex_r: f64,
+    /// An illuminance receiver in a slot draws its first direction from
+    /// this table instead of the cosine (and its light-guided connection
+    /// weighs by the table's density).
+    pub(crate) grazing: Option<&'a GrazingTable>,
     /// The batch's light-tracing collisions, for the recursive split.
     pub(crate) pool: Option<&'a Pool>,
     /// Light neighbourhoods (centre [m], squared radius [m^2]) whose
@@ -353,6 +367,8 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
 ) -> Walk {
     let PathSetup {
         first_max,
+        vertex_r,
+        grazing,
         pool,
         reach,
     } = *path;
@@ -373,7 +389,13 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         // times `cos` (the integrand of `E = int L cos dw`, or of the
         // luminance), and the density of its own first direction there.
         let v = connect(scene, rec.p, None, first_max, rng, |w: DVec3| {
-            rec.transfer(frame, w)
+            let (value, pdf) = rec.transfer(frame, w);
+            match grazing {
+                Some(t) if matches!(rec.response, Response::Illuminance) => {
+                    (value, t.pdf(frame.to_local(w)))
+                }
+                _ => (value, pdf),
+            }
         });
         if v > 0.0 {
             add(1, v);
@@ -381,10 +403,25 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     }
     // First direction, from the receiver's response.
     let (d_local, mut beta, mut pdf) = match rec.response {
-        Response::Illuminance => {
-            let s = sample_cosine_hemisphere(rng.next_2d());
-            (s.w, PI, s.pdf)
-        }
+        Response::Illuminance => match grazing {
+            // A point in a slot: weight cos / pdf.
+            Some(table) => {
+                let [u0, u1] = rng.next_2d();
+                let s = table.sample([u0, u1, rng.next_f64()]);
+                if s.pdf <= 0.0 {
+                    return Walk {
+                        vertices: 0,
+                        reached: 0,
+                        exposed: 0,
+                    };
+                }
+                (s.w, s.w.z / s.pdf, s.pdf)
+            }
+            None => {
+                let s = sample_cosine_hemisphere(rng.next_2d());
+                (s.w, PI, s.pdf)
+            }
+        },
         Response::Luminance { material, wo } => {
             let s = material.sample(wo, rng.next_2d());
             if s.pdf <= 0.0 || s.w.z <= 0.0 {
@@ -441,7 +478,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         // surfaces comes by the path, from farther ones by the pool.
         let seg_max = match pool {
             Some(pool) => {
-                let radius = split_radius(scene, h.p, first_max);
+                let radius = split_radius(scene, h.p, vertex_r);
                 let at = Vertex {
                     h: &h,
                     m,
@@ -454,7 +491,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                 join_pool(scene, pool, &at, radius, cfg.chain.max_order, rng, &mut add);
                 // Exposed: the receiver's radius, not `d / 2`, sets the split
                 // here and a light's core lies within it.
-                if radius == first_max
+                if radius == vertex_r
                     && reach
                         .iter()
                         .any(|&(c, r2)| (h.p - c).length() < radius + r2.sqrt())

@@ -42,7 +42,7 @@ pub fn run(
         let near = if cfg.near.0 > 0.0 {
             receivers.clone().with_near_field(cfg.near.0, cfg.near.1)
         } else {
-            receivers.clone().with_auto_near_field(cfg.near.1)
+            receivers.clone().with_auto_near_field(scene, cfg.near.1)
         };
         return drive(&LocalWork::new(scene, &near), cfg, observe);
     }
@@ -240,11 +240,14 @@ impl BatchWork for LocalWork<'_> {
                     continue;
                 }
                 let frame = &receivers.frames()[j];
+                let (grazing, vertex_r) = receivers.near_path_setup(j);
                 for s in 0..paths {
                     let stream = (b * paths + s) * n as u64 + j as u64;
                     let mut rng = Philox4x32::new(cfg.seed ^ NEAR_KEY, stream);
                     let path = PathSetup {
                         first_max: radius,
+                        vertex_r,
+                        grazing,
                         pool: pool.as_ref(),
                         reach: &self.reach,
                     };

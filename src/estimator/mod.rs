@@ -49,6 +49,7 @@ use crate::chain::Collision;
 use crate::geometry::SideMask;
 use crate::light::Light;
 use crate::material::Material;
+use crate::sampling::grazing::GrazingTable;
 use crate::sampling::warp::Frame;
 use crate::scene::{Scene, ShapeRef};
 use glam::DVec3;
@@ -441,6 +442,10 @@ pub struct Receivers {
     /// distance to the nearest light where a surface lies closer than that
     /// (0: none needed); see [`near_need`].
     need_r: Vec<f64>,
+    /// The receivers in a slot ([`slot_table`]), by index, with the table
+    /// their near paths draw their first directions from; empty until the
+    /// auto split sets them.
+    slots: Vec<(u32, GrazingTable)>,
     all: Vec<Receiver>,
     frames: Vec<Frame>,
     /// The distinct receiver lists ([`Self::from_receivers`]).
@@ -888,6 +893,7 @@ impl Receivers {
         let mut r = Self {
             near_paths: 0,
             near_r: vec![0.0; receivers.len()],
+            slots: Vec::new(),
             view_r,
             enclosed,
             need_r,
@@ -1058,9 +1064,44 @@ impl Receivers {
     /// leaves that receiver on the plain estimate); a receiver with no
     /// surface within a tenth of its distance to the nearest light gets
     /// exactly the plain estimate.
-    pub fn with_auto_near_field(self, paths: u32) -> Self {
-        let radii = self.need_r.clone();
+    ///
+    /// An enclosed illuminance point in a slot ([`slot_table`]: a wall point
+    /// behind a board hung 1 cm off it, the board's back black) gets the
+    /// slot's radius, so that its near part covers what it sees through
+    /// the slit, and its near paths draw their first direction from the
+    /// slot's [`GrazingTable`]; at their vertices the split radius stays
+    /// the one it needs. Measured on the office's 12 wall points behind the
+    /// whiteboard (E 0.015-0.17 lx): the local estimate scored them only from
+    /// collisions in a strip about 2 cm wide along the wall (R 3-6 % at
+    /// 131,072 chains, 70 % of the 506 planar grid points' summed R^2);
+    /// their near paths now give R 0.3-0.5 % at 1,048,576 chains in 3 s,
+    /// where the local estimate needed 16,777,216 chains and 20 s.
+    pub fn with_auto_near_field(mut self, scene: &Scene, paths: u32) -> Self {
+        let mut radii = self.need_r.clone();
+        self.slots.clear();
+        for (j, r) in radii.iter_mut().enumerate() {
+            if *r > 0.0
+                && self.enclosed[j]
+                && matches!(self.all[j].response, Response::Illuminance)
+                && let Some((table, radius)) = slot_table(scene, self.all[j].p, &self.frames[j])
+                && radius > *r
+            {
+                *r = radius;
+                self.slots.push((j as u32, table));
+            }
+        }
         self.with_near_radii(radii, paths)
+    }
+
+    /// How receiver `j`'s near paths are traced: the table of grazing
+    /// directions their first direction is drawn from, if it is in a slot,
+    /// and the split radius [m] at their vertices (see
+    /// [`Self::with_auto_near_field`]).
+    pub fn near_path_setup(&self, j: usize) -> (Option<&GrazingTable>, f64) {
+        match self.slots.binary_search_by_key(&(j as u32), |s| s.0) {
+            Ok(k) => (Some(&self.slots[k].1), self.need_r[j]),
+            Err(_) => (None, self.near_r[j]),
+        }
     }
 
     /// Whether receiver `j` needs the near/far split ([`near_need`]) but is
@@ -1483,6 +1524,63 @@ pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame, sphere: bool) -> f64 {
         scene.first_hit_from(p, d).is_some_and(|h| h.t < r)
     });
     if near { r } else { 0.0 }
+}
+
+/// Where an enclosed illuminance point at `p` (normal frame `frame`) can
+/// receive light from: per azimuth bin of a [`GrazingTable`], the largest
+/// `cos^2 theta` at which a ray from `p` still meets the front of a surface
+/// (bisection in `log cos^2 theta` over `[1e-8, 1]` at the 32 bin edges;
+/// a bin takes 1.25 times the larger of its edges'), and the farthest
+/// such first hit [m] (times 1.01). `None` where no direction gets
+/// through. On a wall behind a board hung 1 cm off it (the board's back
+/// black) the light comes in only through the slit round the board, almost
+/// parallel to the wall: cosine sampling finds it once in 10^3-10^4 paths,
+/// and the local estimate scores into the point only from collisions in a
+/// strip about 2 cm wide along the wall.
+pub fn slot_table(scene: &Scene, p: DVec3, frame: &Frame) -> Option<(GrazingTable, f64)> {
+    const BINS: usize = 32;
+    const STEPS: usize = 24;
+    let lowest = 1e-8f64.ln();
+    let mut farthest: f64 = 0.0;
+    let mut through = |turns: f64, v: f64| -> bool {
+        let (sp, cp) = (turns * std::f64::consts::TAU).sin_cos();
+        let st = (1.0 - v).max(0.0).sqrt();
+        let d = frame.to_world(DVec3::new(st * cp, st * sp, v.sqrt()));
+        match scene.first_hit_from(p, d) {
+            Some(h) if d.dot(h.n) < 0.0 => {
+                farthest = farthest.max(h.t);
+                true
+            }
+            _ => false,
+        }
+    };
+    let edges: Vec<f64> = (0..BINS)
+        .map(|a| {
+            let turns = a as f64 / BINS as f64;
+            if !through(turns, lowest.exp()) {
+                return 0.0;
+            }
+            // through at `lo`, blocked (or untested) at `hi`.
+            let (mut lo, mut hi) = (lowest, 0.0);
+            if through(turns, 1.0) {
+                return 1.0;
+            }
+            for _ in 0..STEPS {
+                let mid = 0.5 * (lo + hi);
+                if through(turns, mid.exp()) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo.exp()
+        })
+        .collect();
+    let reach = (0..BINS)
+        .map(|a| 1.25 * edges[a].max(edges[(a + 1) % BINS]))
+        .collect();
+    let table = GrazingTable::new(reach)?;
+    Some((table, 1.01 * farthest))
 }
 
 /// Radius [m] of the neighbourhood holding almost all of what an

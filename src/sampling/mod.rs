@@ -5,6 +5,7 @@
 
 pub mod alias;
 pub mod cone;
+pub mod grazing;
 pub mod owen;
 pub mod qmc;
 pub mod rng;
