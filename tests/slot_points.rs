@@ -159,3 +159,95 @@ fn light_through_a_slit_matches_quadrature() {
         );
     }
 }
+
+#[test]
+fn points_at_or_near_the_board_edge_keep_the_plain_split() {
+    // 2 mm inside the board's edge a point sees half the room (the table's
+    // mean reach about 0.5), 1 cm inside it light still gets in through
+    // several per cent of its hemisphere: neither is a slot, so both keep
+    // the radius they need and cosine-sampled near paths. 30 cm inside,
+    // the point is one.
+    let scene = scene();
+    let pts: Vec<(DVec3, DVec3)> = [(HI - 0.002, 1.0), (HI - 0.01, 1.0), (HI - 0.3, 1.0)]
+        .iter()
+        .map(|&(y, z)| (DVec3::new(WALL, y, z), -DVec3::X))
+        .collect();
+    let rec = Receivers::new(&scene, &pts).unwrap();
+    let auto = rec.clone().with_auto_near_field(&scene, 16);
+    let plain = rec.clone().with_near_field(0.0, 16);
+    let (_, radii) = auto.near_field();
+    for (j, &r) in radii.iter().enumerate().take(2) {
+        assert!(rec.enclosed(j), "point {j} not enclosed");
+        assert!(auto.near_path_setup(j).0.is_none(), "point {j} made a slot");
+        assert!(r > 0.0 && r < 0.2, "point {j}: radius {r}");
+    }
+    assert!(auto.near_path_setup(2).0.is_some() && radii[2] > 1.0);
+    // A fixed radius asked after the automatic one drops the slots.
+    let fixed = auto.clone().with_near_field(0.05, 16);
+    assert!((0..3).all(|j| fixed.near_path_setup(j).0.is_none()));
+    assert!((0..3).all(|j| plain.near_path_setup(j).0.is_none()));
+}
+
+/// A reflecting room (reflectance 0.5, a white board front 0.6): the light
+/// through the slit has been reflected any number of times, so the slot
+/// points' near paths go on past the floor with their vertices' own split
+/// (pool joins, next segments). Against the plain local estimate (no near
+/// part: the wall is coplanar with the points and the board's back black,
+/// so its kernel stays bounded there) at 8 times the chains.
+#[test]
+fn slot_points_in_a_reflecting_room_match_the_plain_estimate() {
+    let src = r#"
+[[surface]]
+type = "box"
+name = "room"
+min = [0, 0, 0]
+max = [4, 3, 2.8]
+normals = "inward"
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+type = "rectangle"
+name = "board"
+corner = [3.99, 0.9, 0.8]
+edge1 = [0, 1.2, 0]
+edge2 = [0, 0, 1.0]
+sides = "back"
+material = { type = "lambertian", reflectance = 0.6 }
+
+[[light]]
+type = "point"
+position = [2.0, 1.5, 2.5]
+intensity = 1000
+"#;
+    let scene = parse(src, std::path::Path::new("room.toml")).unwrap();
+    let pts: Vec<(DVec3, DVec3)> = [(1.5, 1.3), (1.2, 1.0), (1.8, 1.6)]
+        .iter()
+        .map(|&(y, z)| (DVec3::new(4.0, y, z), -DVec3::X))
+        .collect();
+    let rec = Receivers::new(&scene, &pts).unwrap();
+    let auto = rec.clone().with_auto_near_field(&scene, 16);
+    for j in 0..pts.len() {
+        assert!(
+            auto.near_path_setup(j).0.is_some(),
+            "point {j} not in a slot"
+        );
+    }
+    let slot = run(&scene, &auto, &chains_cfg(1 << 19, 3, 0), &mut |_| true);
+    let plain_cfg = lumest::run::RunConfig {
+        near_auto: false,
+        ..chains_cfg(1 << 22, 4, 0)
+    };
+    let plain = run(&scene, &rec, &plain_cfg, &mut |_| true);
+    let bound = sidak_bound(1e-3, pts.len(), None);
+    for j in 0..pts.len() {
+        let (a, b, se) = common::apart(&slot, &plain, j);
+        println!("point {j}: slot {a:.6e} plain {b:.6e} +- {se:.2e}");
+        assert!(
+            ((a - b) / se).abs() < bound,
+            "point {j}: {a} against {b} +- {se}"
+        );
+        // Precise enough to catch an error of a few per cent (a share of
+        // the light counted twice or lost at the vertices).
+        assert!(se < 0.01 * b, "point {j}: se {se} of {b}");
+    }
+}

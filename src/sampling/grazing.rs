@@ -106,6 +106,13 @@ impl GrazingTable {
         })
     }
 
+    /// The mean of the bins' reaches: about the cosine-weighted share of
+    /// the hemisphere the table holds (cosine sampling draws a direction
+    /// in it with that probability).
+    pub fn mean_reach(&self) -> f64 {
+        self.mean
+    }
+
     /// A direction in the local frame (z the normal) and its density
     /// [1/sr] ([`Self::pdf`]).
     pub fn sample(&self, u: [f64; 3]) -> DirectionSample {
