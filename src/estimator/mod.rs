@@ -1067,12 +1067,12 @@ impl Receivers {
     /// exactly the plain estimate.
     ///
     /// An enclosed illuminance point in a slot ([`slot_table`]: a wall point
-    /// behind a board hung 1 cm off it, the board's back black), where light
-    /// gets in through a narrow share of its hemisphere ([`SLOT_REACH`]),
-    /// gets the slot's radius, so that its near part covers what it sees through
-    /// the slit, and its near paths draw their first direction from the
-    /// slot's [`GrazingTable`]; at their vertices the split radius stays
-    /// the one it needs. Measured on the office's 12 wall points behind the
+    /// behind a board hung 1 cm off it, the board's back black), where
+    /// light gets in through a narrow share of its hemisphere (the table's
+    /// mean reach below 0.01), gets the slot's radius, so that its near part
+    /// covers what it sees through the slit, and its near paths draw their
+    /// first direction from the slot's [`GrazingTable`]; at their vertices
+    /// the split radius stays the one it needs. Measured on the office's 12 wall points behind the
     /// whiteboard (E 0.015-0.17 lx): the local estimate scored them only from
     /// collisions in a strip about 2 cm wide along the wall (R 3-6 % at
     /// 131,072 chains, 70 % of the 506 planar grid points' summed R^2);
