@@ -316,6 +316,15 @@ pub(crate) struct Walk {
     pub(crate) exposed: u64,
 }
 
+impl Walk {
+    /// A path that ended before its first vertex.
+    const NONE: Self = Self {
+        vertices: 0,
+        reached: 0,
+        exposed: 0,
+    };
+}
+
 /// Trace one path from receiver `rec`; `add(order, value)` receives each
 /// contribution.
 ///
@@ -409,11 +418,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                 let [u0, u1] = rng.next_2d();
                 let s = table.sample([u0, u1, rng.next_f64()]);
                 if s.pdf <= 0.0 {
-                    return Walk {
-                        vertices: 0,
-                        reached: 0,
-                        exposed: 0,
-                    };
+                    return Walk::NONE;
                 }
                 (s.w, s.w.z / s.pdf, s.pdf)
             }
@@ -425,11 +430,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         Response::Luminance { material, wo } => {
             let s = material.sample(wo, rng.next_2d());
             if s.pdf <= 0.0 || s.w.z <= 0.0 {
-                return Walk {
-                    vertices: 0,
-                    reached: 0,
-                    exposed: 0,
-                };
+                return Walk::NONE;
             }
             (s.w, material.eval(s.w, wo) * s.w.z / s.pdf, s.pdf)
         }

@@ -21,28 +21,28 @@ use std::f64::consts::FRAC_1_PI;
 
 /// The grazing bands' upper bounds on `cos^2 theta`.
 const BANDS: [f64; 6] = [1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6];
-/// The cosine share `a0` of the mixture; each band has `(1 - a0) / 6`.
+/// The cosine share `a0` of the mixture.
 const COSINE_SHARE: f64 = 0.4;
+/// Each band's share `a_k`: `(1 - a0) / 6`.
+const BAND_SHARE: f64 = (1.0 - COSINE_SHARE) / BANDS.len() as f64;
 
 /// Density of `v = cos^2 theta` under the mixture (cosine sampling: 1).
 fn v_density(v: f64) -> f64 {
-    let band = (1.0 - COSINE_SHARE) / BANDS.len() as f64;
     COSINE_SHARE
         + BANDS
             .iter()
             .filter(|&&s| v <= s)
-            .map(|&s| band / s)
+            .map(|&s| BAND_SHARE / s)
             .sum::<f64>()
 }
 
 /// A direction in the local frame (z the normal) drawn from the mixture,
 /// with its density [1/sr]; `u[2]` picks the component.
 pub fn sample_grazing_cosine(u: [f64; 3]) -> DirectionSample {
-    let band = (1.0 - COSINE_SHARE) / BANDS.len() as f64;
     let scale = if u[2] < COSINE_SHARE {
         1.0
     } else {
-        let k = ((u[2] - COSINE_SHARE) / band) as usize;
+        let k = ((u[2] - COSINE_SHARE) / BAND_SHARE) as usize;
         BANDS[k.min(BANDS.len() - 1)]
     };
     let v = scale * u[0];
@@ -208,8 +208,11 @@ mod tests {
         assert!((m - 0.5).abs() < 4.0 * se, "{m} +- {se}");
         for (k, &e) in BANDS.iter().enumerate() {
             // P(v <= e) = a0 e + sum over bands s of a_s min(e, s) / s.
-            let band = (1.0 - COSINE_SHARE) / BANDS.len() as f64;
-            let p: f64 = COSINE_SHARE * e + BANDS.iter().map(|&s| band * e.min(s) / s).sum::<f64>();
+            let p: f64 = COSINE_SHARE * e
+                + BANDS
+                    .iter()
+                    .map(|&s| BAND_SHARE * e.min(s) / s)
+                    .sum::<f64>();
             let got = below[k] as f64 / nf;
             let sd = (p * (1.0 - p) / nf).sqrt();
             assert!((got - p).abs() < 4.5 * sd, "edge {e}: {got} against {p}");
@@ -253,9 +256,13 @@ mod tests {
         let se = ((mean2 / nf - m * m) / nf).sqrt();
         assert!((m - 0.5).abs() < 4.0 * se, "{m} +- {se}");
         // P(inside) = 0.8 + 0.2 * (the mixture's mass inside the region).
-        let band = (1.0 - COSINE_SHARE) / BANDS.len() as f64;
-        let mass =
-            |r: f64| COSINE_SHARE * r + BANDS.iter().map(|&s| band * r.min(s) / s).sum::<f64>();
+        let mass = |r: f64| {
+            COSINE_SHARE * r
+                + BANDS
+                    .iter()
+                    .map(|&s| BAND_SHARE * r.min(s) / s)
+                    .sum::<f64>()
+        };
         let p =
             TABLE_SHARE + (1.0 - TABLE_SHARE) * reach.iter().map(|&r| mass(r)).sum::<f64>() / 32.0;
         let got = inside as f64 / nf;
