@@ -9,8 +9,15 @@
 use assert_cmd::Command;
 use std::f64::consts::{FRAC_PI_2, PI};
 
-/// Runs a scene on points; returns per point (E, stderr, DF, DF_sky).
+/// Runs a scene on points with `--daylight-factor`; returns per point (E,
+/// stderr, DF, DF_sky).
 fn run(scene: &str, points: &str, chains: &str, seed: &str) -> Vec<[f64; 4]> {
+    run_as(scene, points, chains, seed, true)
+}
+
+/// [`run`], with `--daylight-factor` only where `df` (else DF and DF_sky
+/// are NaN).
+fn run_as(scene: &str, points: &str, chains: &str, seed: &str, df: bool) -> Vec<[f64; 4]> {
     let dir = tempfile::tempdir().unwrap();
     let (s, p, o) = (
         dir.path().join("s.toml"),
@@ -36,7 +43,8 @@ fn run(scene: &str, points: &str, chains: &str, seed: &str) -> Vec<[f64; 4]> {
             "--seed",
             seed,
         ])
-        .args(["--quiet", "--daylight-factor"])
+        .arg("--quiet")
+        .args(df.then_some("--daylight-factor"))
         .output()
         .unwrap();
     assert!(
@@ -48,14 +56,16 @@ fn run(scene: &str, points: &str, chains: &str, seed: &str) -> Vec<[f64; 4]> {
     let mut lines = text.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
     let col = |n: &str| head.iter().position(|h| *h == n).unwrap();
-    let (e, se, df, dfs) = (col("E"), col("E_stderr"), col("DF"), col("DF_sky"));
+    let col_nan = |n: &str| head.iter().position(|h| *h == n).unwrap_or(usize::MAX);
+    let (e, se, df, dfs) = (col("E"), col("E_stderr"), col_nan("DF"), col_nan("DF_sky"));
     lines
         .map(|l| {
             let c: Vec<f64> = l
                 .split(',')
                 .map(|x| x.parse().unwrap_or(f64::NAN))
                 .collect();
-            [c[e], c[se], c[df], c[dfs]]
+            let at = |k: usize| c.get(k).copied().unwrap_or(f64::NAN);
+            [c[e], c[se], at(df), at(dfs)]
         })
         .collect()
 }
@@ -206,7 +216,7 @@ fn general_skies_and_the_sun_against_independent_quadrature() {
     let scene = format!(
         "[[light]]\ntype = \"sun\"\nilluminance = 80000\nangular_diameter = 0\nsun_altitude = {alt}\nsun_azimuth = {az}\n"
     );
-    let r = run(&scene, &pts, "2000", "1");
+    let r = run_as(&scene, &pts, "2000", "1", false);
     for (v, n) in r.iter().zip(&normals) {
         let exact = 80000.0 * (n[0] * sun[0] + n[1] * sun[1] + n[2] * sun[2]).max(0.0);
         assert!(
@@ -295,5 +305,69 @@ fn sky_component_through_a_window_of_a_black_room() {
     assert!(
         sharpest < 0.02 / bound(4),
         "relative errors down to {sharpest}"
+    );
+}
+
+/// The daylight factor counts the light of the sky alone (CIE S 017: direct
+/// sunlight excluded; electric light is not daylight), in `E` and in `E_h`
+/// alike: the traditional overcast sky over a black floor, with a sun and a
+/// point light beside it, gives the sky's own results, and DF = 100 at the
+/// unobstructed point facing up and `100 (3 pi + 8) / (14 pi)` = 39.6 % at
+/// the vertical ones (with the sun counted, DF would be 6.3 % facing north).
+#[test]
+fn daylight_factor_counts_the_sky_alone() {
+    let sky = "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+               material = { type = \"lambertian\", reflectance = 0 }\n\n\
+               [[light]]\ntype = \"sky\"\nsky = \"overcast\"\nzenith_luminance = 9000\n";
+    let others = "\n[[light]]\ntype = \"sun\"\nname = \"sun\"\nilluminance = 80000\n\
+                  sun_altitude = 40\nsun_azimuth = 180\n\n\
+                  [[light]]\ntype = \"point\"\nposition = [0.3, 0.2, 2.0]\nintensity = 5000\n";
+    let mixed = format!("{sky}{others}");
+    let (pts, normals) = compass(0.5);
+    let r = run(&mixed, &pts, "2000000", "4");
+    // The same bytes as the sky alone: nothing of the sun or the lamp.
+    assert_eq!(r, run(sky, &pts, "2000000", "4"));
+    let lz = 9000.0;
+    let l = |w: [f64; 3]| lz * (1.0 + 2.0 * w[2]) / 3.0;
+    let e_h = 7.0 * PI * lz / 9.0;
+    let mut sharpest = f64::INFINITY;
+    for (k, (v, n)) in r.iter().zip(&normals).enumerate() {
+        let exact = if k == 0 {
+            100.0
+        } else {
+            100.0 * sky_quadrature(&l, *n) / e_h
+        };
+        if k > 0 {
+            assert!((exact - 100.0 * (3.0 * PI + 8.0) / (14.0 * PI)).abs() < 1e-3);
+        }
+        let se = 100.0 * v[1] / e_h;
+        let z = (v[2] - exact) / se;
+        assert!(
+            z.abs() < bound(5),
+            "point {k}: DF {} +- {se} vs {exact} (z {z})",
+            v[2]
+        );
+        sharpest = sharpest.min(se / exact);
+    }
+    assert!(
+        sharpest < 0.02 / bound(5),
+        "relative errors down to {sharpest}"
+    );
+    // A scene with no sky has no daylight factor: refused, by name.
+    let dir = tempfile::tempdir().unwrap();
+    let (s, p) = (dir.path().join("s.toml"), dir.path().join("p.csv"));
+    std::fs::write(&s, others).unwrap();
+    std::fs::write(&p, &pts).unwrap();
+    let out = Command::cargo_bin("lumest")
+        .unwrap()
+        .args(["illuminance", "--scene", s.to_str().unwrap(), "--points"])
+        .args([p.to_str().unwrap(), "--out", "-", "--chains", "1000"])
+        .arg("--daylight-factor")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("needs a `sky` or `environment` light"),
+        "{err}"
     );
 }

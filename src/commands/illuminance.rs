@@ -894,7 +894,27 @@ pub(crate) fn measure_full(
     if estimator == EstimatorKind::Backward {
         run_args.check_local_only("backward")?;
     }
-    let mut scene = scene::load(scene_path)?;
+    // A daylight factor counts the sky's light alone (`DF` and `E` alike).
+    let mut scene = if run_args.daylight_factor {
+        let (scene, left_out, kept) = scene::load_sky_only(scene_path)?;
+        anyhow::ensure!(
+            kept > 0,
+            "{}: --daylight-factor needs a `sky` or `environment` light: the daylight factor is the \
+             light of the sky alone (CIE S 017: direct sunlight excluded; electric light is not \
+             daylight), and the scene has none",
+            scene_path.display()
+        );
+        if !left_out.is_empty() {
+            eprintln!(
+                "lumest: --daylight-factor: E and DF count the light of the sky alone (CIE S 017: \
+                 direct sunlight excluded; electric light is not daylight); left out: {}",
+                left_out.join(", ")
+            );
+        }
+        scene
+    } else {
+        scene::load(scene_path)?
+    };
     scene.set_direct_lights(run_args.direct_lights, run_args.ris_candidates);
     anyhow::ensure!(
         !(scene.has_panes() && run_args.direct_lights == crate::light::array::DirectLights::Ris),
@@ -949,14 +969,16 @@ pub(crate) fn measure_full(
             job.points.is_some(),
             "--daylight-factor adds columns to the points' results: give --points"
         );
-        let e_h = daylight_reference(&scene).filter(|e| *e > 0.0).ok_or_else(|| {
-            anyhow::anyhow!(
-                "--daylight-factor needs daylight in the scene: a `sky`, `sun`, `environment` or \
-                 `distant` light whose unobstructed horizontal illuminance is positive"
-            )
-        })?;
+        let e_h = daylight_reference(&scene)
+            .filter(|e| *e > 0.0)
+            .ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--daylight-factor needs a `sky` or `environment` light whose unobstructed \
+                 horizontal illuminance is positive"
+                )
+            })?;
         eprintln!(
-            "lumest: daylight factors divide by {} lx, the unobstructed horizontal illuminance of the scene's daylight (exact)",
+            "lumest: daylight factors divide by {} lx, the unobstructed horizontal illuminance of the scene's sky (exact)",
             format_number(e_h)
         );
         job.daylight = Some(e_h);

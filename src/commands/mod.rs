@@ -165,10 +165,11 @@ pub struct RunArgs {
     )]
     pub checkpoint_every: f64,
     /// Add daylight factors to the points' results: `DF = 100 E / E_h` [%]
-    /// with `E_h` the illuminance the scene's sky, sun and environment
-    /// lights give on an unobstructed horizontal plane (exact), and the sky
+    /// with `E_h` the illuminance the scene's sky and environment lights
+    /// give on an unobstructed horizontal plane (exact), and the sky
     /// component `DF_sky` from the direct light alone, each with its
-    /// standard error.
+    /// standard error. The run counts the sky's light alone (CIE S 017):
+    /// `sun`, `distant` and electric lights are left out, of `E` too.
     #[arg(long = "daylight-factor")]
     pub daylight_factor: bool,
     /// Continue the run whose checkpoint this is (same scene, points, seed,

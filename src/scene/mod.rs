@@ -55,6 +55,51 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     parse(&src, path)
 }
 
+/// Light kinds whose light is the sky's for a daylight factor: `sky` and
+/// `environment` (CIE S 017, daylight factor: the light of a sky of
+/// assumed or known luminance distribution, direct sunlight excluded).
+pub const SKY_KINDS: [&str; 2] = ["sky", "environment"];
+
+/// A scene for daylight factors: read and validated whole (every light, so
+/// that an error in one is reported as by [`load`]), then compiled with
+/// its [`SKY_KINDS`] lights alone. Returns the scene, the lights left out
+/// (`sun` and `distant` lights, whose parallel beams are direct sunlight,
+/// and electric lights) in words, and the number of lights kept (0: the
+/// scene returned is the whole one, for the caller to refuse).
+pub fn load_sky_only(path: &Path) -> Result<(Scene, Vec<String>, usize), SceneError> {
+    let src = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
+        file: path.to_path_buf(),
+        reason,
+    })?;
+    let mut desc = parse_desc(&src, path)?;
+    let ctx = compile::SourceCtx {
+        src: &src,
+        file: path,
+    };
+    let whole = compile::compile(&desc, &ctx)?;
+    let mut left_out = Vec::new();
+    let mut k = 0;
+    desc.light.retain(|l| {
+        k += 1;
+        let l = l.get_ref();
+        let kind = l.kind.get_ref().as_str();
+        let keep = SKY_KINDS.contains(&kind);
+        if !keep {
+            left_out.push(match &l.name {
+                Some(n) => format!("`{kind}` light '{}'", n.get_ref()),
+                None => format!("`{kind}` light #{k}"),
+            });
+        }
+        keep
+    });
+    let kept = desc.light.len();
+    if kept == 0 {
+        // Nothing to compile; the caller refuses the run.
+        return Ok((whole, left_out, 0));
+    }
+    Ok((compile::compile(&desc, &ctx)?, left_out, kept))
+}
+
 /// The key of the `key = value` whose value starts at byte `at` (the last
 /// `key =` before `at` on its line, also inside an inline table), if any.
 fn key_before(src: &str, at: usize) -> Option<&str> {
