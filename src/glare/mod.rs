@@ -19,11 +19,12 @@
 //! is a Monte Carlo estimate, and its error carries to the rating
 //! ([`Ugr::from_parts`]).
 //!
-//! Which luminaires count: those in front of the observer (`R > 0` along
-//! the line of sight) and at or above it (`H >= 0` along the observer's up
-//! direction: the position index is defined for the upper field; CIE 117
-//! leaves luminaires below the line of sight out), of which the eye sees
-//! some part: a luminaire partly hidden (behind a screen, a beam) counts
+//! Which luminaires count: those in the field of CIE 117's table of
+//! position indices ([`in_position_field`]): in front of the observer
+//! (`R > 0` along the line of sight), at or above it (`H >= 0` along the
+//! observer's up direction), within `T/R <= 3` and `H/R <= 1.9` and not
+//! where the brows hide them; of which the eye sees some part: a
+//! luminaire partly hidden (behind a screen, a beam) counts
 //! with the solid angle of the part it sees ([`visible_part`]), its
 //! luminance unchanged.
 //!
@@ -67,7 +68,8 @@ use std::f64::consts::{LN_10, PI};
 /// It reproduces the table's `T/R = 0` column (CIE 117-1995, IES Handbook)
 /// within 4 % (tested). CIE 117-1995 (4.5) prescribes interpolating its
 /// Table 4.1 instead, which leaves out luminaires beyond `T/R = 3` and the
-/// positions hidden by brows; Levin gives the fit's largest departure from
+/// positions hidden by brows (left out here too, [`in_position_field`]);
+/// Levin gives the fit's largest departure from
 /// Guth's plot as about 12 % (0.8 on the rating for one dominant
 /// luminaire). That table is not bundled: ratings here are the fit's.
 pub fn guth_index(tau_deg: f64, sigma_deg: f64) -> f64 {
@@ -89,6 +91,26 @@ pub fn position_index(r: f64, t: f64, h: f64) -> f64 {
     let tau = t.abs().atan2(h).to_degrees();
     let sigma = off.atan2(r).to_degrees();
     guth_index(tau, sigma)
+}
+
+/// Whether a source at `r` [m] ahead along the line of sight, `t` [m] to
+/// the side and `h` [m] above it lies in the field of CIE 117-1995's Table
+/// 4.1 of position indices, the field a rating counts: ahead (`R > 0`) and
+/// at or above the line of sight (`H >= 0`), where the table's nearest
+/// node (steps of 0.1 in `T/R` and `H/R`) has an index: `T/R` up to 3 and
+/// `H/R` up to 1.9, less the table's dashes where the brows hide a source
+/// (`H/R = 1.8` and `1.9` for `T/R <= 0.3`, `H/R = 1.9` for `T/R = 0.4 ..
+/// 0.8`). The nearest node decides, so that a position a rounding away
+/// from a node (an eye a millimetre off the standard room's wall) is
+/// treated as the node. CIE 117 leaves luminaires outside the field out
+/// of the rating.
+pub fn in_position_field(r: f64, t: f64, h: f64) -> bool {
+    if !(r > 0.0 && h >= 0.0) {
+        return false;
+    }
+    let (tr, hr) = (t.abs() / r, h / r);
+    let hidden = (tr < 0.35 && hr >= 1.75) || (tr < 0.85 && hr >= 1.85);
+    tr < 3.05 && hr < 1.95 && !hidden
 }
 
 /// An observer: the eye [m] and the unit line of sight, with the frame
@@ -303,8 +325,10 @@ fn centre_and_intensity(
 }
 
 /// The glare term of light `k` (luminous parts `area`) for `obs`; `None`
-/// when it does not count: behind the observer or below the line of
-/// sight, wholly hidden from the eye, dark towards it, or seen edge-on.
+/// when it does not count: outside the position-index field
+/// ([`in_position_field`]: behind the observer, below the line of sight,
+/// beyond `T/R = 3` or `H/R = 1.9`, or hidden by the brows), wholly hidden
+/// from the eye, dark towards it, or seen edge-on.
 pub fn glare_term(
     scene: &Scene,
     k: usize,
@@ -315,7 +339,7 @@ pub fn glare_term(
     let (c, _, _) = centre_and_intensity(light, DVec3::Z)?;
     let v = c - obs.eye;
     let (r, t, h) = (v.dot(obs.view), v.dot(obs.side), v.dot(obs.up));
-    if r <= 0.0 || h < 0.0 {
+    if !in_position_field(r, t, h) {
         return None;
     }
     let d = v.length();
@@ -413,6 +437,44 @@ pub const OMEGA_RANGE: (f64, f64) = (3e-4, 0.1);
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The field of CIE 117's Table 4.1: its extent and the dashes where
+    /// the brows hide a source, node by node and between nodes (the
+    /// nearest node decides).
+    #[test]
+    fn position_field_is_the_tables() {
+        for (t, h) in [
+            (0.0, 0.0),
+            (3.0, 1.9),
+            (3.04, 1.94),
+            (0.3, 1.7),
+            (0.4, 1.8),
+            (0.9, 1.9),
+            (2.0, 1.0),
+        ] {
+            assert!(
+                in_position_field(1.0, t, h),
+                "T/R {t}, H/R {h} has an index"
+            );
+            assert!(
+                in_position_field(2.0, -2.0 * t, 2.0 * h),
+                "only ratios and |T| matter"
+            );
+        }
+        for (t, h) in [
+            (0.0, 1.8),
+            (0.3, 1.8),
+            (0.3, 1.9),
+            (0.8, 1.9),
+            (0.5, 1.86),
+            (3.06, 0.0),
+            (1.0, 1.96),
+            (0.0, -0.01),
+        ] {
+            assert!(!in_position_field(1.0, t, h), "T/R {t}, H/R {h} has none");
+        }
+        assert!(!in_position_field(-1.0, 0.0, 0.0) && !in_position_field(0.0, 0.0, 0.0));
+    }
 
     /// Guth's table (CIE 117-1995 / IES Handbook), column `T/R = 0`, rows
     /// `H/R = 0, 0.1, ..., 1.0` and 1.5: the closed form is within 4 %

@@ -37,7 +37,7 @@
 //! offset, which is `(n_x - |k|) (n_y - |l|)` on the spacing-sized cell
 //! `(k, l)` of offsets ([`StandardRoom::direct_flux`]).
 
-use super::{LuminousArea, position_index};
+use super::{LuminousArea, in_position_field, position_index};
 use crate::light::{Goniometric, LuminaireFrame};
 use crate::math::quadrature::CompensatedSum;
 use glam::DVec3;
@@ -221,12 +221,16 @@ impl StandardRoom {
     }
 
     /// `sum L^2 omega / p^2` [(cd/m^2)^2 sr] over every luminaire of the
-    /// room that shows the eye a luminous area.
+    /// room that shows the eye a luminous area, within the field of the
+    /// position index ([`in_position_field`]).
     pub fn glare_sum(&self, lum: &dyn TableLuminaire) -> f64 {
         let eye = self.eye_position();
         let mut sum = CompensatedSum::default();
         for c in self.luminaires() {
             let v = c - eye;
+            if !in_position_field(v.x, v.y, v.z) {
+                continue;
+            }
             let d = v.length();
             let w = -v / d;
             let (i, a_p) = (lum.intensity(w), lum.projected_area(w));
@@ -598,22 +602,24 @@ mod tests {
 
     /// The room's axes: `along` runs along the line of sight from the
     /// observer's wall, `across` to the side. A room one luminaire wide and
-    /// three deep puts all three straight ahead of the eye, so the sum is
+    /// seven deep puts all seven straight ahead of the eye, so the sum is
     /// the hand-written one (position index at `tau = 0`, `C = 180` deg from
-    /// the luminaire to the eye); with the axes swapped they would stand to
-    /// the side.
+    /// the luminaire to the eye) over the five beyond the brows' cut-off
+    /// (CIE 117's table has no index at `T = 0` from `H/R = 1.8` on: the
+    /// first two, at `H/R = 8` and `2.67`, do not count); with the axes
+    /// swapped they would stand to the side.
     #[test]
     fn room_axes_by_hand() {
         let room = StandardRoom {
             across: 0.5,
-            along: 1.5,
+            along: 3.5,
             eye: 1.2,
             h: 2.0,
             spacing: 0.5,
             rho: [0.0; 3],
         };
         let mut want = 0.0;
-        for x in [0.25f64, 0.75, 1.25] {
+        for x in [1.25f64, 1.75, 2.25, 2.75, 3.25] {
             let d2 = x * x + 4.0;
             let mu = 2.0 / d2.sqrt();
             let i = 200.0 * mu * 1.5;
