@@ -656,3 +656,56 @@ fn disc_sources_with_every_radial_profile_against_quadrature() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Where nothing reflects, the reflected part is exactly 0 and the
+/// `sparse` check (too few collisions near the point to trust its
+/// reflected light) has nothing to judge, though the sampled direct light
+/// of an area source is an estimate with an error bar: a disc with a
+/// radial profile and no surface at all, and a panel in a black box, flag
+/// no point `sparse` (both did, with the sampled direct light taken for
+/// reflected light).
+#[test]
+fn direct_light_alone_is_never_sparse() {
+    let dir = tempfile::tempdir().unwrap();
+    let disc = "[[light]]\ntype = \"disc\"\ncenter = [0, 0, 3]\nnormal = [0, 0, -1]\n\
+                radius = 0.4\nflux = 1000.0\nprofile = \"linear-decreasing\"\n";
+    let boxed = "[[surface]]\ntype = \"box\"\nmin = [-2, -2, 0]\nmax = [2, 2, 3]\n\
+                 material = { type = \"lambertian\", reflectance = 0 }\n\n\
+                 [[light]]\ntype = \"rectangle\"\ncorner = [-0.3, -0.3, 2.99]\n\
+                 edge1 = [0, 0.6, 0]\nedge2 = [0.6, 0, 0]\nflux = 1000.0\n";
+    let mut points = String::from("id,x,y,z,nx,ny,nz\na,0,0,2.9,0,0,1\nb,0.5,0,1,0,0,1\n");
+    for k in 0..24 {
+        let z = 0.1 + 0.12 * f64::from(k);
+        points += &format!("w{k},1.999,0.{k},{z},-1,0,0\n");
+    }
+    std::fs::write(dir.path().join("p.csv"), &points).unwrap();
+    for (name, src) in [("disc", disc), ("boxed", boxed)] {
+        let s = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&s, src).unwrap();
+        let o = dir.path().join(format!("{name}.csv"));
+        let out = assert_cmd::Command::cargo_bin("lumest")
+            .unwrap()
+            .args(["illuminance", "--quiet", "--chains", "100000", "--seed", "1"])
+            .arg("--scene")
+            .arg(&s)
+            .arg("--points")
+            .arg(dir.path().join("p.csv"))
+            .arg("--out")
+            .arg(&o)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let text = std::fs::read_to_string(&o).unwrap();
+        let head: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+        let (e, f) = (
+            head.iter().position(|h| *h == "E_stderr").unwrap(),
+            head.iter().position(|h| *h == "E_flag").unwrap(),
+        );
+        for line in text.lines().skip(1) {
+            let c: Vec<&str> = line.split(',').collect();
+            let se: f64 = c[e].parse().unwrap();
+            assert!(se > 0.0, "{name}: the direct light is sampled: {line}");
+            assert!(!c[f].contains("sparse"), "{name}: {line}");
+        }
+    }
+}

@@ -146,6 +146,11 @@ impl Tallies {
             .find(|(n, _)| 2 * n <= b)
             .map(|(n, v)| (*n, v[j]));
         let mut d = Diagnostics::of(&self.estimated[j], direct, half, self.estimated.len());
+        // The reflected part is exactly 0 where every batch's total was its
+        // sampled direct light alone (reflected scores are never negative,
+        // and a batch adds nothing to its direct light exactly then): the
+        // `sparse` check has no reflected light to judge.
+        d.indirect_zero = self.estimated[j].mean() == self.sampled_direct_mean(j);
         d.near_hits = self
             .watched
             .get(j)
