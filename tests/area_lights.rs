@@ -685,7 +685,14 @@ fn direct_light_alone_is_never_sparse() {
         let o = dir.path().join(format!("{name}.csv"));
         let out = assert_cmd::Command::cargo_bin("lumest")
             .unwrap()
-            .args(["illuminance", "--quiet", "--chains", "100000", "--seed", "1"])
+            .args([
+                "illuminance",
+                "--quiet",
+                "--chains",
+                "100000",
+                "--seed",
+                "1",
+            ])
             .arg("--scene")
             .arg(&s)
             .arg("--points")
@@ -694,7 +701,11 @@ fn direct_light_alone_is_never_sparse() {
             .arg(&o)
             .output()
             .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let text = std::fs::read_to_string(&o).unwrap();
         let head: Vec<&str> = text.lines().next().unwrap().split(',').collect();
         let (e, f) = (

@@ -269,6 +269,13 @@ fn planned_text(planned: u64, r: f64, what: &str) -> String {
 
 /// The run summary printed to standard error.
 pub fn summary(r: &RunResult) -> String {
+    summary_seen(r, false)
+}
+
+/// [`summary`], where `sees_lights` tells that some view sees a light
+/// source itself (its emitted luminance is added outside the run), so that
+/// a run whose receivers get no light is not reported as lighting nothing.
+pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
     let rms = r.tallies.rms_rel_error(&r.direct);
     let max = r.tallies.max_rel_error(&r.direct);
     let mut counts = std::collections::BTreeMap::new();
@@ -331,7 +338,9 @@ pub fn summary(r: &RunResult) -> String {
             // Views that all leave the scene (they see only lights at
             // infinity, computed exactly) or meet back sides.
             "undefined (no receivers: every view leaves the scene or meets a back side)".to_string()
-        } else if (0..r.direct.len()).all(|j| r.direct[j] + r.tallies.estimated[j].mean() == 0.0) {
+        } else if !sees_lights
+            && (0..r.direct.len()).all(|j| r.direct[j] + r.tallies.estimated[j].mean() == 0.0)
+        {
             "undefined\nWARNING: no light reaches any point (a light sealed inside a solid, \
              points behind walls, or lights facing away): every result is 0"
                 .to_string()
@@ -1173,7 +1182,7 @@ pub(crate) fn measure_full(
         file.commit().with_context(|| format!("writing {out}"))?;
         written.push(out);
     }
-    for line in summary(&result).lines() {
+    for line in summary_seen(&result, job.emitted.iter().any(|l| *l > 0.0)).lines() {
         eprintln!("lumest: {line}");
     }
     for (line, _) in &rows {

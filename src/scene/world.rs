@@ -761,7 +761,18 @@ impl Scene {
                 "sampled by RIS ({m} candidates drawn by power, one shadow test per sample)"
             ),
             None => {
-                "exact sum (closed forms at set-up, one shadow test per source and receiver)".into()
+                let sampled = (0..n)
+                    .filter(|&k| !crate::estimator::exact_direct(self, k))
+                    .count();
+                match sampled {
+                    0 => "exact sum (closed forms at set-up, one shadow test per source and receiver)"
+                        .into(),
+                    s if s == n => "sum over every source, each sampled (an estimate with its error bar)".into(),
+                    s => format!(
+                        "sum over every source: {} by closed forms at set-up (one shadow test per source and receiver), {s} sampled (an estimate with its error bar)",
+                        n - s
+                    ),
+                }
             }
         };
         let at_vertices = match self.vertex_light_array() {
