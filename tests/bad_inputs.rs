@@ -333,6 +333,7 @@ fn scene_cases() -> Vec<Case> {
         surface("sh: a sphere of radius 0.3 as k = 0 only", "sh", &format!("coefficients = [[0, 0, 0.3, 0]]\ncenter = [-1, -1, 0.5]\n{LAMB}"), Accept("E_avg")),
         // Sphere lights.
         light("sphere light: radius 0", "sphere", "center = [0.5, 0.5, 2]\nradius = 0\nintensity = 10", Error("field `radius`")),
+        light("sphere light cutting the room's ceiling", "sphere", "name = \"globe\"\ncenter = [0.5, 0.5, 2.9]\nradius = 0.2\nintensity = 10", Warn("WARNING: globe: about 25 % of the sphere light's surface lies beyond a surface")),
         light("sphere light: radius missing", "sphere", "center = [0.5, 0.5, 2]\nintensity = 10", Error("field `radius`: missing field")),
         light("sphere light: with a position", "sphere", "position = [0.5, 0.5, 2]\nradius = 0.1\nintensity = 10", Error("s.toml:")),
         light("sphere light: with a direction", "sphere", "center = [0.5, 0.5, 2]\nradius = 0.1\nintensity = 10\ndirection = [0, 0, -1]", Error("field `direction`: not allowed")),

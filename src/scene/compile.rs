@@ -220,7 +220,12 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
             ));
         }
         let cut = scene.luminous_shape_cut(k);
-        if cut >= 0.01 {
+        if cut >= 0.01 && matches!(scene.lights[k], Light::Sphere { .. }) {
+            scene.notes.push(format!(
+                "WARNING: {name}: about {:.0} % of the sphere light's surface lies beyond a surface (it cuts a shape), and that part's light leaves where it is (out of a room through its wall): move it or make it smaller",
+                100.0 * cut
+            ));
+        } else if cut >= 0.01 {
             scene.notes.push(format!(
                 "WARNING: {name}: about {:.0} % of its luminous shape lies beyond a surface, whose light meets that surface at once; the shape is centred on `position`, the photometric centre (a luminaire with luminous sides mounted on a ceiling has its centre half the sides' height below it)",
                 100.0 * cut

@@ -919,10 +919,28 @@ impl Scene {
     /// nadir, which a luminaire's room holds). Such a part's light meets
     /// the surface at once: a luminaire with luminous sides placed with its
     /// photometric centre (`position`) in a ceiling sends half its sides'
-    /// light into the ceiling. 0 for every other light.
+    /// light into the ceiling. For a sphere light, the share of its surface
+    /// (1024 points of a Fibonacci sphere) that a finite shape hides from
+    /// its centre: a sphere cutting a box's wall sends that part of its
+    /// flux out of the room (one cutting an infinite plane is refused when
+    /// the scene is read). 0 for every other light.
     pub fn luminous_shape_cut(&self, k: usize) -> f64 {
         const DIRS: usize = 64;
         const GRID: usize = 8;
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        if let Light::Sphere { c, r, .. } = &self.lights[k] {
+            let n = 16 * DIRS;
+            let hidden = (0..n)
+                .filter(|&i| {
+                    let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+                    let s = (1.0 - z * z).max(0.0).sqrt();
+                    let (sp, cp) = (golden * i as f64).sin_cos();
+                    let y = *c + *r * (1.0 - 1e-9) * DVec3::new(s * cp, s * sp, z);
+                    !self.visible(*c, None, y)
+                })
+                .count();
+            return hidden as f64 / n as f64;
+        }
         let Light::Gonio {
             p,
             frame,
@@ -936,7 +954,6 @@ impl Scene {
             return 0.0;
         }
         let inside = *p + frame.to_world(DVec3::new(0.0, 0.0, -0.999 * o.half.z));
-        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
         let (mut hidden, mut total) = (0usize, 0usize);
         for i in 0..DIRS {
             let z = 1.0 - 2.0 * (i as f64 + 0.5) / DIRS as f64;
