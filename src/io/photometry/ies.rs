@@ -26,7 +26,9 @@
 //! included. The signs of width, length and height give the opening's shape
 //! (LM-63-2002's luminous shapes: [`opening`]).
 
-use super::{Opening, PhotometricType, Photometry, PhotometryError, check_angles, whole};
+use super::{
+    Opening, PhotometricType, Photometry, PhotometryError, check_angles, strip_bom, whole,
+};
 
 /// Most angles per axis and values in a table (larger files are refused
 /// before anything is allocated for them).
@@ -108,8 +110,16 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         field: field.to_string(),
         message,
     };
-    let lines: Vec<&str> = text.lines().collect();
-    let first = lines.first().map_or("", |l| l.trim());
+    // A byte-order mark and blank lines before the first line are skipped
+    // when looking for the version (left there, they would make a 2019
+    // file read as 1986, its file-generation type a candela factor); line
+    // numbers still count the blank lines.
+    let lines: Vec<&str> = strip_bom(text).lines().collect();
+    let first = lines
+        .iter()
+        .map(|l| l.trim())
+        .find(|l| !l.is_empty())
+        .unwrap_or("");
     let version = match first {
         s if s.starts_with("IESNA:LM-63-1995") => Version::Lm1995,
         s if s.starts_with("IESNA:LM-63-2002") => Version::Lm2002,
@@ -663,6 +673,38 @@ TILT=NONE
         let f = "IESNA91\nTILT=INCLUDE\n1\n3\n-10 0 10\n0.8 0.5 0.8\n1 100 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\n2 4\n";
         let p = parse(f, "c.ies").unwrap();
         assert_eq!(p.candela[0], [1.0, 2.0]);
+    }
+
+    /// A byte-order mark or blank lines before the version line (the
+    /// reviewer's `bom.ies`, an LM-63-2019 file whose file-generation type
+    /// 1.10001 must not multiply): the same table as without, the file's
+    /// own values 100, 80, 50 cd; read from disk (the BOM's UTF-8 bytes) and
+    /// from text (U+FEFF).
+    #[test]
+    fn a_byte_order_mark_or_blank_lines_do_not_hide_the_version() {
+        let body = "IES:LM-63-2019\n[TEST] x\n[TESTLAB] y\n[ISSUEDATE] 2020\n[MANUFAC] z\nTILT=NONE\n1 -1 1 3 1 1 2 0 0 0\n1 1.10001 50\n0 45 90\n0\n100 80 50\n";
+        let dir = tempfile::tempdir().unwrap();
+        let mut variants = Vec::new();
+        for (name, text) in [
+            ("nobom.ies", body.to_string()),
+            ("bom.ies", format!("\u{feff}{body}")),
+            ("blank.ies", format!("\n  \r\n\t\n{body}")),
+            ("bomblank.ies", format!("\u{feff}\n{body}")),
+        ] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text.as_bytes()).unwrap();
+            variants.push((name, super::super::read(&path).unwrap()));
+            variants.push((name, parse(&text, name).unwrap()));
+        }
+        for (name, p) in &variants {
+            assert_eq!(p.format, "IES LM-63-2019", "{name}");
+            assert_eq!(p.candela, [vec![100.0, 80.0, 50.0]], "{name}");
+            assert_eq!(p.watts, Some(50.0), "{name}");
+        }
+        // Line numbers still count the blank lines: the bad value is on line 14.
+        let bad = format!("\u{feff}\n\n\n{}", body.replace("100 80 50", "100 -80 50"));
+        let e = parse(&bad, "b.ies").unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (14, "candela values"), "{e}");
     }
 
     #[test]

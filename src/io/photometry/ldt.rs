@@ -30,7 +30,8 @@
 //! are accepted.
 
 use super::{
-    Opening, OpeningShape, PhotometricType, Photometry, PhotometryError, check_angles, whole,
+    Opening, OpeningShape, PhotometricType, Photometry, PhotometryError, check_angles, strip_bom,
+    whole,
 };
 
 /// Most C-planes and gamma angles per plane.
@@ -96,8 +97,11 @@ impl Lines<'_> {
 
 /// Parse the text of an EULUMDAT file; `file` names it in messages.
 pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
+    // A byte-order mark would only prefix the company identification
+    // (text, unused): stripped all the same. Blank lines are not skipped:
+    // an empty first line is an empty company identification.
     let mut l = Lines {
-        lines: text.lines().collect(),
+        lines: strip_bom(text).lines().collect(),
         next: 0,
         file,
     };
@@ -367,6 +371,23 @@ mod tests {
         assert_eq!(p.candela[0], [3.0, 5.0, 0.0]);
         assert!(p.opening.round);
         assert!((p.opening.width - 0.5).abs() < 1e-15 && p.opening.height == 0.01);
+    }
+
+    /// A byte-order mark before the company identification changes
+    /// nothing (as UTF-8 bytes read from disk, or as U+FEFF); an empty
+    /// company line is still a line.
+    #[test]
+    fn a_byte_order_mark_is_harmless() {
+        let good = ldt(1, 8, 1, &[vec![1.0, 2.0, 3.0]], false);
+        let want = parse(&good, "t.ldt").unwrap();
+        assert_eq!(want.candela, [vec![2.0, 4.0, 6.0]]);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bom.ldt");
+        std::fs::write(&path, format!("\u{feff}{good}").as_bytes()).unwrap();
+        assert_eq!(super::super::read(&path).unwrap(), want);
+        assert_eq!(parse(&format!("\u{feff}{good}"), "t.ldt").unwrap(), want);
+        let blank = good.replacen("lumest test", "", 1);
+        assert_eq!(parse(&blank, "t.ldt").unwrap(), want);
     }
 
     #[test]

@@ -250,6 +250,16 @@ pub fn read(path: &std::path::Path) -> Result<Photometry, PhotometryError> {
     }
 }
 
+/// `text` without a leading byte-order mark: `U+FEFF`, or its UTF-8 bytes
+/// `EF BB BF` as [`read`] decodes them (one Latin-1 character per byte).
+/// Editors on Windows write one; left in place it would hide an IES file's
+/// version line.
+pub(crate) fn strip_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}')
+        .or_else(|| text.strip_prefix("\u{ef}\u{bb}\u{bf}"))
+        .unwrap_or(text)
+}
+
 /// Check that angles are finite, ascending and within `[lo, hi]` degrees.
 pub(crate) fn check_angles(
     angles: &[f64],
