@@ -576,6 +576,7 @@ mod tests {
             opening: Opening::default(),
             watts: None,
             format: "test".into(),
+            tilt: None,
         }
     }
 

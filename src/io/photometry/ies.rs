@@ -20,14 +20,17 @@
 //!
 //! The intensity is the file's candela value times the candela multiplier
 //! times the ballast factor, times the ballast-lamp photometric factor for
-//! the versions that define one (never the 2019 file-generation type), and
-//! times the tilt factor at 0 degrees (the luminaire used as measured) with
-//! `TILT=INCLUDE`. A `TILT=<file>` reference is refused: the data must be
-//! included. The signs of width, length and height give the opening's shape
+//! the versions that define one (never the 2019 file-generation type).
+//! With `TILT=INCLUDE` the tilt table is kept ([`super::Tilt`]) and its
+//! factor at the luminaire's installed tilt multiplies later, where the
+//! light is placed (it depends on the aim); `lumest photometry` shows the
+//! upright luminaire (tilt 0). A `TILT=<file>` reference is refused: the
+//! data must be included. The signs of width, length and height give the opening's shape
 //! (LM-63-2002's luminous shapes: [`opening`]).
 
 use super::{
-    Opening, PhotometricType, Photometry, PhotometryError, check_angles, strip_bom, whole,
+    Opening, PhotometricType, Photometry, PhotometryError, Tilt, TiltGeometry, check_angles,
+    strip_bom, whole,
 };
 
 /// Most angles per axis and values in a table (larger files are refused
@@ -184,8 +187,12 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         file,
         last_line: lines.len(),
     };
-    let tilt_factor = if include {
-        t.count("TILT lamp-to-luminaire geometry", 1, 3)?;
+    let tilt = if include {
+        let geometry = match t.count("TILT lamp-to-luminaire geometry", 1, 3)? {
+            1 => TiltGeometry::Vertical,
+            2 => TiltGeometry::HorizontalC0,
+            _ => TiltGeometry::HorizontalC90,
+        };
         let n = t.count("number of TILT angles", 1, MAX_ANGLES as i64)? as usize;
         let line = t.line();
         let angles = t.numbers(n, "TILT angle")?;
@@ -199,9 +206,13 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
                 format!("must be >= 0, got {}", crate::io::format_number(*f)),
             ));
         }
-        interpolate(&angles, &factors, 0.0)
+        Some(Tilt {
+            geometry,
+            angles,
+            factors,
+        })
     } else {
-        1.0
+        None
     };
     let line = t.line();
     let lamps = t.count("number of lamps", 1, 1_000_000)?;
@@ -308,7 +319,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
             ));
         }
     }
-    let scale = multiplier * ballast * lamp_factor * tilt_factor;
+    let scale = multiplier * ballast * lamp_factor;
     let mut candela = Vec::with_capacity(n_h);
     for (i, c) in h_angles.iter().enumerate() {
         let line = t.line();
@@ -352,6 +363,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
             Version::Lm2019 => "IES LM-63-2019",
         }
         .to_string(),
+        tilt,
     })
 }
 
@@ -427,20 +439,6 @@ fn opening(version: Version, w: f64, l: f64, h: f64, unit: f64) -> Opening {
     } else {
         of(S::Rectangle, wa, la, ha)
     })
-}
-
-/// Piecewise-linear interpolation of `ys` over ascending `xs` at `x`,
-/// clamped to the end values outside.
-fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
-    let k = xs.partition_point(|&a| a <= x);
-    if k == 0 {
-        return ys[0];
-    }
-    if k == xs.len() {
-        return ys[xs.len() - 1];
-    }
-    let t = (x - xs[k - 1]) / (xs[k] - xs[k - 1]);
-    ys[k - 1] + t * (ys[k] - ys[k - 1])
 }
 
 #[cfg(test)]
@@ -669,10 +667,22 @@ TILT=NONE
             assert_eq!(p.candela[0], [4.0, 5.0, 6.0]);
             assert_eq!(p.lamp_lumens, None);
         }
-        // TILT=INCLUDE: the factor at 0 degrees multiplies.
+        // TILT=INCLUDE: the table is kept, not applied; upright (tilt 0)
+        // its factor is 0.5.
         let f = "IESNA91\nTILT=INCLUDE\n1\n3\n-10 0 10\n0.8 0.5 0.8\n1 100 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\n2 4\n";
         let p = parse(f, "c.ies").unwrap();
-        assert_eq!(p.candela[0], [1.0, 2.0]);
+        assert_eq!(p.candela[0], [2.0, 4.0]);
+        let tilt = p.tilt.as_ref().unwrap();
+        assert_eq!(tilt.geometry, TiltGeometry::Vertical);
+        assert_eq!(
+            (&tilt.angles[..], &tilt.factors[..]),
+            (&[-10.0, 0.0, 10.0][..], &[0.8, 0.5, 0.8][..])
+        );
+        assert_eq!(p.upright_tilt_factor(), 0.5);
+        // Linear between angles, the end factor beyond: 5 deg half way, 30 clamped.
+        assert_eq!(tilt.factor(5.0), 0.65);
+        assert_eq!(tilt.factor(30.0), 0.8);
+        assert_eq!(tilt.factor(-30.0), 0.8);
     }
 
     /// A byte-order mark or blank lines before the version line (the

@@ -270,6 +270,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         },
         watts: (watts[0] > 0.0).then_some(watts[0]),
         format: "EULUMDAT".to_string(),
+        tilt: None,
     })
 }
 
