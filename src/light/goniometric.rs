@@ -649,6 +649,67 @@ mod tests {
         }
     }
 
+    /// An IES type C table over 0-350 degrees is a full turn that wraps
+    /// from C350 to C360 = C0: planes 0, 90, 180, 270, 350 with values
+    /// `100 + C / 10`, `50 + C / 10`, 10 at gamma 0, 45, 90. By hand, at
+    /// C355 (half way from C350 to C0), gamma 45: (85 + 50) / 2 = 67.5; at
+    /// C352.5, gamma 22.5: (126.25 + 76.25) / 2 = 101.25 (off the pole,
+    /// where every plane meets). The
+    /// same table written out to 360 (C360 repeating C0) gives the same
+    /// intensities and flux.
+    #[test]
+    fn a_table_to_350_degrees_wraps_to_c0() {
+        let file = |h: &[f64]| {
+            let rows: Vec<String> = h
+                .iter()
+                .map(|&c| {
+                    let c = if c == 360.0 { 0.0 } else { c };
+                    format!("{} {} 10", 100.0 + c / 10.0, 50.0 + c / 10.0)
+                })
+                .collect();
+            let hs: Vec<String> = h.iter().map(|c| c.to_string()).collect();
+            format!(
+                "IESNA:LM-63-2002\n[TEST] x\nTILT=NONE\n1 -1 1 3 {} 1 2 0 0 0\n1 1 0\n0 45 90\n{}\n{}\n",
+                h.len(),
+                hs.join(" "),
+                rows.join("\n")
+            )
+        };
+        let p350 = ies::parse(&file(&[0.0, 90.0, 180.0, 270.0, 350.0]), "a.ies").unwrap();
+        let p360 = ies::parse(&file(&[0.0, 90.0, 180.0, 270.0, 350.0, 360.0]), "b.ies").unwrap();
+        assert_eq!(p350.symmetry(), Symmetry::None);
+        let (a, b) = (Goniometric::new(&p350, 1.0), Goniometric::new(&p360, 1.0));
+        for (c, gm, want) in [
+            (355.0f64, 45.0f64, 67.5),
+            (355.0, 90.0, 10.0),
+            (352.5, 22.5, 101.25),
+            (350.0, 45.0, 85.0),
+            (0.0, 45.0, 50.0),
+            (300.0, 45.0, 50.0 + 27.0 + 3.0 / 8.0 * 8.0),
+        ] {
+            let d = a.direction(c.to_radians(), gm.to_radians());
+            for g in [&a, &b] {
+                let (i, j) = (
+                    g.intensity(d),
+                    g.intensity_at(c.to_radians(), gm.to_radians()),
+                );
+                assert!(
+                    (i - want).abs() < 1e-9 && (j - want).abs() < 1e-9,
+                    "C{c} g{gm}: {i}, {j} vs {want}"
+                );
+            }
+        }
+        let mut rng = crate::sampling::Philox4x32::new(11, 0);
+        for _ in 0..5000 {
+            let d = crate::sampling::warp::sample_uniform_sphere(rng.next_2d()).w;
+            assert!((a.intensity(d) - b.intensity(d)).abs() < 1e-9, "{d}");
+        }
+        assert!((a.power() / b.power() - 1.0).abs() < 1e-12);
+        // 0 to 170 is no known layout (neither a half nor a full turn).
+        let e = ies::parse(&file(&[0.0, 90.0, 170.0]), "c.ies").unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (7, "horizontal angles"), "{e}");
+    }
+
     #[test]
     fn nodes_are_reproduced_and_nothing_is_emitted_outside_the_measured_range() {
         let (_, p) = tables().swap_remove(1);

@@ -307,14 +307,17 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
     check_angles(&h_angles, h_lo, h_hi, |m| err(line, "horizontal angles", m))?;
     if kind == PhotometricType::C && n_h > 1 {
         let (first, last) = (h_angles[0], h_angles[n_h - 1]);
-        let known = (first == 0.0 && [90.0, 180.0, 360.0].contains(&last))
-            || (first == 90.0 && last == 270.0);
+        // A table from 0 to a last angle past 180 (not 360) is a full
+        // turn that wraps from its last plane to C360 = C0 (as Radiance's
+        // ies2rad reads it).
+        let known =
+            (first == 0.0 && (last == 90.0 || last >= 180.0)) || (first == 90.0 && last == 270.0);
         if !known {
             return Err(err(
                 line,
                 "horizontal angles",
                 format!(
-                    "a type C table must span 0-90, 0-180, 0-360 or 90-270 degrees, got {first}-{last}"
+                    "a type C table must span 0-90, 0-180, 0 to 180-360 (a full turn) or 90-270 degrees, got {first}-{last}"
                 ),
             ));
         }

@@ -246,7 +246,8 @@ pub enum Symmetry {
     BilateralC0,
     /// C90-C270: mirrored about the C90-C270 plane.
     BilateralC90,
-    /// C0-C360 (the last plane may repeat the first).
+    /// A full turn from C0: the last plane may be C360 (repeating C0), or
+    /// any angle past 180 (then the table wraps from it to C360 = C0).
     None,
 }
 
