@@ -115,7 +115,12 @@ fn every_file_holds_its_analytic_distribution_and_flux() {
                         (5.0 * gi as f64).to_radians(),
                     );
                     let d = DVec3::new(gm.sin() * c.cos(), gm.sin() * c.sin(), -gm.cos());
-                    let (got, want) = (g.intensity(d), analytic(f, d));
+                    // At the nadir, where every plane meets, the planes'
+                    // mean: I0 (each file's C term, a sum of cos / sin of C
+                    // and 2C, averages to 0 over a turn, and so does its
+                    // trapezoidal mean over equally spaced planes).
+                    let want = if gi == 0 { I0 } else { analytic(f, d) };
+                    let got = g.intensity(d);
                     assert!(
                         (got - want).abs() <= 1e-5 * I0,
                         "{f} at C {ci} gamma {gi}: {got} vs {want}"
@@ -229,4 +234,98 @@ fn the_ies_and_ldt_pair_give_the_same_illuminance() {
             "point {j}: {x} vs {y}"
         );
     }
+}
+
+/// The direct illuminance [lx] at `point` with normal `normal` from one
+/// light of the IES file `text` written as `t.ies`, placed by `light` (the
+/// TOML lines after `file`), with the scene's total flux [lm].
+fn one_ies_light(text: &str, light: &str, point: DVec3, normal: DVec3) -> (f64, f64) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("t.ies"), text).unwrap();
+    let src = format!("[[light]]\ntype = \"ies\"\nfile = \"t.ies\"\n{light}\n");
+    let scene = lumest::scene::parse(&src, &dir.path().join("s.toml")).unwrap();
+    let r = lumest::estimator::Receivers::new(&scene, &[(point, normal)]).unwrap();
+    (r.direct()[0], scene.total_power())
+}
+
+/// TILT=INCLUDE applies the factor at the installed tilt, by the file's
+/// lamp-to-luminaire geometry (1 vertical: the aim's angle from straight
+/// down; 2, 3 horizontal along C0 / C90: local x / y's inclination from the
+/// horizontal), linear between the table's angles and clamped beyond. The
+/// reviewer's tilt.ies (100 cd, factors 1, 0.8, 0.6 at 0, 45, 90 deg), aimed
+/// 45 deg from down at a point 3 sqrt(2) m along the aim, facing it:
+/// 100 x 0.8 / 18 = 4.4444 lx (5.5556 before: the factor at 0 deg). Then a
+/// 100 cd table over the whole sphere (flux 400 pi lm) at tilts worked out
+/// by hand: a point 3 m along the aim, facing the light, gets 100 f / 9 lx.
+#[test]
+fn tilt_factors_apply_at_the_installed_tilt() {
+    let s = std::f64::consts::FRAC_1_SQRT_2;
+    let reviewer = "IESNA:LM-63-2002\n[TEST] x\nTILT=INCLUDE\n1\n3\n0 45 90\n1.0 0.8 0.6\n\
+                    1 -1 1 3 1 1 2 0 0 0\n1 1 50\n0 45 90\n0\n100 100 100\n";
+    let (e, _) = one_ies_light(
+        reviewer,
+        "position = [0, 0, 3]\naim = [0.7071067811865476, 0, -0.7071067811865476]",
+        DVec3::new(3.0, 0.0, 0.0),
+        DVec3::new(-s, 0.0, s),
+    );
+    assert!((e - 80.0 / 18.0).abs() < 1e-9, "{e} lx, want 4.4444");
+    let file = |geometry: u8| {
+        format!(
+            "IESNA:LM-63-2002\n[TEST] x\nTILT=INCLUDE\n{geometry}\n3\n0 45 90\n1.0 0.8 0.6\n\
+             1 -1 1 3 1 1 2 0 0 0\n1 1 50\n0 90 180\n0\n100 100 100\n"
+        )
+    };
+    let (s30, c30) = (0.5, 0.75f64.sqrt());
+    // 30 deg: 1 + (0.8 - 1) 30 / 45.
+    let f30 = 1.0 - 0.2 * 30.0 / 45.0;
+    let cases: [(u8, [f64; 3], f64, f64); 12] = [
+        (1, [0.0, 0.0, -1.0], 0.0, 1.0),
+        (1, [s30, 0.0, -c30], 0.0, f30),
+        // Turning about the aim changes nothing for a vertical lamp.
+        (1, [0.0, s30, -c30], 77.0, f30),
+        (1, [1.0, 0.0, 0.0], 0.0, 0.6),
+        // Straight up: tilt 180, past the table's 90: its last factor.
+        (1, [0.0, 0.0, 1.0], 0.0, 0.6),
+        // Aimed 30 deg towards +x: C0 (local x) rises 30 deg, C90 stays level.
+        (2, [s30, 0.0, -c30], 0.0, f30),
+        (3, [s30, 0.0, -c30], 0.0, 1.0),
+        // Turned 90 deg about the aim: C0 level, C90 rises 30 deg.
+        (2, [s30, 0.0, -c30], 90.0, 1.0),
+        (3, [s30, 0.0, -c30], 90.0, f30),
+        // Aimed along +y: C0 stays +x (level); turned 90, C0 points up.
+        (2, [0.0, 1.0, 0.0], 0.0, 1.0),
+        (2, [0.0, 1.0, 0.0], 90.0, 0.6),
+        // Upright (down, C0 along +x): tilt 0 for every geometry.
+        (3, [0.0, 0.0, -1.0], 0.0, 1.0),
+    ];
+    for (geometry, aim, rotate, f) in cases {
+        let a = DVec3::from(aim);
+        let (e, power) = one_ies_light(
+            &file(geometry),
+            &format!(
+                "position = [0, 0, 5]\naim = [{}, {}, {}]\nrotate = {rotate}",
+                aim[0], aim[1], aim[2]
+            ),
+            DVec3::new(0.0, 0.0, 5.0) + 3.0 * a,
+            -a,
+        );
+        let want = 100.0 * f / 9.0;
+        assert!(
+            (e - want).abs() < 1e-9 * want,
+            "geometry {geometry}, aim {aim:?}, rotate {rotate}: {e} lx, want {want}"
+        );
+        assert!(
+            (power - 400.0 * PI * f).abs() < 1e-9 * power,
+            "geometry {geometry}: {power} lm"
+        );
+    }
+    // `flux` rescales the file's table; the tilt factor multiplies on top:
+    // 1000 lm at 45 deg emits 800 lm.
+    let (_, power) = one_ies_light(
+        &file(1),
+        "position = [0, 0, 5]\naim = [0.7071067811865476, 0, -0.7071067811865476]\nflux = 1000",
+        DVec3::ZERO,
+        DVec3::Z,
+    );
+    assert!((power - 800.0).abs() < 1e-9, "{power} lm");
 }

@@ -64,9 +64,11 @@ pub fn spread_angle(g: &Goniometric, c: f64, fraction: f64) -> Option<f64> {
     Some(thetas[hi] - thetas[lo])
 }
 
-/// The summary lines of a photometric file.
+/// The summary lines of a photometric file: the upright luminaire (with
+/// an IES tilt table, its factor at tilt 0 applied).
 pub fn summary(p: &Photometry) -> Vec<String> {
-    let g = Goniometric::new(p, 1.0);
+    let tilt = p.upright_tilt_factor();
+    let g = Goniometric::new(p, tilt);
     let mut lines = vec![
         format!(
             "{}, type {:?}, {} horizontal x {} vertical angles, symmetry {:?}",
@@ -89,9 +91,19 @@ pub fn summary(p: &Photometry) -> Vec<String> {
             ),
         },
     ];
+    if let Some(t) = &p.tilt {
+        lines.push(format!(
+            "TILT=INCLUDE, lamp {:?}: factors {} at {} deg; shown upright (factor {}), in a scene at the light's installed tilt",
+            t.geometry,
+            t.factors.iter().map(|f| format_number(*f)).collect::<Vec<_>>().join(", "),
+            t.angles.iter().map(|f| format_number(*f)).collect::<Vec<_>>().join(", "),
+            format_number(tilt)
+        ));
+    }
     let (mut best, mut at) = (0.0, (0.0, 0.0));
     for (a, row) in p.h_angles.iter().zip(&p.candela) {
         for (v, &i) in p.v_angles.iter().zip(row) {
+            let i = i * tilt;
             if i > best {
                 best = i;
                 at = (*a, *v);
@@ -145,7 +157,7 @@ pub fn summary(p: &Photometry) -> Vec<String> {
 
 /// A polar candela plot (SVG) of the C0-C180 and C90-C270 planes.
 pub fn polar_svg(p: &Photometry, title: &str) -> Result<String, String> {
-    let g = Goniometric::new(p, 1.0);
+    let g = Goniometric::new(p, p.upright_tilt_factor());
     let curve = |c: f64| -> Vec<(f64, f64)> {
         (-360..=360)
             .map(|k| {

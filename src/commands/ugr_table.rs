@@ -141,7 +141,8 @@ pub fn ugr_table_command(a: &UgrTableArgs) -> anyhow::Result<()> {
         p.kind
     );
     let area = LuminousArea::of_file(&p.opening).map_err(|e| anyhow::anyhow!("{shown}: {e}"))?;
-    let g = Goniometric::new(&p, 1.0);
+    // The upright luminaire (a tilt table's factor at tilt 0).
+    let g = Goniometric::new(&p, p.upright_tilt_factor());
     let rows = ugr_table(&g, &area, a.spacing);
     if let Some(bad) = first_undefined(&rows) {
         anyhow::bail!(

@@ -7,9 +7,14 @@
 //! Type C (every EULUMDAT file, most IES files): the photometric nadir
 //! (`gamma = 0`) points along `-z`, the C0 plane contains `+x` and C90
 //! contains `+y`; a unit direction `d` has `gamma = acos(-d_z)` and
-//! `C = atan2(d_y, d_x)` in `[0, 360)` (at the poles, where the azimuth is
-//! undefined, C0, or C180 when `d_x` is a negative zero, as `atan2` has
-//! it). Type B (floodlights): the beam axis
+//! `C = atan2(d_y, d_x)` in `[0, 360)`. At the poles (`gamma` 0 or 180),
+//! where the azimuth is undefined and the C-planes of a measured table may
+//! still differ, a direction's intensity is their mean (within 1e-12 rad of
+//! the pole, so that rounding in a turned frame does not pick a plane): the bilinear
+//! interpolant averaged over C (each plane weighted by the span of C it
+//! interpolates; the plain mean of equally spaced planes), zero where the
+//! pole lies outside the measured range; [`Goniometric::intensity_at`],
+//! given an azimuth, keeps that plane's value. Type B (floodlights): the beam axis
 //! is `-z` and the B-planes turn about the transverse axis `y`; `H` is the
 //! plane's angle from the axis towards `+x` and `V` the angle out of the
 //! `xz` plane towards `+y`: `d = (cos V sin H, sin V, -cos V cos H)`. Type A
@@ -39,6 +44,12 @@ use super::angle_grid::{AngleGrid, AngleKind};
 use crate::io::photometry::{PhotometricType, Photometry, Symmetry};
 use glam::DVec3;
 use std::f64::consts::PI;
+
+/// A type C direction whose polar sine (its distance from the nadir axis
+/// over its length) is at most this is at a pole: 1e-12 rad, well above the
+/// rounding left in the local components of a direction along a turned
+/// frame's nadir (~1e-16), so that the pole's value does not depend on it.
+const POLE_SIN: f64 = 1e-12;
 
 /// A goniometric intensity distribution [cd] over the luminaire's frame.
 #[derive(Clone, Debug, PartialEq)]
@@ -74,6 +85,10 @@ pub struct Goniometric {
     coef: Vec<[f64; 4]>,
     /// Entries per row of `coef` (`v.len()`: the cells and the zero one).
     stride: usize,
+    /// Type C: the intensity [cd] at the poles gamma 0 and gamma 180, the
+    /// mean over C of the interpolant there (module docs); 0 where the
+    /// pole lies outside the measured range.
+    poles: [f64; 2],
     /// The file's luminous opening [m] (all zero: the file gives none), for
     /// glare ([`crate::glare`]): luminance and solid angle need its area.
     opening: crate::io::photometry::Opening,
@@ -111,8 +126,29 @@ impl Goniometric {
             grids: None,
             coef: Vec::new(),
             stride: nv,
+            poles: [0.0; 2],
             opening: p.opening,
         };
+        if p.kind == PhotometricType::C && g.h.len() > 1 && nv > 0 {
+            // The trapezoidal rule is exact for the piecewise-linear
+            // interpolant in C; the expanded table spans a full turn.
+            let span = g.h[g.h.len() - 1] - g.h[0];
+            let mean = |k: usize| {
+                (0..g.h.len() - 1)
+                    .map(|a| (g.h[a + 1] - g.h[a]) * 0.5 * (g.at(a, k) + g.at(a + 1, k)))
+                    .sum::<f64>()
+                    / span
+            };
+            let poles = [
+                if p.v_angles[0] == 0.0 { mean(0) } else { 0.0 },
+                if p.v_angles[nv - 1] == 180.0 {
+                    mean(nv - 1)
+                } else {
+                    0.0
+                },
+            ];
+            g.poles = poles;
+        }
         g.rotational = p.kind == PhotometricType::C
             && !g.h.is_empty()
             && (0..g.h.len()).all(|a| (0..nv).all(|k| g.at(a, k) == g.at(0, k)));
@@ -321,6 +357,10 @@ impl Goniometric {
     #[inline(always)]
     pub fn intensity(&self, d: DVec3) -> f64 {
         let Some((vg, hg)) = &self.grids else {
+            if self.kind == PhotometricType::C && d.x.hypot(d.y) <= POLE_SIN * d.length() {
+                // A pole: the planes' mean (index 1 straight up).
+                return self.poles[usize::from(d.z > 0.0)];
+            }
             let (h, v) = self.angles(d);
             return self.intensity_at(h, v);
         };
@@ -350,8 +390,8 @@ impl Goniometric {
     /// polar angle's `(cos, sin)` and the azimuth's components `(x, y)`
     /// with `r = hypot(x, y)` (any common scale): zero outside the
     /// measured angles (the grids' virtual cells point at zero entries).
-    /// At the poles (`r = 0`) the azimuth is atan2's: C180 for a negative
-    /// zero `x`, else C0.
+    /// At the poles (`s <= POLE_SIN`), where there is no azimuth, the
+    /// planes' mean (module docs).
     #[inline(always)]
     fn bilinear_c(
         &self,
@@ -360,15 +400,13 @@ impl Goniometric {
         (c, s): (f64, f64),
         (x, y, r): (f64, f64, f64),
     ) -> f64 {
+        if s <= POLE_SIN {
+            // (c > 0: gamma 0, the nadir; c < 0: gamma 180.)
+            return self.poles[usize::from(c < 0.0)];
+        }
         let (jv, tv) = vg.locate_cell(true, c, s);
-        let (cc, sc) = if r > 0.0 {
-            let inv = r.recip();
-            (x * inv, y * inv)
-        } else if x.is_sign_negative() {
-            (-1.0, 0.0)
-        } else {
-            (1.0, 0.0)
-        };
+        let inv = r.recip();
+        let (cc, sc) = (x * inv, y * inv);
         let (jh, th) = hg.locate_cell(false, cc, sc);
         let j = jh + jv;
         // (intensity_at's lo and hi - lo, to rounding, at once.)
@@ -381,6 +419,8 @@ impl Goniometric {
 
     /// Intensity [cd] at angles `(h, v)` [rad]: bilinear, zero outside the
     /// measured vertical range and outside the horizontal range of types A/B.
+    /// At a pole this is plane `h`'s own value, not the planes' mean that
+    /// [`Self::intensity`] gives a direction there.
     pub fn intensity_at(&self, h: f64, v: f64) -> f64 {
         let (nh, nv) = (self.h.len(), self.v.len());
         if nv == 0
@@ -406,9 +446,10 @@ impl Goniometric {
         self.cdf.len()
     }
 
-    /// Draw a direction: `u[0]` picks the cell, `u[1]` and the rescaled
-    /// remainder of `u[0]` place the direction in it (module docs). `None`
-    /// when the table is all zero.
+    /// Draw a direction: `u[0]` picks the cell, `u[1]` places the
+    /// direction across it in the horizontal angle and the separate uniform
+    /// `u2` in the vertical one (uniformly in solid angle within the cell;
+    /// module docs). `None` when the table is all zero.
     pub fn sample(&self, u: [f64; 2], u2: f64) -> Option<GonioSample> {
         if self.weight_total <= 0.0 {
             return None;
@@ -576,6 +617,7 @@ mod tests {
             opening: Opening::default(),
             watts: None,
             format: "test".into(),
+            tilt: None,
         }
     }
 
@@ -646,6 +688,67 @@ mod tests {
                 g.power()
             );
         }
+    }
+
+    /// An IES type C table over 0-350 degrees is a full turn that wraps
+    /// from C350 to C360 = C0: planes 0, 90, 180, 270, 350 with values
+    /// `100 + C / 10`, `50 + C / 10`, 10 at gamma 0, 45, 90. By hand, at
+    /// C355 (half way from C350 to C0), gamma 45: (85 + 50) / 2 = 67.5; at
+    /// C352.5, gamma 22.5: (126.25 + 76.25) / 2 = 101.25 (off the pole,
+    /// where every plane meets). The
+    /// same table written out to 360 (C360 repeating C0) gives the same
+    /// intensities and flux.
+    #[test]
+    fn a_table_to_350_degrees_wraps_to_c0() {
+        let file = |h: &[f64]| {
+            let rows: Vec<String> = h
+                .iter()
+                .map(|&c| {
+                    let c = if c == 360.0 { 0.0 } else { c };
+                    format!("{} {} 10", 100.0 + c / 10.0, 50.0 + c / 10.0)
+                })
+                .collect();
+            let hs: Vec<String> = h.iter().map(|c| c.to_string()).collect();
+            format!(
+                "IESNA:LM-63-2002\n[TEST] x\nTILT=NONE\n1 -1 1 3 {} 1 2 0 0 0\n1 1 0\n0 45 90\n{}\n{}\n",
+                h.len(),
+                hs.join(" "),
+                rows.join("\n")
+            )
+        };
+        let p350 = ies::parse(&file(&[0.0, 90.0, 180.0, 270.0, 350.0]), "a.ies").unwrap();
+        let p360 = ies::parse(&file(&[0.0, 90.0, 180.0, 270.0, 350.0, 360.0]), "b.ies").unwrap();
+        assert_eq!(p350.symmetry(), Symmetry::None);
+        let (a, b) = (Goniometric::new(&p350, 1.0), Goniometric::new(&p360, 1.0));
+        for (c, gm, want) in [
+            (355.0f64, 45.0f64, 67.5),
+            (355.0, 90.0, 10.0),
+            (352.5, 22.5, 101.25),
+            (350.0, 45.0, 85.0),
+            (0.0, 45.0, 50.0),
+            (300.0, 45.0, 50.0 + 27.0 + 3.0 / 8.0 * 8.0),
+        ] {
+            let d = a.direction(c.to_radians(), gm.to_radians());
+            for g in [&a, &b] {
+                let (i, j) = (
+                    g.intensity(d),
+                    g.intensity_at(c.to_radians(), gm.to_radians()),
+                );
+                assert!(
+                    (i - want).abs() < 1e-9 && (j - want).abs() < 1e-9,
+                    "C{c} g{gm}: {i}, {j} vs {want}"
+                );
+            }
+        }
+        let mut rng = crate::sampling::Philox4x32::new(11, 0);
+        for _ in 0..5000 {
+            let d = crate::sampling::warp::sample_uniform_sphere(rng.next_2d()).w;
+            assert!((a.intensity(d) - b.intensity(d)).abs() < 1e-9, "{d}");
+        }
+        assert!((a.power() / b.power() - 1.0).abs() < 1e-12);
+        // 0 to 170 is no known layout (neither a half nor a full turn).
+        let e = ies::parse(&file(&[0.0, 90.0, 170.0]), "c.ies").unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (7, "horizontal angles"), "{e}");
     }
 
     #[test]
@@ -765,7 +868,9 @@ mod fast_path_tests {
     /// rounding, on every test table, at random directions and at the
     /// nodes, the poles and the edges of the measured range. The reference
     /// takes its angles by `atan2` (accurate at the poles, where
-    /// `acos(-d_z)` loses half the digits).
+    /// `acos(-d_z)` loses half the digits); at a pole (within 1e-12 rad) it is the mean
+    /// of `intensity_at` over 3600 equal steps of C (the midpoint rule, exact
+    /// for the interpolant, linear between planes at whole degrees).
     #[test]
     fn shortcuts_agree_with_the_general_rule() {
         let mut checked = 0;
@@ -801,15 +906,81 @@ mod fast_path_tests {
                     }
                     _ => fast.angles(d),
                 };
-                let (a, b) = (fast.intensity(d), fast.intensity_at(h, v));
+                let pole = p.kind == PhotometricType::C && d.x.hypot(d.y) <= 1e-12 * d.length();
+                let b = if pole {
+                    (0..3600)
+                        .map(|k| fast.intensity_at(((k as f64 + 0.5) / 10.0).to_radians(), v))
+                        .sum::<f64>()
+                        / 3600.0
+                } else {
+                    fast.intensity_at(h, v)
+                };
+                let a = fast.intensity(d);
+                let tol = if pole { 1e-10 } else { 1e-12 };
                 assert!(
-                    (a - b).abs() <= 1e-12 * b.abs().max(1.0),
+                    (a - b).abs() <= tol * b.abs().max(1.0),
                     "{name} {d}: {a} vs {b}"
                 );
                 checked += 1;
             }
         }
         assert!(checked > 100_000);
+    }
+
+    /// At the poles, where every C-plane meets, the intensity of a
+    /// direction is the planes' mean, whatever the sign of a zero
+    /// component: planes C0, C60, C180, C270 (wrapping to C360 = C0) with
+    /// 100, 200, 300, 400 cd at gamma 0 and a tenth of that at gamma 180.
+    /// By hand, the mean over C of the interpolant: (60 x 150 + 120 x 250 +
+    /// 90 x 350 + 90 x 250) / 360 = 258.333 cd at the nadir, 25.8333 cd at
+    /// the zenith (before: C0's 100 or, for a negative zero x, C180's 300).
+    #[test]
+    fn pole_intensity_is_the_planes_mean() {
+        let p = super::tests::table(
+            PhotometricType::C,
+            &[0.0, 60.0, 180.0, 270.0],
+            &[0.0, 90.0, 180.0],
+            |c, gm| {
+                let at0 = match c as i32 {
+                    0 => 100.0,
+                    60 => 200.0,
+                    180 => 300.0,
+                    _ => 400.0,
+                };
+                at0 * (1.0 - 0.9 * gm / 180.0)
+            },
+        );
+        let g = Goniometric::new(&p, 1.0);
+        let (down, up) = (93_000.0 / 360.0, 9_300.0 / 360.0);
+        assert!(matches!(g.grids, Some((_, Some(_)))));
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-9 * b;
+        for d in [
+            DVec3::new(0.0, 0.0, -1.0),
+            DVec3::new(-0.0, 0.0, -1.0),
+            DVec3::new(-0.0, -0.0, -1.0),
+            DVec3::new(0.0, -0.0, -1.0),
+        ] {
+            assert!(close(g.intensity(d), down), "{d}: {}", g.intensity(d));
+            assert!(close(g.intensity(-d), up), "{}: {}", -d, g.intensity(-d));
+        }
+        // The same in the world: straight along a tilted nadir, by the
+        // direct term (I c / |w|^3 at 2 m, facing the light: I / 4).
+        let frame = super::super::LuminaireFrame::aimed(DVec3::new(0.3, -0.2, -1.0), 0.7);
+        for (w, want) in [(-2.0 * frame.z, down), (2.0 * frame.z, up)] {
+            let e = g.direct_term(&frame, w, 2.0);
+            assert!(close(e, want / 4.0), "{w}: {e}");
+        }
+        // Off the pole, plane by plane as before: C60 at gamma 1e-9 deg.
+        let d = g.direction(60f64.to_radians(), 1e-9f64.to_radians());
+        assert!((g.intensity(d) - 200.0).abs() < 1e-6);
+        // Measured 0-90 only: nothing straight up.
+        let half = super::tests::table(
+            PhotometricType::C,
+            &[0.0, 60.0, 180.0, 270.0],
+            &[0.0, 90.0],
+            |c, _| 100.0 + c,
+        );
+        assert_eq!(Goniometric::new(&half, 1.0).intensity(DVec3::Z), 0.0);
     }
 
     /// The world-frame shortcut of rotational tables equals the intensity
@@ -856,10 +1027,15 @@ mod fast_path_tests {
                         "{w}: {got} vs {want}"
                     );
                 }
-                // Poles, where the azimuth is atan2's.
+                // Poles: the intensity of the local pole direction (the
+                // planes' mean there, checked in pole_intensity_is_the_planes_mean).
                 for w in [frame.z, -frame.z, -2.0 * frame.z] {
-                    let (h, v) = g.angles(frame.to_local(w.normalize()));
-                    let want = g.intensity_at(h, v) / w.length_squared();
+                    let local = if w.dot(frame.z) > 0.0 {
+                        DVec3::Z
+                    } else {
+                        -DVec3::Z
+                    };
+                    let want = g.intensity(local) / w.length_squared();
                     let got = g.direct_term(&frame, w, w.length());
                     assert!(
                         (got - want).abs() <= 1e-9 * want.max(1e-300),

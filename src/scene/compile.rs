@@ -1662,8 +1662,9 @@ fn f_span(d: &LightDesc, l: &Spanned<LightDesc>) -> Range<usize> {
 
 /// A goniometric luminaire (`type = "ies"` or `"ldt"`): the photometric
 /// file, its placement and orientation, and an optional `flux` [lm] or
-/// `multiplier` on its candela values; with a note for the run summary
-/// (the table's flux against the file's lamp lumens).
+/// `multiplier` on its candela values, times an IES tilt table's factor
+/// at the installed tilt ([`crate::io::photometry::Tilt`]); with a note
+/// for the run summary (the table's flux against the file's lamp lumens).
 fn goniometric(
     l: &Spanned<LightDesc>,
     ctx: &SourceCtx,
@@ -1713,6 +1714,11 @@ fn goniometric(
         Some(r) => return Err(ctx.invalid(r.span(), "rotate", "must be a finite angle [deg]")),
         None => 0.0,
     };
+    let frame = LuminaireFrame::aimed(aim, rotate);
+    // An IES tilt table: its factor at the installed tilt (the aim, and
+    // for a horizontal lamp the rotation) multiplies every intensity, on
+    // top of `flux` or `multiplier`, which scale the file's table.
+    let (tilt_factor, tilt_angle) = photometry.tilt_factor(frame.x, frame.y, frame.z);
     let mut table = |scale: f64| {
         tables
             .entry((path.clone(), scale.to_bits()))
@@ -1742,7 +1748,7 @@ fn goniometric(
         (None, Some(m)) => ctx.nonneg(m, "multiplier")?,
         (None, None) => 1.0,
     };
-    let dist = table(scale);
+    let dist = table(scale * tilt_factor);
     if !(dist.power().is_finite()
         && dist.max_intensity() <= MAX_INTENSITY
         && (dist.max_intensity() == 0.0 || dist.max_intensity() >= MIN_INTENSITY))
@@ -1757,8 +1763,15 @@ fn goniometric(
         || "absolute photometry".to_string(),
         |lm| format!("{:.4} x the file's {lm} lamp lumens", unscaled.power() / lm),
     );
+    let tilted = match (&photometry.tilt, tilt_angle) {
+        (Some(t), Some(a)) => format!(
+            "; TILT lamp {:?} at {a:.4} deg: factor {tilt_factor:.6}",
+            t.geometry
+        ),
+        _ => String::new(),
+    };
     let note = format!(
-        "{} `{}`: table flux {:.6e} lm ({lamps}); emitting {:.6e} lm, max {:.6e} cd",
+        "{} `{}`: table flux {:.6e} lm ({lamps}){tilted}; emitting {:.6e} lm, max {:.6e} cd",
         photometry.format,
         fs.get_ref(),
         unscaled.power(),
@@ -1795,7 +1808,7 @@ fn goniometric(
     Ok((
         Light::Gonio {
             p,
-            frame: LuminaireFrame::aimed(aim, rotate),
+            frame,
             dist,
             opening,
         },

@@ -20,13 +20,18 @@
 //!
 //! The intensity is the file's candela value times the candela multiplier
 //! times the ballast factor, times the ballast-lamp photometric factor for
-//! the versions that define one (never the 2019 file-generation type), and
-//! times the tilt factor at 0 degrees (the luminaire used as measured) with
-//! `TILT=INCLUDE`. A `TILT=<file>` reference is refused: the data must be
-//! included. The signs of width, length and height give the opening's shape
+//! the versions that define one (never the 2019 file-generation type).
+//! With `TILT=INCLUDE` the tilt table is kept ([`super::Tilt`]) and its
+//! factor at the luminaire's installed tilt multiplies later, where the
+//! light is placed (it depends on the aim); `lumest photometry` shows the
+//! upright luminaire (tilt 0). A `TILT=<file>` reference is refused: the
+//! data must be included. The signs of width, length and height give the opening's shape
 //! (LM-63-2002's luminous shapes: [`opening`]).
 
-use super::{Opening, PhotometricType, Photometry, PhotometryError, check_angles, whole};
+use super::{
+    Opening, PhotometricType, Photometry, PhotometryError, Tilt, TiltGeometry, check_angles,
+    strip_bom, whole,
+};
 
 /// Most angles per axis and values in a table (larger files are refused
 /// before anything is allocated for them).
@@ -108,8 +113,16 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         field: field.to_string(),
         message,
     };
-    let lines: Vec<&str> = text.lines().collect();
-    let first = lines.first().map_or("", |l| l.trim());
+    // A byte-order mark and blank lines before the first line are skipped
+    // when looking for the version (left there, they would make a 2019
+    // file read as 1986, its file-generation type a candela factor); line
+    // numbers still count the blank lines.
+    let lines: Vec<&str> = strip_bom(text).lines().collect();
+    let first = lines
+        .iter()
+        .map(|l| l.trim())
+        .find(|l| !l.is_empty())
+        .unwrap_or("");
     let version = match first {
         s if s.starts_with("IESNA:LM-63-1995") => Version::Lm1995,
         s if s.starts_with("IESNA:LM-63-2002") => Version::Lm2002,
@@ -174,8 +187,12 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         file,
         last_line: lines.len(),
     };
-    let tilt_factor = if include {
-        t.count("TILT lamp-to-luminaire geometry", 1, 3)?;
+    let tilt = if include {
+        let geometry = match t.count("TILT lamp-to-luminaire geometry", 1, 3)? {
+            1 => TiltGeometry::Vertical,
+            2 => TiltGeometry::HorizontalC0,
+            _ => TiltGeometry::HorizontalC90,
+        };
         let n = t.count("number of TILT angles", 1, MAX_ANGLES as i64)? as usize;
         let line = t.line();
         let angles = t.numbers(n, "TILT angle")?;
@@ -189,9 +206,13 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
                 format!("must be >= 0, got {}", crate::io::format_number(*f)),
             ));
         }
-        interpolate(&angles, &factors, 0.0)
+        Some(Tilt {
+            geometry,
+            angles,
+            factors,
+        })
     } else {
-        1.0
+        None
     };
     let line = t.line();
     let lamps = t.count("number of lamps", 1, 1_000_000)?;
@@ -286,19 +307,22 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
     check_angles(&h_angles, h_lo, h_hi, |m| err(line, "horizontal angles", m))?;
     if kind == PhotometricType::C && n_h > 1 {
         let (first, last) = (h_angles[0], h_angles[n_h - 1]);
-        let known = (first == 0.0 && [90.0, 180.0, 360.0].contains(&last))
-            || (first == 90.0 && last == 270.0);
+        // A table from 0 to a last angle past 180 (not 360) is a full
+        // turn that wraps from its last plane to C360 = C0 (as Radiance's
+        // ies2rad reads it).
+        let known =
+            (first == 0.0 && (last == 90.0 || last >= 180.0)) || (first == 90.0 && last == 270.0);
         if !known {
             return Err(err(
                 line,
                 "horizontal angles",
                 format!(
-                    "a type C table must span 0-90, 0-180, 0-360 or 90-270 degrees, got {first}-{last}"
+                    "a type C table must span 0-90, 0-180, 0 to 180-360 (a full turn) or 90-270 degrees, got {first}-{last}"
                 ),
             ));
         }
     }
-    let scale = multiplier * ballast * lamp_factor * tilt_factor;
+    let scale = multiplier * ballast * lamp_factor;
     let mut candela = Vec::with_capacity(n_h);
     for (i, c) in h_angles.iter().enumerate() {
         let line = t.line();
@@ -342,6 +366,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
             Version::Lm2019 => "IES LM-63-2019",
         }
         .to_string(),
+        tilt,
     })
 }
 
@@ -417,20 +442,6 @@ fn opening(version: Version, w: f64, l: f64, h: f64, unit: f64) -> Opening {
     } else {
         of(S::Rectangle, wa, la, ha)
     })
-}
-
-/// Piecewise-linear interpolation of `ys` over ascending `xs` at `x`,
-/// clamped to the end values outside.
-fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
-    let k = xs.partition_point(|&a| a <= x);
-    if k == 0 {
-        return ys[0];
-    }
-    if k == xs.len() {
-        return ys[xs.len() - 1];
-    }
-    let t = (x - xs[k - 1]) / (xs[k] - xs[k - 1]);
-    ys[k - 1] + t * (ys[k] - ys[k - 1])
 }
 
 #[cfg(test)]
@@ -659,10 +670,54 @@ TILT=NONE
             assert_eq!(p.candela[0], [4.0, 5.0, 6.0]);
             assert_eq!(p.lamp_lumens, None);
         }
-        // TILT=INCLUDE: the factor at 0 degrees multiplies.
+        // TILT=INCLUDE: the table is kept, not applied; upright (tilt 0)
+        // its factor is 0.5.
         let f = "IESNA91\nTILT=INCLUDE\n1\n3\n-10 0 10\n0.8 0.5 0.8\n1 100 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\n2 4\n";
         let p = parse(f, "c.ies").unwrap();
-        assert_eq!(p.candela[0], [1.0, 2.0]);
+        assert_eq!(p.candela[0], [2.0, 4.0]);
+        let tilt = p.tilt.as_ref().unwrap();
+        assert_eq!(tilt.geometry, TiltGeometry::Vertical);
+        assert_eq!(
+            (&tilt.angles[..], &tilt.factors[..]),
+            (&[-10.0, 0.0, 10.0][..], &[0.8, 0.5, 0.8][..])
+        );
+        assert_eq!(p.upright_tilt_factor(), 0.5);
+        // Linear between angles, the end factor beyond: 5 deg half way, 30 clamped.
+        assert_eq!(tilt.factor(5.0), 0.65);
+        assert_eq!(tilt.factor(30.0), 0.8);
+        assert_eq!(tilt.factor(-30.0), 0.8);
+    }
+
+    /// A byte-order mark or blank lines before the version line (the
+    /// reviewer's `bom.ies`, an LM-63-2019 file whose file-generation type
+    /// 1.10001 must not multiply): the same table as without, the file's
+    /// own values 100, 80, 50 cd; read from disk (the BOM's UTF-8 bytes) and
+    /// from text (U+FEFF).
+    #[test]
+    fn a_byte_order_mark_or_blank_lines_do_not_hide_the_version() {
+        let body = "IES:LM-63-2019\n[TEST] x\n[TESTLAB] y\n[ISSUEDATE] 2020\n[MANUFAC] z\nTILT=NONE\n1 -1 1 3 1 1 2 0 0 0\n1 1.10001 50\n0 45 90\n0\n100 80 50\n";
+        let dir = tempfile::tempdir().unwrap();
+        let mut variants = Vec::new();
+        for (name, text) in [
+            ("nobom.ies", body.to_string()),
+            ("bom.ies", format!("\u{feff}{body}")),
+            ("blank.ies", format!("\n  \r\n\t\n{body}")),
+            ("bomblank.ies", format!("\u{feff}\n{body}")),
+        ] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text.as_bytes()).unwrap();
+            variants.push((name, super::super::read(&path).unwrap()));
+            variants.push((name, parse(&text, name).unwrap()));
+        }
+        for (name, p) in &variants {
+            assert_eq!(p.format, "IES LM-63-2019", "{name}");
+            assert_eq!(p.candela, [vec![100.0, 80.0, 50.0]], "{name}");
+            assert_eq!(p.watts, Some(50.0), "{name}");
+        }
+        // Line numbers still count the blank lines: the bad value is on line 14.
+        let bad = format!("\u{feff}\n\n\n{}", body.replace("100 80 50", "100 -80 50"));
+        let e = parse(&bad, "b.ies").unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (14, "candela values"), "{e}");
     }
 
     #[test]

@@ -20,6 +20,10 @@
 //! The C-planes stored depend on `Isym` (1-based indices into the `Mc`
 //! angles, wrapping past `Mc`): 0: 1..Mc; 1: 1 (C0); 2: 1..Mc/2+1 (C0-C180);
 //! 3: 3Mc/4+1..3Mc/4+1+Mc/2 (C270-C90 through C0); 4: 1..Mc/4+1 (C0-C90).
+//! The C angles must fit (else an error names the angle's line): listed
+//! from 0 to below 360 degrees (but for Isym 1, whose one plane stands for
+//! all), the stored planes running C0-C180 (2), C270-C0-C90 (3) or C0-C90
+//! (4); the gamma angles ascend within 0-180.
 //! A table stored as C270-C90 is turned into the equivalent C90-C270 half
 //! (the mirror image `C -> 180 - C`) so that every [`Photometry`] keeps its
 //! horizontal angles ascending.
@@ -30,7 +34,8 @@
 //! are accepted.
 
 use super::{
-    Opening, OpeningShape, PhotometricType, Photometry, PhotometryError, check_angles, whole,
+    Opening, OpeningShape, PhotometricType, Photometry, PhotometryError, check_angles, strip_bom,
+    whole,
 };
 
 /// Most C-planes and gamma angles per plane.
@@ -96,8 +101,11 @@ impl Lines<'_> {
 
 /// Parse the text of an EULUMDAT file; `file` names it in messages.
 pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
+    // A byte-order mark would only prefix the company identification
+    // (text, unused): stripped all the same. Blank lines are not skipped:
+    // an empty first line is an empty company identification.
     let mut l = Lines {
-        lines: text.lines().collect(),
+        lines: strip_bom(text).lines().collect(),
         next: 0,
         file,
     };
@@ -205,6 +213,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
             ),
         ));
     }
+    check_symmetry_angles(isym, &c_all, |k, m| l.err(c_line + k, "C angles", m))?;
     let scale = flux[0] / 1000.0 * cfli;
     let mut planes: Vec<(f64, Vec<f64>)> = Vec::with_capacity(mc2 - mc1 + 1);
     for k in mc1..=mc2 {
@@ -234,13 +243,6 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
     }
     planes.sort_by(|a, b| a.0.total_cmp(&b.0));
     let h_angles: Vec<f64> = planes.iter().map(|p| p.0).collect();
-    if isym == 3 && (h_angles.first() != Some(&90.0) || h_angles.last() != Some(&270.0)) {
-        return Err(l.err(
-            c_line,
-            "C angles",
-            "Isym 3 needs C-planes at 90 and 270 degrees",
-        ));
-    }
     let absolute = lamps[0] < 0.0;
     let [_, _, _, la, wa, h0, h90, h180, h270] = dims;
     let round = wa == 0.0 && la > 0.0;
@@ -266,7 +268,81 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         },
         watts: (watts[0] > 0.0).then_some(watts[0]),
         format: "EULUMDAT".to_string(),
+        tilt: None,
     })
+}
+
+/// Check the `Mc` C angles `c` (already ascending within [0, 360]) against
+/// the symmetry `isym`: every table but a rotational one (1, whose one
+/// plane stands for all) lists the C-planes from 0 to below 360 degrees,
+/// and the planes stored must be the half or quarter the symmetry names:
+/// 2: planes 1..Mc/2+1 from C0 to C180; 3: planes 3Mc/4+1..Mc, 1..Mc/4+1
+/// from C270 through C0 to C90; 4: planes 1..Mc/4+1 from C0 to C90. `err`
+/// gets the 0-based index of the angle at fault and the message.
+fn check_symmetry_angles(
+    isym: i64,
+    c: &[f64],
+    err: impl Fn(usize, String) -> PhotometryError,
+) -> Result<(), PhotometryError> {
+    let mc = c.len();
+    let name = match isym {
+        0 => "Isym 0 (no symmetry)",
+        2 => "Isym 2 (symmetric about C0-C180)",
+        3 => "Isym 3 (symmetric about C90-C270)",
+        4 => "Isym 4 (symmetric about C0-C180 and C90-C270)",
+        _ => return Ok(()),
+    };
+    let f = crate::io::format_number;
+    if c[0] != 0.0 {
+        return Err(err(
+            0,
+            format!(
+                "{name} needs the C angles to start at 0 degrees, got {}",
+                f(c[0])
+            ),
+        ));
+    }
+    if c[mc - 1] >= 360.0 {
+        return Err(err(
+            mc - 1,
+            format!(
+                "{name} needs the C angles below 360 degrees (360 is C0 again), got {} (angle {mc})",
+                f(c[mc - 1])
+            ),
+        ));
+    }
+    // (0-based index, the angle it must have, the stored range in words).
+    let ends: &[(usize, f64, &str)] = match isym {
+        2 => &[(mc / 2, 180.0, "planes 1 to Mc/2+1 must run from C0 to C180")],
+        3 => &[
+            (
+                3 * mc / 4,
+                270.0,
+                "planes 3Mc/4+1 to Mc and 1 to Mc/4+1 must run from C270 through C0 to C90",
+            ),
+            (
+                mc / 4,
+                90.0,
+                "planes 3Mc/4+1 to Mc and 1 to Mc/4+1 must run from C270 through C0 to C90",
+            ),
+        ],
+        4 => &[(mc / 4, 90.0, "planes 1 to Mc/4+1 must run from C0 to C90")],
+        _ => &[],
+    };
+    for &(k, want, range) in ends {
+        if c[k] != want {
+            return Err(err(
+                k,
+                format!(
+                    "{name} stores {range} (Mc = {mc}): C angle {} must be {}, got {}",
+                    k + 1,
+                    f(want),
+                    f(c[k])
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -369,6 +445,23 @@ mod tests {
         assert!((p.opening.width - 0.5).abs() < 1e-15 && p.opening.height == 0.01);
     }
 
+    /// A byte-order mark before the company identification changes
+    /// nothing (as UTF-8 bytes read from disk, or as U+FEFF); an empty
+    /// company line is still a line.
+    #[test]
+    fn a_byte_order_mark_is_harmless() {
+        let good = ldt(1, 8, 1, &[vec![1.0, 2.0, 3.0]], false);
+        let want = parse(&good, "t.ldt").unwrap();
+        assert_eq!(want.candela, [vec![2.0, 4.0, 6.0]]);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bom.ldt");
+        std::fs::write(&path, format!("\u{feff}{good}").as_bytes()).unwrap();
+        assert_eq!(super::super::read(&path).unwrap(), want);
+        assert_eq!(parse(&format!("\u{feff}{good}"), "t.ldt").unwrap(), want);
+        let blank = good.replacen("lumest test", "", 1);
+        assert_eq!(parse(&blank, "t.ldt").unwrap(), want);
+    }
+
     #[test]
     fn errors_name_line_and_field() {
         let good = ldt(1, 8, 1, &[vec![1.0, 2.0, 3.0]], false);
@@ -389,6 +482,85 @@ mod tests {
             let e = parse(&text, "t.ldt").unwrap_err();
             assert_eq!((e.line, e.field.as_str()), (line, field), "{e}");
         }
+    }
+
+    /// C angles that do not match the symmetry indicator are refused,
+    /// naming the line of the angle at fault (the C angles of the helper's
+    /// files start on line 49, the gamma angles follow them). Before, the
+    /// reviewer's c5.ldt (Isym 0, C = 5, 35, ..., 335) was read as if its
+    /// planes were where a 0-based table has them, and the other files
+    /// here read silently with planes out of place.
+    #[test]
+    fn c_angles_must_fit_the_symmetry() {
+        let with_c = |isym: u8, mc: usize, c: &[f64]| {
+            let rows = vec![vec![1.0, 2.0, 3.0]; mc];
+            let n = match isym {
+                0 => mc,
+                1 => 1,
+                2 | 3 => mc / 2 + 1,
+                _ => mc / 4 + 1,
+            };
+            let good = ldt(isym, mc, 1, &rows[..n], false);
+            let mut lines: Vec<String> = good.lines().map(String::from).collect();
+            for (k, a) in c.iter().enumerate() {
+                lines[48 + k] = a.to_string();
+            }
+            lines.join("\n")
+        };
+        let step = |mc: usize, first: f64, dc: f64| -> Vec<f64> {
+            (0..mc).map(|k| first + dc * k as f64).collect()
+        };
+        let mut c3 = step(8, 0.0, 45.0);
+        c3[0] = 2.0;
+        let mut c0 = step(8, 0.0, 45.0);
+        c0[7] = 360.0;
+        for (isym, mc, c, line, what) in [
+            // The reviewer's c5.ldt: Isym 0, Mc 12, C = 5..335.
+            (0u8, 12, step(12, 5.0, 30.0), 49, "start at 0"),
+            (0, 8, c0, 56, "below 360"),
+            // Planes 1..5 of Dc 40: C0..C160, not C0..C180.
+            (
+                2,
+                8,
+                step(8, 0.0, 40.0),
+                53,
+                "C angle 5 must be 180, got 160",
+            ),
+            // C0..C60, not C0..C90.
+            (4, 8, step(8, 0.0, 30.0), 51, "C angle 3 must be 90, got 60"),
+            // C270, C315, C2, C45, C90: before, the C2 plane was taken for C0.
+            (3, 8, c3, 49, "start at 0"),
+            (
+                3,
+                8,
+                step(8, 0.0, 40.0),
+                55,
+                "C angle 7 must be 270, got 240",
+            ),
+        ] {
+            let e = parse(&with_c(isym, mc, &c), "t.ldt").unwrap_err();
+            assert_eq!((e.line, e.field.as_str()), (line, "C angles"), "{e}");
+            assert!(e.to_string().contains(what), "{e}");
+            assert!(
+                e.to_string()
+                    .starts_with(&format!("t.ldt:{line}: C angles: Isym {isym}")),
+                "{e}"
+            );
+        }
+        // Uneven but fitting angles are accepted: Isym 3 with C270, C300, C0,
+        // C45, C90 stored; Isym 1 reads its one plane whatever the angles.
+        let mut ok3 = step(8, 0.0, 45.0);
+        ok3[7] = 300.0;
+        let p = parse(&with_c(3, 8, &ok3), "t.ldt").unwrap();
+        assert_eq!(p.h_angles, [90.0, 135.0, 180.0, 240.0, 270.0]);
+        assert!(parse(&with_c(1, 8, &step(8, 5.0, 30.0)), "t.ldt").is_ok());
+        // Gamma angles must ascend within [0, 180] (0, 95, 90 on lines
+        // 57-59): the error names the first gamma line.
+        let good = ldt(1, 8, 1, &[vec![1.0, 2.0, 3.0]], false);
+        let mut lines: Vec<&str> = good.lines().collect();
+        lines[57] = "95";
+        let e = parse(&lines.join("\n"), "t.ldt").unwrap_err();
+        assert_eq!((e.line, e.field.as_str()), (57, "gamma angles"), "{e}");
     }
 
     #[test]

@@ -137,11 +137,79 @@ pub struct Opening {
     pub shape: OpeningShape,
 }
 
+/// How the lamp sits in the luminaire (IES LM-63 "lamp-to-luminaire
+/// geometry"): what the angles of a `TILT=INCLUDE` table measure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TiltGeometry {
+    /// 1: the lamp vertical, base up or down: the tilt is the angle [deg,
+    /// 0-180] between the photometric nadir (the light's `aim`) and
+    /// straight down (world `-z`).
+    Vertical,
+    /// 2: the lamp horizontal, its axis along the C0-C180 plane (local
+    /// `x`): the tilt is the inclination [deg, 0-90] of local `x` from the
+    /// horizontal.
+    HorizontalC0,
+    /// 3: the lamp horizontal, its axis along C90-C270 (local `y`): the
+    /// inclination [deg, 0-90] of local `y` from the horizontal.
+    HorizontalC90,
+}
+
+/// An IES `TILT=INCLUDE` table: the factor by which the lamp's output
+/// changes with the luminaire's tilt from its measured position (upright:
+/// nadir down, C0 and C90 horizontal, tilt 0 in every geometry). The
+/// factor at the installed tilt multiplies every intensity, and so the
+/// flux (applied where a light is placed: `scene` compile).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tilt {
+    /// What the angles measure.
+    pub geometry: TiltGeometry,
+    /// Tilt angles [deg], ascending, within [-180, 180].
+    pub angles: Vec<f64>,
+    /// Multiplying factors (>= 0) at `angles`.
+    pub factors: Vec<f64>,
+}
+
+impl Tilt {
+    /// The tilt [deg] of a luminaire whose local axes `x` (C0), `y` (C90)
+    /// and `z` (opposite the nadir) are the given world unit vectors (world
+    /// `z` up), by [`Self::geometry`]: 0-180 for
+    /// [`TiltGeometry::Vertical`], 0-90 for the horizontal lamps.
+    pub fn angle(&self, x: glam::DVec3, y: glam::DVec3, z: glam::DVec3) -> f64 {
+        // The angle of v from the horizontal plane, 0-90 (atan2: accurate
+        // near both ends, unlike asin / acos).
+        let inclination = |v: glam::DVec3| v.z.abs().atan2(v.x.hypot(v.y)).to_degrees();
+        match self.geometry {
+            // Between the nadir -z and world -z: that of z and world +z.
+            TiltGeometry::Vertical => z.x.hypot(z.y).atan2(z.z).to_degrees(),
+            TiltGeometry::HorizontalC0 => inclination(x),
+            TiltGeometry::HorizontalC90 => inclination(y),
+        }
+    }
+
+    /// The factor at tilt `angle` [deg]: linear in the angle between the
+    /// table's angles, the end factors beyond them (clamped, never
+    /// extrapolated).
+    pub fn factor(&self, angle: f64) -> f64 {
+        let (xs, ys) = (&self.angles, &self.factors);
+        let k = xs.partition_point(|&a| a <= angle);
+        if k == 0 {
+            return ys[0];
+        }
+        if k == xs.len() {
+            return ys[xs.len() - 1];
+        }
+        let t = (angle - xs[k - 1]) / (xs[k] - xs[k - 1]);
+        ys[k - 1] + t * (ys[k] - ys[k - 1])
+    }
+}
+
 /// A luminaire's measured intensity distribution, as read from the file.
 ///
 /// `candela[i][k]` is the intensity [cd] in horizontal plane `h_angles[i]`
 /// at vertical angle `v_angles[k]` (degrees, both ascending), with every
-/// multiplier of the file already applied. The table covers only the
+/// multiplier of the file already applied except the tilt factor, which
+/// depends on how the luminaire is installed ([`Photometry::tilt_factor`]).
+/// The table covers only the
 /// planes the file stores; [`Photometry::symmetry`] says how the others
 /// follow from them (the distribution module expands it).
 #[derive(Clone, Debug, PartialEq)]
@@ -163,6 +231,8 @@ pub struct Photometry {
     pub watts: Option<f64>,
     /// Format and version, e.g. `IES LM-63-1995`, `EULUMDAT`.
     pub format: String,
+    /// The IES `TILT=INCLUDE` table (`None`: `TILT=NONE`, and EULUMDAT).
+    pub tilt: Option<Tilt>,
 }
 
 /// Horizontal symmetry of a type C table, by the planes it stores.
@@ -176,7 +246,8 @@ pub enum Symmetry {
     BilateralC0,
     /// C90-C270: mirrored about the C90-C270 plane.
     BilateralC90,
-    /// C0-C360 (the last plane may repeat the first).
+    /// A full turn from C0: the last plane may be C360 (repeating C0), or
+    /// any angle past 180 (then the table wraps from it to C360 = C0).
     None,
 }
 
@@ -198,6 +269,32 @@ impl Photometry {
         } else {
             Symmetry::None
         }
+    }
+
+    /// The tilt factor of the luminaire whose local axes `x` (C0), `y`
+    /// (C90), `z` (opposite the nadir) are these world unit vectors ([`Tilt`];
+    /// 1 without a tilt table), with the tilt [deg] it was read at (`None`
+    /// without a table). The upright luminaire (`X`, `Y`, `Z`) has tilt 0.
+    pub fn tilt_factor(
+        &self,
+        x: glam::DVec3,
+        y: glam::DVec3,
+        z: glam::DVec3,
+    ) -> (f64, Option<f64>) {
+        match &self.tilt {
+            Some(t) => {
+                let a = t.angle(x, y, z);
+                (t.factor(a), Some(a))
+            }
+            None => (1.0, None),
+        }
+    }
+
+    /// The tilt factor of the upright luminaire (nadir down, C0 along `x`):
+    /// the table as measured, for summaries and plots of the file itself.
+    pub fn upright_tilt_factor(&self) -> f64 {
+        self.tilt_factor(glam::DVec3::X, glam::DVec3::Y, glam::DVec3::Z)
+            .0
     }
 
     /// Largest intensity in the table [cd].
@@ -248,6 +345,16 @@ pub fn read(path: &std::path::Path) -> Result<Photometry, PhotometryError> {
             message: "unknown photometric format: the name must end in .ies or .ldt".into(),
         }),
     }
+}
+
+/// `text` without a leading byte-order mark: `U+FEFF`, or its UTF-8 bytes
+/// `EF BB BF` as [`read`] decodes them (one Latin-1 character per byte).
+/// Editors on Windows write one; left in place it would hide an IES file's
+/// version line.
+pub(crate) fn strip_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}')
+        .or_else(|| text.strip_prefix("\u{ef}\u{bb}\u{bf}"))
+        .unwrap_or(text)
 }
 
 /// Check that angles are finite, ascending and within `[lo, hi]` degrees.
