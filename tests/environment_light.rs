@@ -593,6 +593,127 @@ fn views_that_leave_the_scene_see_the_map() {
     assert_eq!(l, 8.0078125, "{}", csv.lines().nth(1).unwrap());
 }
 
+/// Insert Radiance header `lines` after the first line of an `.hdr` file.
+fn with_header(bytes: &[u8], lines: &str) -> Vec<u8> {
+    let k = bytes.iter().position(|&b| b == b'\n').unwrap() + 1;
+    [&bytes[..k], lines.as_bytes(), &bytes[k..]].concat()
+}
+
+/// Radiance's header convention: the stored values are the true ones times
+/// every `EXPOSURE=` (several multiply) and, per channel, every
+/// `COLORCORR=`, so the true value is the stored one divided by them. A
+/// 16 x 8 map, sky 1 above the horizon, one pixel of 1000 at row 2 (45 to
+/// 67.5 degrees from the zenith): `E_h = pi + 999 (cos^2 45 - cos^2 67.5) /
+/// 2 * 2 pi / 16` = 72.49 lx; with `EXPOSURE=4` a quarter, 18.12 lx.
+#[test]
+fn radiance_exposure_and_colorcorr_divide_the_stored_values() {
+    let d = dir("exposure");
+    let img = LuminanceImage::from_fn(16, 8, |x, y| match (x, y) {
+        (0, 2) => 1000.0,
+        (_, 0..4) => 1.0,
+        _ => 0.0,
+    })
+    .unwrap();
+    let plain = encode_hdr(&img).unwrap();
+    let (c0, c1) = ((PI / 4.0).cos(), (3.0 * PI / 8.0).cos());
+    let e_h = PI + 999.0 * (c0 * c0 - c1 * c1) / 2.0 * 2.0 * PI / 16.0;
+    assert!((e_h - 72.49).abs() < 0.005, "{e_h}");
+    for (name, header, k) in [
+        ("plain.hdr", "", 1.0),
+        ("exp4.hdr", "EXPOSURE=4\n", 4.0),
+        ("exp2x2.hdr", "EXPOSURE= 2\nEXPOSURE=2.0\n", 4.0),
+        ("exp_half.hdr", "EXPOSURE=0.5\n", 0.5),
+    ] {
+        std::fs::write(d.join(name), with_header(&plain, header)).unwrap();
+        let s = scene_in(
+            &d,
+            &format!("[[light]]\ntype = \"environment\"\nfile = \"{name}\"\n"),
+        );
+        let Light::Environment(env) = &s.lights[0] else {
+            panic!()
+        };
+        let got = env.horizontal_illuminance();
+        assert!(
+            (got / (e_h / k) - 1.0).abs() < 1e-12,
+            "{name}: {got} vs {}",
+            e_h / k
+        );
+        // The load summary says what it applied.
+        let note = s.notes.iter().find(|n| n.contains(name)).unwrap();
+        assert_eq!(
+            note.contains(&format!("EXPOSURE {k} applied")),
+            k != 1.0,
+            "{note}"
+        );
+        if name == "exp4.hdr" {
+            // And the estimate follows: 18.12 lx facing up.
+            check(&s, &[(DVec3::ZERO, DVec3::Z)], &[e_h / 4.0], 400_000, 5);
+        }
+    }
+    // COLORCORR per channel, with EXPOSURE: a pixel (1, 2, 4) stored.
+    let rgb = image::Rgb32FImage::from_fn(2, 1, |x, _| {
+        if x == 0 {
+            image::Rgb([0.5, 0.5, 0.5])
+        } else {
+            image::Rgb([1.0, 2.0, 4.0])
+        }
+    });
+    let mut bytes = Vec::new();
+    image::DynamicImage::ImageRgb32F(rgb)
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Hdr,
+        )
+        .unwrap();
+    let path = d.join("corr.hdr");
+    std::fs::write(
+        &path,
+        with_header(
+            &bytes,
+            "COLORCORR=2 1 0.5\nEXPOSURE=0.5\nCOLORCORR= 1 1 0.5\n",
+        ),
+    )
+    .unwrap();
+    let m = lumest::io::envmap::read_luminance_map(&path).unwrap();
+    let (r, g, b) = (0.5 / (0.5 * 2.0), 0.5 / 0.5, 0.5 / (0.5 * 0.25));
+    assert!(
+        (m.y[0] - (0.2126 * r + 0.7152 * g + 0.0722 * b)).abs() < 1e-12,
+        "{}",
+        m.y[0]
+    );
+    let (r, g, b) = (1.0 / (0.5 * 2.0), 2.0 / 0.5, 4.0 / (0.5 * 0.25));
+    assert!(
+        (m.y[1] - (0.2126 * r + 0.7152 * g + 0.0722 * b)).abs() < 1e-12,
+        "{}",
+        m.y[1]
+    );
+    assert_eq!((m.exposure, m.colour_correction), (0.5, [2.0, 1.0, 0.25]));
+    // Factors that are not positive are refused, naming the file and line.
+    for bad in [
+        "EXPOSURE=0\n",
+        "EXPOSURE=-2\n",
+        "COLORCORR=1 0 1\n",
+        "COLORCORR=1 1\n",
+    ] {
+        std::fs::write(d.join("bad.hdr"), with_header(&plain, bad)).unwrap();
+        let p = d.join("bad.toml");
+        std::fs::write(
+            &p,
+            "[[light]]\ntype = \"environment\"\nfile = \"bad.hdr\"\n",
+        )
+        .unwrap();
+        let e = lumest::scene::load(&p).err().unwrap().to_string();
+        let key = bad.split('=').next().unwrap();
+        assert!(
+            e.contains("bad.toml:3")
+                && e.contains("`file`")
+                && e.contains("bad.hdr")
+                && e.contains(key),
+            "{bad}: {e}"
+        );
+    }
+}
+
 /// A bounded scene (chains start uniformly on the disc that covers it):
 /// a Lambertian sphere of reflectance rho in a uniform map of luminance L.
 /// Convex, so its surface keeps only the map's light, `L` itself

@@ -1444,8 +1444,9 @@ fn environment(
             format!("the map's luminance integrated over the sphere must be finite and at most {MAX_INTENSITY:e} cd/m^2 sr: rescale it"),
         ));
     }
+    let header = map.header_note();
     let note = format!(
-        "environment map `{}`: {} x {} pixels ({}), {:.6e} lx on an unobstructed horizontal plane, int L dw = {:.6e} cd/m^2 sr",
+        "environment map `{}`: {} x {} pixels ({}{}{}), {:.6e} lx on an unobstructed horizontal plane, int L dw = {:.6e} cd/m^2 sr",
         fs.get_ref(),
         map.width,
         map.height,
@@ -1454,6 +1455,8 @@ fn environment(
         } else {
             "equirectangular"
         },
+        if header.is_empty() { "" } else { "; " },
+        header,
         env.horizontal_illuminance(),
         env.integral()
     );
