@@ -512,3 +512,51 @@ fn extreme_intensities_and_coordinates_are_rejected_or_scale_exactly() {
         }
     }
 }
+
+/// The sun's `date` must exist in the Gregorian calendar: a day past the
+/// month's end is refused with the file, line and field (it used to roll
+/// over silently: 2026-02-30 became 2026-03-02); leap years are every 4th
+/// year except centuries not divisible by 400.
+#[test]
+fn impossible_sun_dates_are_refused_with_file_line_and_field() {
+    let scene = |date: &str| {
+        format!(
+            "[[light]]\ntype = \"sun\"\nilluminance = 1000\ndate = \"{date}\"\ntime = \"12:00\"\nlatitude = 50\nlongitude = 0\n"
+        )
+    };
+    for (date, days) in [
+        ("2026-02-30", "28 days"),
+        ("2025-02-29", "28 days"),
+        ("2026-04-31", "30 days"),
+        ("1900-02-29", "28 days"),
+        ("2026-06-31", "30 days"),
+        ("2026-01-32", "31 days"),
+    ] {
+        let e = parse(&scene(date)).unwrap_err();
+        assert!(
+            e.contains("test.toml:4")
+                && e.contains("`date`")
+                && e.contains(date)
+                && e.contains(days),
+            "{date}: {e}"
+        );
+    }
+    for date in [
+        "2024-02-29",
+        "2000-02-29",
+        "2026-02-28",
+        "2026-04-30",
+        "2026-12-31",
+        "2026-01-31",
+    ] {
+        parse(&scene(date)).unwrap_or_else(|e| panic!("{date}: {e}"));
+    }
+    // Day 0 and month 13 stay refused as before.
+    for date in ["2026-02-00", "2026-13-01"] {
+        let e = parse(&scene(date)).unwrap_err();
+        assert!(
+            e.contains("test.toml:4") && e.contains("`date`"),
+            "{date}: {e}"
+        );
+    }
+}

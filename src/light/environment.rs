@@ -2,17 +2,26 @@
 //! infinity, given by an HDR map (a sky, a light probe).
 //!
 //! **Axes.** The map's own frame has `+z` up; `theta` is measured from `+z`
-//! and `phi` from `+x` towards `+y`. An *equirectangular* map of `W x H`
-//! pixels covers `phi` from 0 at its left edge to `2 pi` at its right edge
-//! (column `j` spans `[2 pi j / W, 2 pi (j + 1) / W]`) and `theta` from 0
-//! (the zenith, the top row) to `pi` (the nadir, the bottom row; row `i`
-//! spans `[pi i / H, pi (i + 1) / H]`). An *angular* (mirror-ball light
-//! probe, Debevec's angular map) image is a disc: its centre looks along
-//! `+x`, its top along `+z`, its right along `-y` (as seen by a viewer
-//! looking along `+x`), and the angle from `+x` grows linearly with the
-//! distance from the centre, to 180 degrees on the rim. The light is
-//! turned by `rotate` about the vertical: a map feature at `phi` appears
-//! at world azimuth `phi + rotate`.
+//! and the azimuth `phi` from `+x` towards `+y` (counter-clockwise seen
+//! from above); at `rotate = 0` it is the world frame (`+x` east, `+y`
+//! north). An *equirectangular* (latitude-longitude) map of `W x H` pixels
+//! has the zenith on its top row and the nadir on its bottom (row `i` spans
+//! `theta` in `[pi i / H, pi (i + 1) / H]`); its left edge looks along `+x`
+//! and moving right across the image turns *clockwise* seen from above, as
+//! a viewer inside the sphere turning to the right (the layout of the
+//! OpenEXR latitude-longitude map and of photographic panoramas): column
+//! `j` spans `phi` in `[-2 pi (j + 1) / W, -2 pi j / W]`, so a quarter of
+//! the way across looks along `-y`, the centre along `-x`, three quarters
+//! along `+y` (at `rotate = 0`: east, south, west, north, east). The table
+//! keeps the column's own angle `t = -phi` in `[0, 2 pi)` (`table_direction`,
+//! `table_angle`). An *angular* (mirror-ball light probe, Debevec's
+//! angular map) image is a disc: its centre looks along `+x`, its top along
+//! `+z`, its right along `+y` (right x up = centre, as in Debevec's
+//! `angmap.cal`: the ball seen from the camera, so mirrored against a
+//! photograph looking along `+x`), and the angle from `+x` grows linearly
+//! with the distance from the centre, to 180 degrees on the rim. The light
+//! is turned by `rotate` about the vertical, counter-clockwise seen from
+//! above: a map feature at `phi` appears at world azimuth `phi + rotate`.
 //!
 //! **Luminance.** A pixel's value (its `Y`, exactly the value of a grey
 //! pixel; [`crate::io::envmap::luminance_of`]) times `scale` is the
@@ -116,11 +125,9 @@ impl Environment {
                         (PI * (i + 1) as f64 / rows as f64).cos(),
                     );
                     let ct = c0 + (c1 - c0) * (a as f64 + 0.5) / 4.0;
-                    let st = (1.0 - ct * ct).max(0.0).sqrt();
                     for b in 0..4 {
-                        let phi = 2.0 * PI * (j as f64 + (b as f64 + 0.5) / 4.0) / cols as f64;
-                        let (sp, cp) = phi.sin_cos();
-                        sum += sky.luminance(DVec3::new(st * cp, st * sp, ct));
+                        let t = 2.0 * PI * (j as f64 + (b as f64 + 0.5) / 4.0) / cols as f64;
+                        sum += sky.luminance(table_direction(ct, t));
                     }
                 }
                 values.push(sum / 16.0);
@@ -171,28 +178,26 @@ impl Environment {
         let (rows, cols) = self.table.size();
         let (i, j) = (i.min(rows - 1), j.min(cols - 1));
         let theta = PI * (i as f64 + 0.5) / rows as f64;
-        let phi = 2.0 * PI * (j as f64 + 0.5) / cols as f64;
-        self.to_world(theta.cos(), phi)
+        let t = 2.0 * PI * (j as f64 + 0.5) / cols as f64;
+        self.to_world(theta.cos(), t)
     }
 
-    /// The map frame's `(cos theta, phi)` of world direction `w` (unit).
+    /// The table's `(cos theta, t)` of world direction `w` (unit).
     #[inline]
     fn to_map(&self, w: DVec3) -> (f64, f64) {
         let (s, c) = self.turn;
         // Undo the turn: map = R(-rotate) world.
         let x = c * w.x + s * w.y;
         let y = -s * w.x + c * w.y;
-        (w.z.clamp(-1.0, 1.0), y.atan2(x).rem_euclid(2.0 * PI))
+        (w.z.clamp(-1.0, 1.0), table_angle(x, y))
     }
 
-    /// World direction of map coordinates.
+    /// World direction of the table's `(cos theta, t)`.
     #[inline]
-    fn to_world(&self, cos_theta: f64, phi: f64) -> DVec3 {
-        let st = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-        let (sp, cp) = phi.sin_cos();
-        let (x, y) = (st * cp, st * sp);
+    fn to_world(&self, cos_theta: f64, t: f64) -> DVec3 {
+        let m = table_direction(cos_theta, t);
         let (s, c) = self.turn;
-        DVec3::new(c * x - s * y, s * x + c * y, cos_theta)
+        DVec3::new(c * m.x - s * m.y, s * m.x + c * m.y, m.z)
     }
 
     /// Luminance [cd/m^2] arriving from unit world direction `wi` (towards the sky).
@@ -312,6 +317,23 @@ impl Environment {
     }
 }
 
+/// Map-frame direction of the table's `(cos theta, t)`: the column angle
+/// `t` turns clockwise seen from above (see the module docs), so the
+/// azimuth is `phi = -t`.
+#[inline]
+fn table_direction(cos_theta: f64, t: f64) -> DVec3 {
+    let st = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let (sp, cp) = t.sin_cos();
+    DVec3::new(st * cp, -st * sp, cos_theta)
+}
+
+/// The table's column angle `t = -phi` in `[0, 2 pi)` of the map-frame
+/// horizontal components `(x, y)` (the inverse of [`table_direction`]).
+#[inline]
+fn table_angle(x: f64, y: f64) -> f64 {
+    (-y).atan2(x).rem_euclid(2.0 * PI)
+}
+
 /// Direction (map frame) of angular-map image coordinates `a` (right) and
 /// `b` (up) in [-1, 1]; `None` outside the disc.
 pub fn angular_direction(a: f64, b: f64) -> Option<DVec3> {
@@ -324,8 +346,8 @@ pub fn angular_direction(a: f64, b: f64) -> Option<DVec3> {
     if r == 0.0 {
         return Some(DVec3::X);
     }
-    // Right is -y, up is +z.
-    Some(DVec3::new(cg, -sg * a / r, sg * b / r))
+    // Right is +y, up is +z: right x up = +x, the centre (Debevec).
+    Some(DVec3::new(cg, sg * a / r, sg * b / r))
 }
 
 /// Image coordinates `(a, b)` of a map-frame direction on the angular map.
@@ -335,7 +357,7 @@ pub fn angular_coords(w: DVec3) -> (f64, f64) {
     if s == 0.0 {
         return (r, 0.0);
     }
-    (r * -w.y / s, r * w.z / s)
+    (r * w.y / s, r * w.z / s)
 }
 
 /// Resample an angular map onto an `2n x n` equirectangular table (times
@@ -354,10 +376,8 @@ fn resample_angular(y: &[f64], w: usize, h: usize, n: usize, scale: f64) -> Vec<
             for a in 0..4 {
                 let ct = c0 + (c1 - c0) * (a as f64 + 0.5) / 4.0;
                 for b in 0..4 {
-                    let phi = 2.0 * PI * (j as f64 + (b as f64 + 0.5) / 4.0) / cols as f64;
-                    let st = (1.0 - ct * ct).max(0.0).sqrt();
-                    let d = DVec3::new(st * phi.cos(), st * phi.sin(), ct);
-                    let (u, v) = angular_coords(d);
+                    let t = 2.0 * PI * (j as f64 + (b as f64 + 0.5) / 4.0) / cols as f64;
+                    let (u, v) = angular_coords(table_direction(ct, t));
                     let x = (((u + 1.0) / 2.0 * w as f64) as usize).min(w - 1);
                     let yy = (((1.0 - v) / 2.0 * h as f64) as usize).min(h - 1);
                     sum += y[yy * w + x];
@@ -375,31 +395,76 @@ mod tests {
 
     #[test]
     fn angular_map_round_trips_and_axes() {
-        for (a, b) in [(0.3, 0.2), (-0.7, 0.1), (0.0, -0.9), (0.5, 0.5)] {
+        for (a, b) in [
+            (0.3, 0.2),
+            (-0.7, 0.1),
+            (0.0, -0.9),
+            (0.5, 0.5),
+            (-0.2, -0.6),
+        ] {
             let d = angular_direction(a, b).unwrap();
             let (a2, b2) = angular_coords(d);
             assert!((a2 - a).abs() < 1e-12 && (b2 - b).abs() < 1e-12);
+        }
+        // And the other way: directions all round the sphere (not the rim).
+        for k in 0..200 {
+            let ct = 1.0 - 2.0 * (k as f64 + 0.5) / 200.0;
+            let t = 2.399963 * k as f64;
+            let w = table_direction(ct, t);
+            let (a, b) = angular_coords(w);
+            assert!(
+                (angular_direction(a, b).unwrap() - w).length() < 1e-9,
+                "{w}"
+            );
         }
         assert_eq!(angular_direction(0.0, 0.0), Some(DVec3::X));
         // Top of the disc, half way: 90 degrees from +x towards +z.
         let up = angular_direction(0.0, 0.5).unwrap();
         assert!((up - DVec3::Z).length() < 1e-12);
+        // Debevec's layout: right x up = centre, so the right is +y (was -y,
+        // a mirror image).
         let right = angular_direction(0.5, 0.0).unwrap();
-        assert!((right + DVec3::Y).length() < 1e-12);
+        assert!((right - DVec3::Y).length() < 1e-12);
+        assert!((right.cross(up) - DVec3::X).length() < 1e-12);
         assert!(angular_direction(0.9, 0.9).is_none());
     }
 
     #[test]
+    fn table_columns_turn_clockwise_seen_from_above() {
+        for k in 0..100 {
+            let t = 2.0 * PI * (k as f64 + 0.5) / 100.0;
+            let w = table_direction(0.3, t);
+            assert!((table_angle(w.x, w.y) - t).abs() < 1e-12);
+        }
+        // A quarter of the way across looks along -y (south at rotate 0).
+        let q = table_direction(0.0, PI / 2.0);
+        assert!((q + DVec3::Y).length() < 1e-12);
+    }
+
+    #[test]
     fn rotation_and_lookup_follow_the_axes() {
-        // 4 x 2 map: upper row values 1, 2, 3, 4 by phi quadrant, lower row 0.
+        // 4 x 2 map: upper row values 1, 2, 3, 4 by column, lower row 0.
+        // Columns turn clockwise seen from above from +x: column 0 spans
+        // the azimuths (from +x towards +y) -90..0 degrees, column 1
+        // -180..-90, column 2 90..180, column 3 0..90. (The mirrored layout
+        // before had column 0 at 0..90 and column 1 at 90..180.)
         let y = [1.0, 2.0, 3.0, 4.0, 0.0, 0.0, 0.0, 0.0];
         let e = Environment::new(&y, 4, 2, Mapping::Equirect, 2.0, 0.0).unwrap();
         let up = |phi: f64| DVec3::new(phi.cos() * 0.6, phi.sin() * 0.6, 0.8);
-        assert_eq!(e.luminance(up(0.1)), 2.0);
-        assert_eq!(e.luminance(up(PI / 2.0 + 0.1)), 4.0);
+        assert_eq!(e.luminance(up(0.1)), 8.0);
+        assert_eq!(e.luminance(up(-0.1)), 2.0);
+        assert_eq!(e.luminance(up(PI / 2.0 + 0.1)), 6.0);
+        assert_eq!(e.luminance(up(-PI / 2.0 - 0.1)), 4.0);
         assert_eq!(e.luminance(-DVec3::Z), 0.0);
+        // Turned by 90 degrees counter-clockwise: column 0 now spans 0..90.
         let r = Environment::new(&y, 4, 2, Mapping::Equirect, 2.0, PI / 2.0).unwrap();
-        assert_eq!(r.luminance(up(PI / 2.0 + 0.1)), 2.0);
+        assert_eq!(r.luminance(up(0.1)), 2.0);
+        assert_eq!(r.luminance(up(PI / 2.0 + 0.1)), 8.0);
+        // Cell centres agree with the lookup.
+        for (j, v) in y[..4].iter().enumerate() {
+            assert_eq!(e.luminance(e.cell_direction(0, j)), 2.0 * v);
+            assert_eq!(r.luminance(r.cell_direction(0, j)), 2.0 * v);
+        }
         // Uniform upper hemisphere L: E_h = pi L.
         let u = Environment::new(&[5.0, 5.0, 0.0, 0.0], 2, 2, Mapping::Equirect, 1.0, 0.0).unwrap();
         assert!((u.horizontal_illuminance() - 5.0 * PI).abs() < 1e-12);

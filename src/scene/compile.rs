@@ -1045,6 +1045,17 @@ fn light_keys(d: &LightDesc) -> Vec<(&'static str, Option<Range<usize>>)> {
     )
 }
 
+/// The days in month `m` (1-12) of Gregorian year `y`: February has 29 in
+/// years divisible by 4, except centuries not divisible by 400.
+fn days_in_month(y: i32, m: u32) -> u32 {
+    match m {
+        4 | 6 | 9 | 11 => 30,
+        2 if (y % 4 == 0 && y % 100 != 0) || y % 400 == 0 => 29,
+        2 => 28,
+        _ => 31,
+    }
+}
+
 /// The sun's unit direction (towards it) from `sun_altitude` and
 /// `sun_azimuth` [deg], or from `date`, `time`, `utc_offset`, `latitude`
 /// and `longitude` ([`crate::light::sun_position`]), with a note.
@@ -1130,8 +1141,19 @@ fn sun_position(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(DVec3, Strin
     };
     let (year, month, day) = match ymd {
         (Some(y), Some(m), Some(dd))
-            if (1800..=2200).contains(&y) && (1..=12).contains(&m) && (1..=31).contains(&dd) =>
+            if (1800..=2200).contains(&y) && (1..=12).contains(&m) && dd >= 1 =>
         {
+            let last = days_in_month(y, m);
+            if dd > last {
+                return Err(ctx.invalid(
+                    ds.span(),
+                    "date",
+                    format!(
+                        "`{}` is not a date: month {m} of {y} has {last} days (Gregorian calendar)",
+                        ds.get_ref()
+                    ),
+                ));
+            }
             (y, m, dd)
         }
         _ => {
@@ -1449,8 +1471,9 @@ fn environment(
             format!("the map's luminance integrated over the sphere must be finite and at most {MAX_INTENSITY:e} cd/m^2 sr: rescale it"),
         ));
     }
+    let header = map.header_note();
     let note = format!(
-        "environment map `{}`: {} x {} pixels ({}), {:.6e} lx on an unobstructed horizontal plane, int L dw = {:.6e} cd/m^2 sr",
+        "environment map `{}`: {} x {} pixels ({}{}{}), {:.6e} lx on an unobstructed horizontal plane, int L dw = {:.6e} cd/m^2 sr",
         fs.get_ref(),
         map.width,
         map.height,
@@ -1459,6 +1482,8 @@ fn environment(
         } else {
             "equirectangular"
         },
+        if header.is_empty() { "" } else { "; " },
+        header,
         env.horizontal_illuminance(),
         env.integral()
     );
