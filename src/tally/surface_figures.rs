@@ -179,13 +179,16 @@ pub fn surface_figures(
     let (plug, _) = nonlinear(&means, weights, wsum);
     let se = avg.std_error();
     let half = t_factor(0.95, b as u64) * se;
+    // The value: the weighted mean of the points' means (the batch
+    // averages' mean, up to rounding), at the interval's centre.
+    let value = means.iter().zip(weights).map(|(e, w)| e * w).sum::<f64>() / wsum;
     let ci95 = if se == 0.0 && b >= 2 {
-        (avg.mean(), avg.mean())
+        (value, value)
     } else {
-        (avg.mean() - half, avg.mean() + half)
+        (value - half, value + half)
     };
     let e_avg = Figure {
-        value: means.iter().zip(weights).map(|(e, w)| e * w).sum::<f64>() / wsum,
+        value,
         std_error: if b >= 2 { se } else { f64::NAN },
         ci95,
         basic_ci95: ci95,
@@ -251,7 +254,6 @@ fn extreme_bounds(
     // (Bonferroni: one-sided 2.5 % / m each; two-sided 5 % / m for Ud).
     let c1 = t_factor(0.95, b as u64);
     let cm = t_factor(1.0 - 0.05 / m as f64, b as u64);
-    let cm2 = t_factor(1.0 - 0.05 / (2 * m) as f64, b as u64);
     // Per-point standard errors of the means, and of the ratios
     // r_k = ybar_k / E_avg by the delta method on the batch values
     // z_bk = (y_bk - r_k A_b) / E_avg (A_b: batch b's weighted average,
@@ -279,8 +281,8 @@ fn extreme_bounds(
     let e_max = (max_of(means, &s, -cm), max_of(means, &s, c1));
     let u0 = (min_of(&ratios, &sr, -c1), min_of(&ratios, &sr, cm));
     // Ud: every point within its two-sided bound at once.
-    let (lo_min, hi_min) = (min_of(means, &s, -cm2), min_of(means, &s, cm2));
-    let (lo_max, hi_max) = (max_of(means, &s, -cm2), max_of(means, &s, cm2));
+    let (lo_min, hi_min) = (min_of(means, &s, -cm), min_of(means, &s, cm));
+    let (lo_max, hi_max) = (max_of(means, &s, -cm), max_of(means, &s, cm));
     let ud = (lo_min.max(0.0) / hi_max, hi_min / lo_max);
     let ud = if lo_max > 0.0 {
         ud
@@ -447,6 +449,17 @@ mod tests {
         let h = surface_figures(&bm1, &[0.0, 0.0], &[0, 1], &[1.0, 1.0], 1.0, 0);
         assert!((h.e_min.ci95.1 - (2.0 + cm * s1)).abs() < 1e-12);
         assert!((h.e_min.ci95.0 - (2.0 - t_factor(0.95, 3) * s1)).abs() < 1e-12);
+        // Ud: both points within their two-sided bounds at once, 5 % / m
+        // each (the exact point 10 is the maximum): (2 -+ cm s2) / 10.
+        let bm2 = means(&[&[1.9, 10.0], &[2.0, 10.0], &[2.1, 10.0]]);
+        let k = surface_figures(&bm2, &[0.0, 0.0], &[0, 1], &[1.0, 1.0], 1.0, 0);
+        let s2 = 0.1 / 3.0f64.sqrt();
+        let (lo, hi) = k.ud.ci95;
+        assert!((lo - (2.0 - cm * s2) / 10.0).abs() < 1e-12, "{lo}");
+        assert!((hi - (2.0 + cm * s2) / 10.0).abs() < 1e-12, "{hi}");
+        // The average's interval is centred on its value.
+        let c = 0.5 * (f.e_avg.ci95.0 + f.e_avg.ci95.1);
+        assert_eq!(c.to_bits(), f.e_avg.value.to_bits());
     }
 
     /// Exact values (every batch equal) give zero errors and point intervals.
