@@ -180,6 +180,20 @@ fn rectangle_and_road() {
         "[[grid]]\nname = \"road\"\ntype = \"road\"\ncorner = [0, 0, 0]\nedge1 = [25, 0, 0]\nedge2 = [0, 3.5, 0]\n",
     );
     assert_eq!(g.cells, (10, 3));
+    assert!(!g.rule.contains("WARNING"), "{}", g.rule);
+    // A 4.5 m lane keeps d = 1.5 m; a 6 m lane (d = 2 m) breaks the
+    // standard's 1.5 m across an illuminance field, and says so.
+    for (w, warned) in [(4.5, false), (6.0, true)] {
+        let g = one(&format!(
+            "[[grid]]\nname = \"road\"\ntype = \"road\"\ncorner = [0, 0, 0]\nedge1 = [25, 0, 0]\nedge2 = [0, {w}, 0]\n"
+        ));
+        assert_eq!(
+            g.rule.contains("WARNING: d exceeds the 1.5 m"),
+            warned,
+            "{}",
+            g.rule
+        );
+    }
 }
 
 /// Bad keys get the file, the line and the field.

@@ -462,9 +462,18 @@ fn road_grid(g: &GridDesc, ctx: &SourceCtx, offset: f64) -> Result<Grid, SceneEr
         u0: None,
         maintenance_factor: 1.0,
         rule: format!(
-            "EN 13201-3: S = {:.3} m, N = {rows}, D = {sa:.3} m; {lanes} lane(s), {} points across each, d = {sb:.3} m",
+            "EN 13201-3: S = {:.3} m, N = {rows}, D = {sa:.3} m; {lanes} lane(s), {} points across each, d = {sb:.3} m{}",
             patch.a,
-            road::POINTS_PER_LANE
+            road::POINTS_PER_LANE,
+            if sb > road::MAX_ACROSS + 1e-9 {
+                format!(
+                    "; WARNING: d exceeds the {} m EN 13201-3 allows across an illuminance field (lanes wider than {} m): give more lanes",
+                    road::MAX_ACROSS,
+                    road::MAX_ACROSS * road::POINTS_PER_LANE as f64
+                )
+            } else {
+                String::new()
+            }
         ),
     })
 }

@@ -10,8 +10,10 @@
 //! edges: the centres of 3 equal cells.
 //!
 //! For illuminance over a whole relevant area (rather than per lane) the
-//! standard asks for at least 3 points across with `d <= 1.5 m`: 3 points
-//! per lane meet that for lanes up to 4.5 m wide (the usual 3-3.75 m).
+//! standard asks for the fewest points across, at least 3, with `d <= 1.5
+//! m` over the whole width: 3 points per lane (the luminance rule, kept
+//! here) keep `d <= 1.5 m` for lanes up to 4.5 m wide (the usual 3-3.75
+//! m), with as many or more points; wider lanes are warned of.
 
 /// Transverse rows along a field of length `s` [m] (the spacing of the
 /// luminaires): `N = 10` up to 30 m, else the smallest `N` with `s / N <= 3 m`.
@@ -25,6 +27,10 @@ pub fn rows_along(s: f64) -> usize {
 
 /// Points across each lane.
 pub const POINTS_PER_LANE: usize = 3;
+
+/// Largest transverse spacing `d` [m] EN 13201-3 allows across an
+/// illuminance field.
+pub const MAX_ACROSS: f64 = 1.5;
 
 #[cfg(test)]
 mod tests {
