@@ -523,10 +523,19 @@ impl Receivers {
                 // Half of a small solid centred on a surface would lie
                 // inside it; the plane's rule (a point on a surface faces
                 // its normal's side) has no counterpart for a solid.
+                let hint = match kind {
+                    Solid::Cylindrical | Solid::Semicylindrical => {
+                        "EN 12464-1 asks cylindrical illuminance 1.2 m above the floor for seated and 1.6 m for standing people; EN 13201-3 semi-cylindrical illuminance 1.5 m above a road"
+                    }
+                    Solid::Hemispherical => {
+                        "a small `offset` in its [[grid]], such as 0.001 m, lifts it; EN 13201-3's hemispherical illuminance at a road's surface counts the luminaires' light alone, which the `E_direct` column holds"
+                    }
+                    Solid::Spherical => "give it a small offset along the normal",
+                };
                 return Err(ReceiverError {
                     index: j,
                     message: format!(
-                        "a {} receiver lies on a surface, so half of it would be inside: place it off the surface (EN 12464-1 asks cylindrical illuminance 1.2 m above the floor for seated and 1.6 m for standing people)",
+                        "a {} receiver lies on a surface, so part of it would be inside: place it off the surface ({hint})",
                         kind.name()
                     ),
                 });
