@@ -412,8 +412,20 @@ fn points_cases() -> Vec<Case> {
     let mut c = vec![
         points("empty file", "", Error("p.csv")),
         points("header only", "x,y,z,nx,ny,nz\n", Error("p.csv")),
-        points("hemispherical receiver on the floor", "x,y,z,nx,ny,nz,receiver\n0,0,0,0,0,1,hemispherical\n", Error("p.csv:2: a hemispherical receiver lies on a surface, so part of it would be inside: place it off the surface (a small `offset`")),
-        points("cylindrical receiver on the floor", "x,y,z,nx,ny,nz,receiver\n0,0,0,0,0,1,cylindrical\n", Error("p.csv:2: a cylindrical receiver lies on a surface, so part of it would be inside: place it off the surface (EN 12464-1 asks")),
+        points(
+            "hemispherical receiver on the floor",
+            "x,y,z,nx,ny,nz,receiver\n0,0,0,0,0,1,hemispherical\n",
+            Error(
+                "p.csv:2: a hemispherical receiver lies on a surface, so part of it would be inside: place it off the surface (a small `offset`",
+            ),
+        ),
+        points(
+            "cylindrical receiver on the floor",
+            "x,y,z,nx,ny,nz,receiver\n0,0,0,0,0,1,cylindrical\n",
+            Error(
+                "p.csv:2: a cylindrical receiver lies on a surface, so part of it would be inside: place it off the surface (EN 12464-1 asks",
+            ),
+        ),
         points(
             "column `nz` missing",
             "x,y,z,nx,ny\n0,0,0.75,0,0\n",

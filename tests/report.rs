@@ -167,8 +167,20 @@ fn check_grids(doc: &Html, figures: &[HashMap<String, String>], dir: &Path) {
 fn office_report_matches_its_figures() {
     let dir = tempfile::tempdir().unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/office.toml");
-    let (doc, figures, _) = run(dir.path(), &scene, &["--chains", "16384", "--seed", "7"]);
+    let (doc, figures, err) = run(dir.path(), &scene, &["--chains", "16384", "--seed", "7"]);
     assert_eq!(figures.len(), 40, "eight grids, five figures each");
+    // The east wall's verdicts say they leave out its 12 points behind the
+    // whiteboard (flagged `enclosed`), and over how many they judge.
+    let east = figures.iter().find(|r| r["grid"] == "east wall").unwrap();
+    let (used, out) = (&east["points"], &east["left_out"]);
+    assert_eq!(out, "12");
+    let total = used.parse::<usize>().unwrap() + 12;
+    assert!(
+        err.contains(&format!(
+            "(judged on {used} of {total} points: 12 flagged `enclosed` left out)"
+        )),
+        "{err}"
+    );
     check_grids(&doc, &figures, dir.path());
     // Luminaires: five downlights and the pendant dimmed to 3000 lm in the scene file.
     let rows: Vec<Vec<String>> = doc

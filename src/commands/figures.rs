@@ -244,7 +244,18 @@ pub fn summary_lines(g: &GridFigures, equal_weights: bool) -> Vec<String> {
         reqs.push(format!("U0 >= {}: {}", format_number(u0), v.name()));
     }
     if !reqs.is_empty() {
-        out.push(format!("  requirements: {}", reqs.join("; ")));
+        // A verdict over fewer points than the grid has says so.
+        let over = if g.left_out > 0 {
+            format!(
+                " (judged on {} of {} points: {} flagged `enclosed` left out)",
+                g.points,
+                g.points + g.left_out,
+                g.left_out
+            )
+        } else {
+            String::new()
+        };
+        out.push(format!("  requirements: {}{over}", reqs.join("; ")));
     }
     out
 }
