@@ -137,8 +137,9 @@ impl std::fmt::Debug for Mesh {
 
 impl Mesh {
     /// Load a Wavefront OBJ file with `tobj`: all objects and groups merged
-    /// into one mesh, polygons triangulated as fans from their first vertex
-    /// (exact for convex polygons), points and lines ignored, materials,
+    /// into one mesh, polygons triangulated by ear clipping in their plane
+    /// ([`super::polygon`]: exact for concave polygons too, the winding
+    /// kept), points and lines ignored, materials,
     /// normals and texture coordinates ignored. Coordinates are read as
     /// `f64` and taken as metres. Zero-area triangles are dropped.
     ///
@@ -150,7 +151,7 @@ impl Mesh {
             std::fs::read(path).map_err(|e| file_error(&file, format!("cannot read: {e}")))?;
         let mut rest: &[u8] = &bytes;
         let options = tobj::LoadOptions {
-            triangulate: true,
+            triangulate: false,
             single_index: false,
             ignore_points: true,
             ignore_lines: true,
@@ -203,12 +204,36 @@ impl Mesh {
                     .chunks_exact(3)
                     .map(|p| DVec3::new(p[0], p[1], p[2])),
             );
-            triangles.extend(
-                m.mesh
-                    .indices
-                    .chunks_exact(3)
-                    .map(|t| [base + t[0], base + t[1], base + t[2]]),
-            );
+            // Faces of any arity (none listed: all triangles).
+            let idx = &m.mesh.indices;
+            let arities = &m.mesh.face_arities;
+            let mut at = 0usize;
+            let faces = if arities.is_empty() {
+                idx.len() / 3
+            } else {
+                arities.len()
+            };
+            for f in 0..faces {
+                let k = arities.get(f).map_or(3, |&a| a as usize);
+                let face = &idx[at..at + k];
+                at += k;
+                if k == 3 {
+                    triangles.push([base + face[0], base + face[1], base + face[2]]);
+                } else if k > 3 {
+                    let pts: Vec<DVec3> = face
+                        .iter()
+                        .map(|&i| {
+                            let p = &m.mesh.positions[3 * i as usize..3 * i as usize + 3];
+                            DVec3::new(p[0], p[1], p[2])
+                        })
+                        .collect();
+                    triangles.extend(
+                        super::polygon::triangulate(&pts)
+                            .into_iter()
+                            .map(|t| [base + face[t[0]], base + face[t[1]], base + face[t[2]]]),
+                    );
+                }
+            }
         }
         if let Some(v) = vertices.iter().find(|v| !v.is_finite()) {
             return Err(match non_finite_vertex(&text()) {
@@ -1178,6 +1203,31 @@ mod tests {
         let p = dir.path().join(name);
         std::fs::write(&p, text).unwrap();
         p
+    }
+
+    /// A concave face (an L of area 3 at z = 1): ear clipping covers it
+    /// exactly, facing +z; a fan from its first vertex would also cover
+    /// (0.8, 1.2), outside the L (a reviewer's case: a point there read 0
+    /// lx under a light above).
+    #[test]
+    fn a_concave_face_is_covered_exactly() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = "v 0 0 1\nv 2 0 1\nv 2 2 1\nv 1 2 1\nv 1 1 1\nv 0 1 1\nf 1 2 3 4 5 6\n";
+        let m = Mesh::load_obj(&write(&dir, "l.obj", text)).unwrap();
+        assert_eq!(m.triangle_count(), 4);
+        let area: f64 = (0..4).map(|k| m.area(k)).sum();
+        assert!((area - 3.0).abs() < 1e-12, "{area}");
+        assert!((0..4).all(|k| m.normal(k) == DVec3::Z));
+        let down = -DVec3::Z;
+        for (x, y, hit) in [
+            (0.8, 1.2, false),
+            (1.9, 1.9, true),
+            (0.5, 0.5, true),
+            (0.5, 1.5, false),
+        ] {
+            let o = DVec3::new(x, y, 2.0);
+            assert_eq!(m.occluded(o, down, 1e-9, 5.0, None), hit, "({x}, {y})");
+        }
     }
 
     #[test]
