@@ -163,19 +163,32 @@ impl Mesh {
             Ok((models, _materials)) => models,
             Err(e) => {
                 return Err(match e {
-                    tobj::LoadError::FaceVertexOutOfBounds => match bad_face_index(&text()) {
-                        Some((line, message)) => MeshError::Line {
-                            file,
-                            line,
-                            message,
-                        },
-                        None => file_error(&file, e.to_string()),
-                    },
-                    // Raised when an object ends, not on the offending line.
-                    tobj::LoadError::FaceTexCoordOutOfBounds
-                    | tobj::LoadError::FaceNormalOutOfBounds
-                    | tobj::LoadError::FaceColorOutOfBounds
-                    | tobj::LoadError::InvalidPolygon => file_error(&file, e.to_string()),
+                    // Raised when an object ends, not on the offending
+                    // line: found again by a scan of the text.
+                    tobj::LoadError::FaceVertexOutOfBounds
+                    | tobj::LoadError::FaceTexCoordOutOfBounds
+                    | tobj::LoadError::FaceNormalOutOfBounds => {
+                        let (slot, key, what) = match e {
+                            tobj::LoadError::FaceVertexOutOfBounds => {
+                                (0, "v", ("vertex", "vertices"))
+                            }
+                            tobj::LoadError::FaceTexCoordOutOfBounds => {
+                                (1, "vt", ("texture coordinate", "texture coordinates"))
+                            }
+                            _ => (2, "vn", ("normal", "normals")),
+                        };
+                        match bad_face_ref(&text(), slot, key, what) {
+                            Some((line, message)) => MeshError::Line {
+                                file,
+                                line,
+                                message,
+                            },
+                            None => file_error(&file, e.to_string()),
+                        }
+                    }
+                    tobj::LoadError::FaceColorOutOfBounds | tobj::LoadError::InvalidPolygon => {
+                        file_error(&file, e.to_string())
+                    }
                     // Raised while parsing the last line read.
                     _ => {
                         let consumed = &bytes[..bytes.len() - rest.len()];
@@ -194,6 +207,16 @@ impl Mesh {
                 });
             }
         };
+        // tobj takes a face of fewer than 3 vertices for a line, which it
+        // drops here unchecked: one that refers to a missing vertex is
+        // refused all the same.
+        if let Some((line, message)) = bad_face_ref(&text(), 0, "v", ("vertex", "vertices")) {
+            return Err(MeshError::Line {
+                file,
+                line,
+                message,
+            });
+        }
         let mut vertices = Vec::new();
         let mut triangles = Vec::new();
         for m in &models {
@@ -620,25 +643,28 @@ fn non_finite_vertex(text: &str) -> Option<u64> {
     })
 }
 
-/// Line (1-based) and message for the first face (3 or more vertices) with
-/// a vertex index out of range.
-fn bad_face_index(text: &str) -> Option<(u64, String)> {
+/// The first face line of `text` with a reference out of range: its
+/// `slot`-th index (0: vertex, 1: texture coordinate, 2: normal) beyond the
+/// `key` lines (`v`, `vt`, `vn`) of the file (1-based, or negative from the
+/// last read), with a message naming what it refers to (singular, plural).
+fn bad_face_ref(
+    text: &str,
+    slot: usize,
+    key: &str,
+    (what, plural): (&str, &str),
+) -> Option<(u64, String)> {
     let total = text
         .lines()
-        .filter(|l| l.split_whitespace().next() == Some("v"))
+        .filter(|l| l.split_whitespace().next() == Some(key))
         .count() as i64;
     let mut seen = 0i64;
     for (n, line) in text.lines().enumerate() {
         let mut w = line.split_whitespace();
         match w.next() {
-            Some("v") => seen += 1,
+            Some(k) if k == key => seen += 1,
             Some("f") => {
-                let refs: Vec<&str> = w.collect();
-                if refs.len() < 3 {
-                    continue;
-                }
-                for r in refs {
-                    let Ok(x) = r.split('/').next().unwrap_or("").parse::<i64>() else {
+                for r in w {
+                    let Ok(x) = r.split('/').nth(slot).unwrap_or("").parse::<i64>() else {
                         continue;
                     };
                     let bad = if x < 0 {
@@ -650,8 +676,8 @@ fn bad_face_index(text: &str) -> Option<(u64, String)> {
                         return Some((
                             n as u64 + 1,
                             format!(
-                                "face vertex index {x} out of range \
-                                 ({total} vertices in the file, {seen} before this line)"
+                                "face {what} index {x} out of range \
+                                 ({total} {plural} in the file, {seen} before this line)"
                             ),
                         ));
                     }
@@ -1359,6 +1385,21 @@ f 9
                 "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n",
                 ":4: face parse error",
             ),
+            (
+                "vt.obj",
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\nf 1/1 2/5 3/1\n",
+                ":6: face texture coordinate index 5 out of range (1 texture coordinates in the file, 1 before this line)",
+            ),
+            (
+                "vn.obj",
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//4\n",
+                ":5: face normal index 4 out of range (1 normals in the file, 1 before this line)",
+            ),
+            (
+                "short.obj",
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 9\n",
+                ":5: face vertex index 9 out of range (3 vertices in the file, 3 before this line)",
+            ),
             ("empty.obj", "# nothing\n", ": no triangles"),
             (
                 "flat.obj",
@@ -1368,7 +1409,9 @@ f 9
         ];
         for (name, text, want) in cases {
             let p = write(&dir, name, text);
-            let e = Mesh::load_obj(&p).unwrap_err().to_string();
+            let e = Mesh::load_obj(&p)
+                .expect_err(name)
+                .to_string();
             let file = p.display().to_string();
             assert!(e.starts_with(&file), "{name}: {e}");
             assert!(e[file.len()..].starts_with(want), "{name}: {e}");
