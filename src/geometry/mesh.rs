@@ -1409,9 +1409,7 @@ f 9
         ];
         for (name, text, want) in cases {
             let p = write(&dir, name, text);
-            let e = Mesh::load_obj(&p)
-                .expect_err(name)
-                .to_string();
+            let e = Mesh::load_obj(&p).expect_err(name).to_string();
             let file = p.display().to_string();
             assert!(e.starts_with(&file), "{name}: {e}");
             assert!(e[file.len()..].starts_with(want), "{name}: {e}");
