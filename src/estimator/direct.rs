@@ -191,6 +191,38 @@ fn cone(r: f64, dist: f64) -> (f64, f64) {
 /// meeting the emitter of light `k` at `y` (distance `t`), or entering
 /// sphere light `k`.
 fn light_pdf(set: &LightSet, scene: &Scene, k: u32, x: DVec3, wi: DVec3, y: DVec3, t: f64) -> f64 {
+    light_density(set, scene, k, x, wi, y, t, false)
+}
+
+/// The density the MIS weights use for the light strategy at the same
+/// point: [`light_pdf`], but for an area source the density of
+/// [`crate::light::AreaLight::pdf_mis_point`] (positive where the
+/// sampling density vanishes with the luminance). Weights from it still sum
+/// to 1 with the BRDF strategy's, so the estimate stays unbiased.
+fn light_weight_pdf(
+    set: &LightSet,
+    scene: &Scene,
+    k: u32,
+    x: DVec3,
+    wi: DVec3,
+    y: DVec3,
+    t: f64,
+) -> f64 {
+    light_density(set, scene, k, x, wi, y, t, true)
+}
+
+/// [`light_pdf`] (`mis` false) or [`light_weight_pdf`] (`mis` true).
+#[allow(clippy::too_many_arguments)]
+fn light_density(
+    set: &LightSet,
+    scene: &Scene,
+    k: u32,
+    x: DVec3,
+    wi: DVec3,
+    y: DVec3,
+    t: f64,
+    mis: bool,
+) -> f64 {
     let p = set.prob[k as usize];
     if p <= 0.0 {
         return 0.0;
@@ -201,7 +233,12 @@ fn light_pdf(set: &LightSet, scene: &Scene, k: u32, x: DVec3, wi: DVec3, y: DVec
             if cos_y <= 0.0 {
                 return 0.0;
             }
-            p * a.pdf_point(y) * t * t / cos_y
+            let pdf_a = if mis {
+                a.pdf_mis_point(y)
+            } else {
+                a.pdf_point(y)
+            };
+            p * pdf_a * t * t / cos_y
         }
         Light::Sphere { c, r, .. } => {
             let dist = (*c - x).length();
@@ -220,9 +257,11 @@ fn light_pdf(set: &LightSet, scene: &Scene, k: u32, x: DVec3, wi: DVec3, y: DVec
     }
 }
 
-/// A light sample: `(f, p_L, wi, hittable)` with `f = L_e w cos V` towards
-/// the sampled point; `f = 0` when it is hidden, behind the receiver or on a
-/// dark side. A source that no ray can meet (a luminaire's opening) is not
+/// A light sample: `(f, p_L, q_L, wi, hittable)` with `f = L_e w cos V`
+/// towards the sampled point and `q_L` the density its MIS weight uses
+/// ([`light_weight_pdf`]; `p_L` but for an area source whose luminance
+/// varies); `f = 0` when it is hidden, behind the receiver or on a dark
+/// side. A source that no ray can meet (a luminaire's opening) is not
 /// `hittable`: then `f / p_L` is the estimate by itself (BRDF sampling never
 /// finds it, so MIS gives it weight 1), `f` and `p_L` per area.
 fn light_sample(
@@ -232,7 +271,7 @@ fn light_sample(
     rec: &Receiver,
     frame: &Frame,
     rng: &mut Philox4x32,
-) -> (f64, f64, DVec3, bool) {
+) -> (f64, f64, f64, DVec3, bool) {
     let u = rng.next_2d();
     let x = rec.p;
     let light = &scene.lights[k as usize];
@@ -248,10 +287,10 @@ fn light_sample(
                 && (scene.planes_only() || !scene.blocked_by_shapes(y, None, x, 0))
         };
         if e.is_nan() || e <= 0.0 || !seen() {
-            return (0.0, p_k, DVec3::Z, false);
+            return (0.0, p_k, p_k, DVec3::Z, false);
         }
         let wi = (y - x).normalize();
-        return (e * rec.weight(frame, wi), p_k, wi, false);
+        return (e * rec.weight(frame, wi), p_k, p_k, wi, false);
     }
     if let Light::Gonio {
         frame: lf,
@@ -263,29 +302,35 @@ fn light_sample(
         // A point of the luminous shape ([`Light::shape_point`]): it sends
         // `I(w) emit` per area towards x; `f` and `p_L` per area.
         let Some(sp) = light.shape_point(x, u) else {
-            return (0.0, set.prob[k as usize], DVec3::Z, false);
+            return (
+                0.0,
+                set.prob[k as usize],
+                set.prob[k as usize],
+                DVec3::Z,
+                false,
+            );
         };
         let v = sp.y - x;
         let t2 = v.length_squared();
         let p_a = set.prob[k as usize] * sp.pdf;
         if t2 <= 0.0 || sp.emit <= 0.0 {
-            return (0.0, p_a, DVec3::Z, false);
+            return (0.0, p_a, p_a, DVec3::Z, false);
         }
         let wi = v / t2.sqrt();
         let (r, _) = response(rec, frame, wi);
         if r <= 0.0 || !scene.visible(x, None, sp.y) {
-            return (0.0, p_a, wi, false);
+            return (0.0, p_a, p_a, wi, false);
         }
         let i = dist.intensity_world(lf, -wi) * scene.pane_transmittance(x, sp.y);
-        return (i * sp.emit * r / t2, p_a, wi, false);
+        return (i * sp.emit * r / t2, p_a, p_a, wi, false);
     }
-    let (f, p, wi) = match light {
+    let (f, p, q, wi) = match light {
         Light::Area(a) => {
             let pt = a.sample_point(u);
             let v = pt.y - x;
             let t2 = v.length_squared();
             if t2 <= 0.0 || pt.pdf_a <= 0.0 {
-                return (0.0, 0.0, DVec3::Z, true);
+                return (0.0, 0.0, 0.0, DVec3::Z, true);
             }
             let t = t2.sqrt();
             let wi = v / t;
@@ -293,15 +338,16 @@ fn light_sample(
             let le = a.emitted(pt.y, -wi);
             let (r, _) = response(rec, frame, wi);
             if le <= 0.0 || r <= 0.0 || p_l <= 0.0 || !scene.visible(x, None, pt.y) {
-                return (0.0, p_l, wi, true);
+                return (0.0, p_l, p_l, wi, true);
             }
-            (le * r * scene.pane_transmittance(x, pt.y), p_l, wi)
+            let q_l = light_weight_pdf(set, scene, k, x, wi, pt.y, t);
+            (le * r * scene.pane_transmittance(x, pt.y), p_l, q_l, wi)
         }
         Light::Sphere { c, r: radius, .. } => {
             let to_c = *c - x;
             let dist = to_c.length();
             if dist <= *radius {
-                return (0.0, 0.0, DVec3::Z, true);
+                return (0.0, 0.0, 0.0, DVec3::Z, true);
             }
             let (omega, cos_a) = cone(*radius, dist);
             let ct = 1.0 - u[0] * (1.0 - cos_a);
@@ -311,17 +357,17 @@ fn light_sample(
             let p_l = set.prob[k as usize] / omega;
             let (r, _) = response(rec, frame, wi);
             if r <= 0.0 {
-                return (0.0, p_l, wi, true);
+                return (0.0, p_l, p_l, wi, true);
             }
             let light = &scene.lights[k as usize];
             let Some(t) = light.hit(x, wi, f64::INFINITY) else {
-                return (0.0, p_l, wi, true); // grazing the rim: measure zero
+                return (0.0, p_l, p_l, wi, true); // grazing the rim: measure zero
             };
             if !scene.visible(x, None, x + wi * t) {
-                return (0.0, p_l, wi, true);
+                return (0.0, p_l, p_l, wi, true);
             }
             let glass = scene.pane_transmittance(x, x + wi * t);
-            (light.luminance() * r * glass, p_l, wi)
+            (light.luminance() * r * glass, p_l, p_l, wi)
         }
         Light::Distant(dl) => {
             // Uniform in the sun's disc; lit where the ray leaves the scene.
@@ -330,10 +376,10 @@ fn light_sample(
             let p_l = set.prob[k as usize] * s.pdf;
             let (r, _) = response(rec, frame, wi);
             if r <= 0.0 || scene.first_hit_from(x, wi).is_some() {
-                return (0.0, p_l, wi, true);
+                return (0.0, p_l, p_l, wi, true);
             }
             let glass = scene.pane_transmittance_ray(x, wi, false);
-            (dl.luminance() * r * glass, p_l, wi)
+            (dl.luminance() * r * glass, p_l, p_l, wi)
         }
         Light::Environment(env) => {
             // A direction drawn from the map, or through a point of the
@@ -344,25 +390,26 @@ fn light_sample(
             let (wi, pdf, le) = match scene.portals() {
                 Some(portals) => match portals.sample_direction(x, u) {
                     Some((wi, pdf)) => (wi, pdf, env.luminance(wi)),
-                    None => return (0.0, 0.0, DVec3::Z, true),
+                    None => return (0.0, 0.0, 0.0, DVec3::Z, true),
                 },
                 None => env.sample(u),
             };
             let p_l = set.prob[k as usize] * pdf;
             let (r, _) = response(rec, frame, wi);
             if r <= 0.0 || le <= 0.0 || scene.first_hit_from(x, wi).is_some() {
-                return (0.0, p_l, wi, true);
+                return (0.0, p_l, p_l, wi, true);
             }
             let glass = scene.pane_transmittance_ray(x, wi, false);
-            (le * r * glass, p_l, wi)
+            (le * r * glass, p_l, p_l, wi)
         }
-        _ => (0.0, 0.0, DVec3::Z),
+        _ => (0.0, 0.0, 0.0, DVec3::Z),
     };
-    (f, p, wi, true)
+    (f, p, q, wi, true)
 }
 
 /// The set's emitters along the ray from `x` in unit direction `wi`, each
-/// as `(L_e, p_L)`: the first surface if it is an emitter of the set
+/// as `(L_e, q_L)` with `q_L` the density the MIS weights use
+/// ([`light_weight_pdf`]): the first surface if it is an emitter of the set
 /// showing an emitting side, and every sphere light of the set entered
 /// before that surface.
 fn emitters_along(
@@ -381,7 +428,7 @@ fn emitters_along(
     {
         let le = a.emitted(h.p, -wi) * scene.pane_transmittance(x, h.p);
         if le > 0.0 {
-            each(le, light_pdf(set, scene, k, x, wi, h.p, h.t));
+            each(le, light_weight_pdf(set, scene, k, x, wi, h.p, h.t));
         }
     }
     for &k in &set.along {
@@ -426,16 +473,20 @@ pub fn sample(
         // With RIS the MIS weights keep the power pick's density `p_l`
         // as a stand-in (they need only sum to 1, see
         // `crate::light::array`); `scale` turns `1 / P_k` into `W`.
-        let (f, p_l, wi, hittable) = light_sample(scene, set, k, rec, frame, rng);
+        let (f, p_l, q_l, wi, hittable) = light_sample(scene, set, k, rec, frame, rng);
         if f > 0.0 && p_l > 0.0 && !hittable {
             total += f / p_l * scale;
         } else if f > 0.0 && p_l > 0.0 {
+            // The weights use q_l (p_l but where an area source's sampling
+            // density vanishes with its luminance); they sum to 1 with the
+            // BRDF strategy's below.
             let p_b = response(rec, frame, wi).1;
             total += scale
+                * f
                 * match strategy {
-                    Strategy::Light => f / p_l,
-                    Strategy::Power => f * p_l / (p_l * p_l + p_b * p_b),
-                    _ => f / (p_l + p_b),
+                    Strategy::Light => 1.0 / p_l,
+                    Strategy::Power => q_l * q_l / (p_l * (q_l * q_l + p_b * p_b)),
+                    _ => q_l / (p_l * (q_l + p_b)),
                 };
         }
     }

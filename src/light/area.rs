@@ -69,6 +69,10 @@ pub struct AreaLight {
     pub surface: u32,
 }
 
+/// Share of the uniform density in [`AreaLight::pdf_mis_point`] on a disc
+/// whose luminance varies.
+pub const MIS_UNIFORM_SHARE: f64 = 0.1;
+
 /// A point drawn on an area source for next-event estimation.
 #[derive(Clone, Copy, Debug)]
 pub struct AreaPoint {
@@ -181,6 +185,26 @@ impl AreaLight {
                     pdf_a: g / k,
                 }
             }
+        }
+    }
+
+    /// The density per area [1/m^2] that multiple importance sampling
+    /// weighs a light sample at `y` by ([`crate::estimator::direct`]): that
+    /// of [`Self::sample_point`], but on a disc whose luminance varies mixed
+    /// with the uniform density (share [`MIS_UNIFORM_SHARE`]). MIS weights
+    /// need only sum to 1 between the strategies to stay unbiased; the
+    /// sampling density itself vanishes where the luminance does (the ring
+    /// of a `v` profile, the rim of `linear-decreasing`), and weights made
+    /// from it hand that region to the receiver's cosine samples, which
+    /// rarely hit a small source: 1.8 times the standard deviation of light
+    /// sampling alone per sample, with a kurtosis of 690 (a disc of 0.4 m
+    /// radius 3 m above a point; batch means flagged `VOV`/`tail` in half the
+    /// runs). Weighed by this density, the light sample keeps the weight.
+    pub fn pdf_mis_point(&self, y: DVec3) -> f64 {
+        if self.is_uniform() {
+            self.pdf_point(y)
+        } else {
+            (1.0 - MIS_UNIFORM_SHARE) * self.pdf_point(y) + MIS_UNIFORM_SHARE / self.area()
         }
     }
 
