@@ -353,6 +353,24 @@ fn daylight_factor_counts_the_sky_alone() {
         sharpest < 0.02 / bound(5),
         "relative errors down to {sharpest}"
     );
+    // An area source switched off still blocks the sky: a panel over the
+    // points gives the bytes of the same rectangle as a black surface (it
+    // was removed with its light, DF about 100 % under a 1.5 m panel).
+    let panel = "\n[[light]]\ntype = \"rectangle\"\ncorner = [-0.75, -0.75, 1.5]\n\
+                 edge1 = [0, 1.5, 0]\nedge2 = [1.5, 0, 0]\nluminance = 300\n";
+    let black = "\n[[surface]]\ntype = \"rectangle\"\ncorner = [-0.75, -0.75, 1.5]\n\
+                 edge1 = [0, 1.5, 0]\nedge2 = [1.5, 0, 0]\n\
+                 material = { type = \"lambertian\", reflectance = 0 }\n";
+    let (a, b) = (
+        run(&format!("{sky}{panel}"), &pts, "200000", "4"),
+        run(&format!("{sky}{black}"), &pts, "200000", "4"),
+    );
+    assert_eq!(a, b);
+    assert!(
+        a[0][2] < 60.0,
+        "the panel shades the point facing up: DF {}",
+        a[0][2]
+    );
     // A scene with no sky has no daylight factor: refused, by name.
     let dir = tempfile::tempdir().unwrap();
     let (s, p) = (dir.path().join("s.toml"), dir.path().join("p.csv"));

@@ -60,12 +60,18 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 /// assumed or known luminance distribution, direct sunlight excluded).
 pub const SKY_KINDS: [&str; 2] = ["sky", "environment"];
 
+/// Light kinds that are also surfaces (they block and reflect light):
+/// area sources.
+const BODY_KINDS: [&str; 2] = ["rectangle", "disc"];
+
 /// A scene for daylight factors: read and validated whole (every light, so
 /// that an error in one is reported as by [`load`]), then compiled with
-/// its [`SKY_KINDS`] lights alone. Returns the scene, the lights left out
-/// (`sun` and `distant` lights, whose parallel beams are direct sunlight,
-/// and electric lights) in words, and the number of lights kept (0: the
-/// scene returned is the whole one, for the caller to refuse).
+/// its [`SKY_KINDS`] lights alone emitting: the others (`sun` and
+/// `distant` lights, whose parallel beams are direct sunlight, and
+/// electric lights) are left out, except that an area source keeps its
+/// surface with zero luminance. Returns the scene, the lights left out in
+/// words, and the number of sky lights kept (0: the scene returned is the
+/// whole one, for the caller to refuse).
 pub fn load_sky_only(path: &Path) -> Result<(Scene, Vec<String>, usize), SceneError> {
     let src = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
         file: path.to_path_buf(),
@@ -78,23 +84,35 @@ pub fn load_sky_only(path: &Path) -> Result<(Scene, Vec<String>, usize), SceneEr
     };
     let whole = compile::compile(&desc, &ctx)?;
     let mut left_out = Vec::new();
+    let mut kept = 0;
     let mut k = 0;
-    desc.light.retain(|l| {
+    desc.light.retain_mut(|l| {
         k += 1;
-        let l = l.get_ref();
-        let kind = l.kind.get_ref().as_str();
-        let keep = SKY_KINDS.contains(&kind);
-        if !keep {
-            left_out.push(match &l.name {
-                Some(n) => format!("`{kind}` light '{}'", n.get_ref()),
-                None => format!("`{kind}` light #{k}"),
-            });
+        let span = l.span();
+        let l = l.get_mut();
+        let kind = l.kind.get_ref().clone();
+        if SKY_KINDS.contains(&kind.as_str()) {
+            kept += 1;
+            return true;
         }
-        keep
+        let name = match &l.name {
+            Some(n) => format!("`{kind}` light '{}'", n.get_ref()),
+            None => format!("`{kind}` light #{k} of the file"),
+        };
+        // An area source is also a surface (it blocks and reflects the
+        // sky's light): switched off, not removed.
+        let body = BODY_KINDS.contains(&kind.as_str());
+        if body {
+            l.luminance = Some(toml::Spanned::new(span, 0.0));
+            l.flux = None;
+            left_out.push(format!("{name} (switched off; its surface stays)"));
+        } else {
+            left_out.push(name);
+        }
+        body
     });
-    let kept = desc.light.len();
     if kept == 0 {
-        // Nothing to compile; the caller refuses the run.
+        // No sky; the caller refuses the run.
         return Ok((whole, left_out, 0));
     }
     Ok((compile::compile(&desc, &ctx)?, left_out, kept))
