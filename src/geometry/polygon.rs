@@ -37,7 +37,14 @@ pub fn triangulate(pts: &[DVec3]) -> Vec<[usize; 3]> {
     // (u, v), whatever the polygon's orientation in space.
     let u = w.any_orthonormal_vector();
     let v = w.cross(u);
-    let q: Vec<DVec2> = pts.iter().map(|p| DVec2::new(p.dot(u), p.dot(v))).collect();
+    // Coordinates about the first vertex, so that the tolerance below
+    // scales with the polygon, not with its distance from the origin (a
+    // georeferenced model lies 1e5-1e6 m out).
+    let o = pts[0];
+    let q: Vec<DVec2> = pts
+        .iter()
+        .map(|p| DVec2::new((*p - o).dot(u), (*p - o).dot(v)))
+        .collect();
     // Lengths in the plane for the tolerance of the tests below.
     let scale = q
         .iter()
@@ -182,6 +189,24 @@ mod tests {
             fan(&[0, 1, 2, 3, 4, 5])
                 .iter()
                 .any(|t| inside(&[pts[t[0]], pts[t[1]], pts[t[2]]], p))
+        );
+        // The L 0.1 m across and 1e6 m from the origin: still ear-clipped
+        // (a tolerance from absolute coordinates found no ear there).
+        let far: Vec<DVec3> = l
+            .iter()
+            .map(|&(x, y)| DVec3::new(1e6 + 0.05 * x, -2e5 + 0.05 * y, 30.0))
+            .collect();
+        let tris = triangulate(&far);
+        let c = DVec3::new(1e6 + 0.05 * 0.8, -2e5 + 0.05 * 1.2, 30.0);
+        assert!(inside(
+            &far,
+            DVec3::new(1e6 + 0.05 * 0.5, -2e5 + 0.05 * 0.5, 30.0)
+        ));
+        assert!(
+            !tris
+                .iter()
+                .any(|t| inside(&[far[t[0]], far[t[1]], far[t[2]]], c)),
+            "{tris:?}"
         );
         // The L tilted out of its plane: the same area.
         let r = glam::DQuat::from_euler(glam::EulerRot::XYZ, 0.3, -0.7, 1.1);
