@@ -191,55 +191,12 @@ fn cone(r: f64, dist: f64) -> (f64, f64) {
 /// meeting the emitter of light `k` at `y` (distance `t`), or entering
 /// sphere light `k`.
 fn light_pdf(set: &LightSet, scene: &Scene, k: u32, x: DVec3, wi: DVec3, y: DVec3, t: f64) -> f64 {
-    light_density(set, scene, k, x, wi, y, t, false)
-}
-
-/// The density the MIS weights use for the light strategy at the same
-/// point: [`light_pdf`], but for an area source the density of
-/// [`crate::light::AreaLight::pdf_mis_point`] (positive where the
-/// sampling density vanishes with the luminance). Weights from it still sum
-/// to 1 with the BRDF strategy's, so the estimate stays unbiased.
-fn light_weight_pdf(
-    set: &LightSet,
-    scene: &Scene,
-    k: u32,
-    x: DVec3,
-    wi: DVec3,
-    y: DVec3,
-    t: f64,
-) -> f64 {
-    light_density(set, scene, k, x, wi, y, t, true)
-}
-
-/// [`light_pdf`] (`mis` false) or [`light_weight_pdf`] (`mis` true).
-#[allow(clippy::too_many_arguments)]
-fn light_density(
-    set: &LightSet,
-    scene: &Scene,
-    k: u32,
-    x: DVec3,
-    wi: DVec3,
-    y: DVec3,
-    t: f64,
-    mis: bool,
-) -> f64 {
     let p = set.prob[k as usize];
     if p <= 0.0 {
         return 0.0;
     }
     match &scene.lights[k as usize] {
-        Light::Area(a) => {
-            let cos_y = a.normal().dot(wi).abs();
-            if cos_y <= 0.0 {
-                return 0.0;
-            }
-            let pdf_a = if mis {
-                a.pdf_mis_point(y)
-            } else {
-                a.pdf_point(y)
-            };
-            p * pdf_a * t * t / cos_y
-        }
+        Light::Area(a) => per_solid_angle(p * a.pdf_point(y), a, wi, t),
         Light::Sphere { c, r, .. } => {
             let dist = (*c - x).length();
             if dist <= *r {
@@ -257,9 +214,35 @@ fn light_density(
     }
 }
 
+/// A density `pdf_a` [1/m^2] over area source `a`'s surface at distance
+/// `t` along unit `wi`, per solid angle [1/sr] (0 seen edge-on).
+fn per_solid_angle(pdf_a: f64, a: &crate::light::AreaLight, wi: DVec3, t: f64) -> f64 {
+    let cos_y = a.normal().dot(wi).abs();
+    if cos_y <= 0.0 {
+        return 0.0;
+    }
+    pdf_a * t * t / cos_y
+}
+
+/// The density [1/sr] the MIS weights use for the light strategy at point
+/// `y` of area source `k` (`a`): [`light_pdf`]'s, but with the density of
+/// [`crate::light::AreaLight::pdf_mis_point`] (positive where the sampling
+/// density vanishes with the luminance). Weights from it still sum to 1
+/// with the BRDF strategy's, so the estimate stays unbiased.
+fn area_weight_pdf(
+    set: &LightSet,
+    k: u32,
+    a: &crate::light::AreaLight,
+    wi: DVec3,
+    y: DVec3,
+    t: f64,
+) -> f64 {
+    per_solid_angle(set.prob[k as usize] * a.pdf_mis_point(y), a, wi, t)
+}
+
 /// A light sample: `(f, p_L, q_L, wi, hittable)` with `f = L_e w cos V`
 /// towards the sampled point and `q_L` the density its MIS weight uses
-/// ([`light_weight_pdf`]; `p_L` but for an area source whose luminance
+/// ([`area_weight_pdf`]; `p_L` but for an area source whose luminance
 /// varies); `f = 0` when it is hidden, behind the receiver or on a dark
 /// side. A source that no ray can meet (a luminaire's opening) is not
 /// `hittable`: then `f / p_L` is the estimate by itself (BRDF sampling never
@@ -340,7 +323,7 @@ fn light_sample(
             if le <= 0.0 || r <= 0.0 || p_l <= 0.0 || !scene.visible(x, None, pt.y) {
                 return (0.0, p_l, p_l, wi, true);
             }
-            let q_l = light_weight_pdf(set, scene, k, x, wi, pt.y, t);
+            let q_l = area_weight_pdf(set, k, a, wi, pt.y, t);
             (le * r * scene.pane_transmittance(x, pt.y), p_l, q_l, wi)
         }
         Light::Sphere { c, r: radius, .. } => {
@@ -409,7 +392,7 @@ fn light_sample(
 
 /// The set's emitters along the ray from `x` in unit direction `wi`, each
 /// as `(L_e, q_L)` with `q_L` the density the MIS weights use
-/// ([`light_weight_pdf`]): the first surface if it is an emitter of the set
+/// ([`area_weight_pdf`] for an area source, else [`light_pdf`]): the first surface if it is an emitter of the set
 /// showing an emitting side, and every sphere light of the set entered
 /// before that surface.
 fn emitters_along(
@@ -428,7 +411,7 @@ fn emitters_along(
     {
         let le = a.emitted(h.p, -wi) * scene.pane_transmittance(x, h.p);
         if le > 0.0 {
-            each(le, light_weight_pdf(set, scene, k, x, wi, h.p, h.t));
+            each(le, area_weight_pdf(set, k, a, wi, h.p, h.t));
         }
     }
     for &k in &set.along {
