@@ -117,9 +117,12 @@ pub struct RunArgs {
     #[arg(long = "near-radius", allow_negative_numbers = true)]
     pub near_radius: Option<String>,
     /// Backward paths per point for every 256 chains, for the near part
-    /// (with `--near-radius`). Local estimator only. [default: 16]
+    /// (with `--near-radius`): `auto` (the default: each point its own
+    /// count, 16 to 256, from a fixed pilot, for the least RMS relative
+    /// error per unit of work) or one count for every point. Local
+    /// estimator only. [default: auto]
     #[arg(long = "near-paths", allow_negative_numbers = true)]
-    pub near_paths: Option<u32>,
+    pub near_paths: Option<String>,
     /// Backward paths (`--estimator backward`, the near part of the split):
     /// plain next-event estimation only, without the light-guided connection
     /// and its multiple importance sampling.
@@ -269,6 +272,12 @@ impl RunArgs {
                 (r, false)
             }
         };
+        let near_paths = match self.near_paths.as_deref().unwrap_or("auto").trim() {
+            "auto" => None,
+            s => Some(s.parse::<u32>().map_err(|_| {
+                anyhow::anyhow!("--near-paths must be `auto` or a whole number >= 0, got `{s}`")
+            })?),
+        };
         anyhow::ensure!(
             self.batch_size.is_none_or(|b| b > 0 && b <= 1 << 32),
             "--batch-size must lie in [1, 2^32] (chains of a batch index one Sobol' net)"
@@ -289,8 +298,9 @@ impl RunArgs {
             } else {
                 self.qmc.map_or(Qmc::default(), QmcArg::into)
             },
-            near: (near_radius, self.near_paths.unwrap_or(16)),
+            near: (near_radius, near_paths.unwrap_or(16)),
             near_auto,
+            near_paths_auto: near_paths.is_none(),
             shard: None,
             resume: None,
             keep_batch_means: 0,

@@ -314,14 +314,22 @@ pub(crate) struct Walk {
     /// neighbourhood, whose light the path must then fetch itself (see
     /// [`crate::tally::Diagnostics::near_reach`]).
     pub(crate) exposed: u64,
+    /// Rays the path cast: its segments, shadow tests (next-event
+    /// estimation counted as one per source, or one with the scene's light
+    /// array), light-guided connections (a photon ray, a visibility test and
+    /// next-event estimation at the photon's hit) and pool joins' visibility
+    /// tests; the near part's cost measure ([`crate::estimator::near_paths`]).
+    pub(crate) rays: u64,
 }
 
 impl Walk {
-    /// A path that ended before its first vertex.
+    /// A path that ended before its first vertex (its one connection and
+    /// first ray counted by the caller, see [`trace`]).
     const NONE: Self = Self {
         vertices: 0,
         reached: 0,
         exposed: 0,
+        rays: 0,
     };
 }
 
@@ -383,6 +391,14 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     } = *path;
     let mut reached = 0;
     let mut exposed = 0;
+    // Rays of next-event estimation at a vertex and of one connection.
+    let nee_rays = if scene.vertex_light_array().is_some() {
+        1
+    } else {
+        scene.lights.len() as u64
+    };
+    let connect_rays = 2 + nee_rays;
+    let mut rays = 0;
     // Light-guided connections start photons at a light's centre; area
     // sources and luminous openings have no such centre, so scenes with
     // them are traced unguided.
@@ -409,6 +425,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         if v > 0.0 {
             add(1, v);
         }
+        rays += connect_rays;
     }
     // First direction, from the receiver's response.
     let (d_local, mut beta, mut pdf) = match rec.response {
@@ -448,6 +465,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     let rr = cfg.chain.rr_weight * beta0;
     let mut d = frame.to_world(d_local);
     let mut hit = scene.first_hit_from(rec.p, d).filter(|h| h.t < first_max);
+    rays += 1;
     let mut order = 0u32;
     let mut vertices = 0;
     while let Some(h) = hit {
@@ -463,6 +481,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         let f_frame = Frame::from_normal(h.n);
         let wo = f_frame.to_local(-d);
         let (nee, p_b) = next_event(scene, &h, m, &f_frame, wo, guide, rng);
+        rays += nee_rays;
         if nee > 0.0 {
             // Strategy A's share of the balance heuristic (1 without guiding).
             // p_A / (p_A + p_B) with p_A = pdf cos / t^2, written without the
@@ -489,7 +508,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                     k: order,
                     picks: Pool::picks(beta, beta0),
                 };
-                join_pool(scene, pool, &at, radius, cfg.chain.max_order, rng, &mut add);
+                rays += join_pool(scene, pool, &at, radius, cfg.chain.max_order, rng, &mut add);
                 // Exposed: the receiver's radius, not `d / 2`, sets the split
                 // here and a light's core lies within it.
                 if radius == vertex_r
@@ -520,6 +539,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
             if v > 0.0 {
                 add(order + 1, v);
             }
+            rays += connect_rays;
         }
         let s = m.sample(wo, rng.next_2d());
         if s.pdf <= 0.0 || s.w.z <= 0.0 {
@@ -535,11 +555,13 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         hit = scene
             .intersect(&Ray { o: h.p, d }, from)
             .filter(|h| h.t < seg_max);
+        rays += 1;
     }
     Walk {
         vertices,
         reached,
         exposed,
+        rays,
     }
 }
 
@@ -581,6 +603,7 @@ struct Vertex<'a> {
 /// `beta Q_y f_y cos_y cos_x / d^2 f_x`, through `v.picks` collisions
 /// drawn uniformly from the pool, each weighted by `seen / (picks chains)`;
 /// light reflected `o_y + k` times (dropped beyond `max_order`, if set).
+/// Returns the visibility tests it made.
 fn join_pool<F: FnMut(u32, f64)>(
     scene: &Scene,
     pool: &Pool,
@@ -589,7 +612,7 @@ fn join_pool<F: FnMut(u32, f64)>(
     max_order: Option<u32>,
     rng: &mut Philox4x32,
     add: &mut F,
-) {
+) -> u64 {
     let Vertex {
         h,
         m,
@@ -601,8 +624,9 @@ fn join_pool<F: FnMut(u32, f64)>(
     } = *v;
     let n = pool.items.len();
     if n == 0 || beta <= 0.0 {
-        return;
+        return 0;
     }
+    let mut tests = 0;
     let scale = pool.seen as f64 / (f64::from(picks) * pool.chains as f64);
     let from = Some((h.surface, h.prim));
     for _ in 0..picks {
@@ -617,7 +641,11 @@ fn join_pool<F: FnMut(u32, f64)>(
             continue;
         }
         let g = local_kernel(y.p, y.n, h.p, h.n);
-        if g <= 0.0 || !scene.visible(h.p, from, y.p) {
+        if g <= 0.0 {
+            continue;
+        }
+        tests += 1;
+        if !scene.visible(h.p, from, y.p) {
             continue;
         }
         let w = v / d2.sqrt(); // from y towards x
@@ -630,6 +658,7 @@ fn join_pool<F: FnMut(u32, f64)>(
             add(y.order + k, value);
         }
     }
+    tests
 }
 
 /// Next-event estimation at the surface vertex `h` (material `m`, frame

@@ -39,11 +39,14 @@ pub fn run(
         && !scene.has_directional()
         && !scene.has_panes();
     if wanted && receivers.near_field().0 == 0 {
-        let near = if cfg.near.0 > 0.0 {
+        let mut near = if cfg.near.0 > 0.0 {
             receivers.clone().with_near_field(cfg.near.0, cfg.near.1)
         } else {
             receivers.clone().with_auto_near_field(scene, cfg.near.1)
         };
+        if cfg.near_paths_auto {
+            near = near.with_allocated_near_paths(scene, cfg).0;
+        }
         return drive(&LocalWork::new(scene, &near), cfg, observe);
     }
     drive(&LocalWork::new(scene, receivers), cfg, observe)
@@ -229,16 +232,16 @@ impl BatchWork for LocalWork<'_> {
         // lies within the radius, weighted to a per-chain sum over the batch.
         if paths > 0 {
             const NEAR_KEY: u64 = 0x6e65_6172_6669_656c; // "nearfiel"
-            // `paths` per point for every 256 chains of the batch, so that both
-            // parts shrink their error as the run grows (a `--chains` run has
-            // 32 batches of whatever size).
-            let paths = u64::from(paths) * bs.div_ceil(256);
-            let w = bs as f64 / paths as f64;
             for (j, rec) in receivers.receivers().iter().enumerate() {
                 let radius = radii[j];
                 if radius <= 0.0 {
                     continue;
                 }
+                // The point's paths for every 256 chains of the batch, so
+                // that both parts shrink their error as the run grows (a
+                // `--chains` run has 32 batches of whatever size).
+                let paths = receivers.near_paths_in_batch(j, bs);
+                let w = bs as f64 / paths as f64;
                 let frame = &receivers.frames()[j];
                 let (grazing, vertex_r) = receivers.near_path_setup(j);
                 for s in 0..paths {

@@ -34,6 +34,7 @@
 pub mod backward;
 pub mod direct;
 pub mod local;
+pub mod near_paths;
 mod occluded_kernel;
 mod open_kernel;
 pub mod pane_images;
@@ -433,6 +434,9 @@ pub struct Receivers {
     /// each receiver's near-field radius [m] (0: plain local estimate).
     near_paths: u32,
     near_r: Vec<f64>,
+    /// Per receiver: its own paths for every 256 chains
+    /// ([`Self::with_allocated_near_paths`]); empty: `near_paths` each.
+    near_per: Vec<u32>,
     /// Radius [m] of each receiver's neighbourhood that holds almost all of
     /// its view (0: none, or not an illuminance point).
     view_r: Vec<f64>,
@@ -901,6 +905,7 @@ impl Receivers {
             .collect();
         let mut r = Self {
             near_paths: 0,
+            near_per: Vec::new(),
             near_r: vec![0.0; receivers.len()],
             slots: Vec::new(),
             view_r,
@@ -1058,6 +1063,7 @@ impl Receivers {
     fn with_near_radii(mut self, radii: Vec<f64>, paths: u32) -> Self {
         let on = paths > 0 && radii.iter().any(|&r| r > 0.0);
         self.near_paths = if on { paths } else { 0 };
+        self.near_per.clear();
         self.near_r = if on { radii } else { vec![0.0; self.all.len()] };
         for list in &mut self.lists {
             for (e, &j) in list.eps2.iter_mut().zip(&list.idx) {
@@ -1138,6 +1144,39 @@ impl Receivers {
     /// receiver's near-field radius [m] (0: plain local estimate there).
     pub fn near_field(&self) -> (u32, &[f64]) {
         (self.near_paths, &self.near_r)
+    }
+
+    /// Receiver `j`'s near-part paths for every 256 chains: its own count
+    /// where they were allocated ([`Self::with_allocated_near_paths`]),
+    /// else the split's common count (0: off).
+    pub fn near_paths_at(&self, j: usize) -> u32 {
+        self.near_per.get(j).copied().unwrap_or(self.near_paths)
+    }
+
+    /// Receiver `j`'s near-part paths in a batch of `bs` chains (0 where it
+    /// has no near part): [`Self::near_paths_at`] for every 256 chains.
+    pub fn near_paths_in_batch(&self, j: usize, bs: u64) -> u64 {
+        if self.near_r[j] <= 0.0 {
+            return 0;
+        }
+        u64::from(self.near_paths_at(j)) * bs.div_ceil(256)
+    }
+
+    /// Each receiver with a near part gets its own number of paths, chosen
+    /// by a fixed pilot for the least RMS relative error per unit of work
+    /// ([`near_paths`]); without a near part, unchanged. Returns the pilot's
+    /// measures too.
+    pub fn with_allocated_near_paths(
+        mut self,
+        scene: &Scene,
+        cfg: &crate::run::RunConfig,
+    ) -> (Self, near_paths::Allocation) {
+        if self.near_paths == 0 {
+            return (self, near_paths::Allocation::default());
+        }
+        let alloc = near_paths::allocate(scene, &self, cfg);
+        self.near_per = alloc.paths.clone();
+        (self, alloc)
     }
 
     /// Number of receivers a collision on surface `s` scores into.

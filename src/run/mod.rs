@@ -102,6 +102,9 @@ pub struct RunConfig {
     /// ([`crate::estimator::Receivers::with_auto_near_field`]), with
     /// `near.1` paths.
     pub near_auto: bool,
+    /// With the split: each receiver's paths chosen by a fixed pilot
+    /// ([`crate::estimator::near_paths`]) instead of `near.1` for all.
+    pub near_paths_auto: bool,
     /// Run only shard `i` of `m` (batches `i, i + m, i + 2m, ...` of a
     /// `--chains` run) and keep the batches unfolded in
     /// [`RunResult::batches`], for [`fold_batches`] to merge later; `None`:
@@ -154,7 +157,8 @@ impl std::fmt::Debug for PilotMeasure {
 }
 
 /// The command line's defaults: 100,000 chains, stratified, the near/far
-/// split where it is needed (`--near-radius auto`, 16 paths), light-guided
+/// split where it is needed (`--near-radius auto`, each point's paths from
+/// a pilot, `--near-paths auto`), light-guided
 /// backward paths, Russian roulette at 0.1 of the starting weight.
 impl Default for RunConfig {
     fn default() -> Self {
@@ -171,6 +175,7 @@ impl Default for RunConfig {
             qmc: Qmc::default(),
             near: (0.0, 16),
             near_auto: true,
+            near_paths_auto: true,
             shard: None,
             resume: None,
             keep_batch_means: 0,
