@@ -95,3 +95,79 @@ fn a_light_sealed_inside_a_solid_is_warned_about() {
     .unwrap();
     assert!(!free.sealed(0));
 }
+
+/// A desk as a closed mesh (the unit cube scaled to 1 x 1 x 0.75 m, both
+/// sides reflecting, the mesh default), in the room with `light`; the
+/// scene file and its OBJ in a fresh folder.
+fn mesh_desk_room(light: [f64; 3], tag: &str) -> lumest::scene::Scene {
+    let dir = std::env::temp_dir().join(format!("lumest-enclosed-{}-{tag}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut obj = String::new();
+    for k in 0..8 {
+        let (x, y, z) = ((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64);
+        obj += &format!("v {} {} {}\n", 1.0 + x, 1.0 + y, 0.75 * z);
+    }
+    // Outward, counter-clockwise faces (1-based).
+    for f in [
+        [1, 3, 2],
+        [2, 3, 4],
+        [5, 6, 7],
+        [6, 8, 7],
+        [1, 2, 5],
+        [2, 6, 5],
+        [3, 7, 4],
+        [4, 7, 8],
+        [1, 5, 3],
+        [3, 5, 7],
+        [2, 4, 6],
+        [4, 8, 6],
+    ] {
+        obj += &format!("f {} {} {}\n", f[0], f[1], f[2]);
+    }
+    std::fs::write(dir.join("desk.obj"), obj).unwrap();
+    let room = ROOM.split("[[surface]]\nname = \"desk\"").next().unwrap();
+    let toml = format!(
+        "{room}[[surface]]\nname = \"desk\"\ntype = \"mesh\"\nfile = \"desk.obj\"\n\
+         material = {{ type = \"lambertian\", reflectance = 0.6 }}\n\n\
+         [[light]]\ntype = \"point\"\nposition = {light:?}\nintensity = 200.0\n"
+    );
+    let path = dir.join("room.toml");
+    std::fs::write(&path, &toml).unwrap();
+    let scene = lumest::scene::load(&path).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    scene
+}
+
+/// A point inside a closed mesh whose both sides reflect sees no black
+/// side, yet no light can reach it: it is flagged `enclosed` (it read
+/// E = 0, flag `ok`). Points on the mesh's top and outside it are not; and
+/// with the light inside the mesh, the point inside is lit and not flagged.
+#[test]
+fn a_point_inside_a_closed_two_sided_mesh_is_enclosed_unless_a_light_is_inside() {
+    let points = [
+        (DVec3::new(1.5, 1.5, 0.4), DVec3::Z),  // inside the desk
+        (DVec3::new(1.5, 1.5, 0.75), DVec3::Z), // on its top
+        (DVec3::new(3.0, 0.5, 0.0), DVec3::Z),  // on the floor
+        (DVec3::new(1.5, 1.5, 0.4), DVec3::X),  // inside, facing sideways
+        (DVec3::new(2.2, 1.5, 0.4), -DVec3::X), // 20 cm off its side, facing it
+    ];
+    let want = [true, false, false, true, false];
+    let scene = mesh_desk_room([3.0, 1.5, 2.5], "out");
+    let rec = Receivers::new(&scene, &points).unwrap();
+    let enclosed: Vec<bool> = (0..points.len()).map(|j| rec.enclosed(j)).collect();
+    assert_eq!(enclosed, want);
+    let r = run(&scene, &rec, &common::chains_cfg(20_000, 1, 2), &mut |_| {
+        true
+    });
+    for (j, &e) in want.iter().enumerate() {
+        let flag = r.tallies.diagnostics(j, r.direct[j]).flag();
+        assert_eq!(flag.contains("enclosed"), e, "point {j}: {flag}");
+        let lit = r.direct[j] + r.tallies.estimated[j].mean();
+        assert_eq!(lit > 0.0, !e, "point {j}: E {lit}");
+    }
+    // The same desk with the light inside it: the inside point is lit.
+    let lit = mesh_desk_room([1.5, 1.5, 0.6], "in");
+    let rec = Receivers::new(&lit, &points[..1]).unwrap();
+    assert!(!rec.enclosed(0));
+    assert!(rec.direct()[0] > 0.0);
+}

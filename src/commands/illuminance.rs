@@ -302,8 +302,9 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
         }
         if counts.contains_key("enclosed") {
             sparse += "; `enclosed`: those points see the back of a surface in most directions \
-             (inside a solid, behind a wall, outside a closed room): check their position and \
-             normal; they are left out of the grid figures";
+             (inside a solid, behind a wall, outside a closed room) or lie inside a closed mesh \
+             that holds no light: check their position and normal; they are left out of the \
+             grid figures";
         }
         if counts.contains_key("near") {
             sparse += "; `near`: a surface lies closer to those points than a tenth of their \
@@ -1239,7 +1240,7 @@ pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
     let left_out = n - kept.len();
     let note = if left_out > 0 {
         format!(
-            " ({left_out} of {n} point(s) left out: flagged `enclosed`, they see the back of a surface in most directions)"
+            " ({left_out} of {n} point(s) left out: flagged `enclosed`, they see the back of a surface in most directions or lie inside a closed mesh that holds no light)"
         )
     } else {
         String::new()

@@ -256,7 +256,7 @@ pub fn stage(
                 );
             }
             if f.left_out > 0 {
-                section.notes.push(format!("{} point(s) left out: flagged `enclosed` (they see the back of a surface in most directions).", f.left_out));
+                section.notes.push(format!("{} point(s) left out: flagged `enclosed` (they see the back of a surface in most directions or lie inside a closed mesh that holds no light).", f.left_out));
             }
             if f.flagged > 0 {
                 section.notes.push(format!(

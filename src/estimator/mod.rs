@@ -889,13 +889,21 @@ impl Receivers {
             lists.push(list);
             lists.len() as u32 - 1
         });
+        // A point inside a closed mesh that holds no light is enclosed too,
+        // even where both of the mesh's sides reflect (its probes then meet
+        // no black side): it can get no light at all.
+        let lightless = scene.lightless_closed_meshes();
         let (view_r, enclosed): (Vec<f64>, Vec<bool>) = receivers
             .iter()
             .zip(&frames)
-            .map(|(rec, frame)| match rec.response {
-                Response::Illuminance => view_probe(scene, rec.p, frame, false),
-                Response::Solid(_) => view_probe(scene, rec.p, frame, true),
-                Response::Luminance { .. } => (0.0, false),
+            .map(|(rec, frame)| {
+                let (r, enclosed) = match rec.response {
+                    Response::Illuminance => view_probe(scene, rec.p, frame, false),
+                    Response::Solid(_) => view_probe(scene, rec.p, frame, true),
+                    Response::Luminance { .. } => return (0.0, false),
+                };
+                let walled_in = || lightless.iter().any(|&k| scene.inside_mesh(k, rec.p));
+                (r, enclosed || walled_in())
             })
             .unzip();
         let need_r = receivers
@@ -946,7 +954,9 @@ impl Receivers {
 
     /// Whether illuminance point `j` is enclosed: it sees the back of a
     /// surface in most directions (inside a solid, behind a wall, outside a
-    /// closed room); see [`view_probe`]. Its `E` is almost surely not what
+    /// closed room; see [`view_probe`]), or it lies inside a closed mesh
+    /// that holds no light ([`Scene::lightless_closed_meshes`]), whose
+    /// sides may both reflect. Its `E` is almost surely not what
     /// was meant, and it is flagged `enclosed`.
     pub fn enclosed(&self, j: usize) -> bool {
         self.enclosed[j]

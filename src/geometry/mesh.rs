@@ -121,6 +121,8 @@ pub struct Mesh {
     /// The box inside a closed mesh ([`super::mesh_core`]), found on first
     /// use.
     core: std::sync::OnceLock<Option<super::mesh_core::Core>>,
+    /// Whether every edge joins two triangles, once each way, found on first use.
+    closed: std::sync::OnceLock<bool>,
 }
 
 impl std::fmt::Debug for Mesh {
@@ -359,7 +361,17 @@ impl Mesh {
             reach,
             bvh,
             core: std::sync::OnceLock::new(),
+            closed: std::sync::OnceLock::new(),
         })
+    }
+
+    /// Whether the mesh is a closed, consistently wound surface: every edge
+    /// joins exactly two triangles, once in each direction (so it bounds a
+    /// solid; [`super::mesh_parity`] tells its inside).
+    pub fn is_closed(&self) -> bool {
+        *self
+            .closed
+            .get_or_init(|| super::mesh_core::closed(&self.triangles))
     }
 
     /// The core of a closed mesh: a box inside the solid, whose crossing by

@@ -104,7 +104,7 @@ fn volume(c: &Core) -> f64 {
 
 /// Every undirected edge used by exactly two triangles, in opposite
 /// directions.
-fn closed(triangles: &[[u32; 3]]) -> bool {
+pub(crate) fn closed(triangles: &[[u32; 3]]) -> bool {
     let mut edges: HashMap<(u32, u32), (u32, i32)> = HashMap::with_capacity(3 * triangles.len());
     for t in triangles {
         for k in 0..3 {

@@ -1416,6 +1416,33 @@ impl Scene {
         m
     }
 
+    /// The meshes that are closed and hold no light: every light with a
+    /// position lies clearly outside ([`crate::geometry::mesh_parity`]; one
+    /// on the surface, or where the parity is unclear, counts as held).
+    /// Lights at infinity lie outside every mesh. No light reaches a point
+    /// inside such a mesh, whichever sides reflect (the mesh is opaque).
+    pub fn lightless_closed_meshes(&self) -> Vec<u32> {
+        use crate::geometry::mesh_parity::{Side, side};
+        (0..self.meshes.len() as u32)
+            .filter(|&k| {
+                let m = &self.meshes[k as usize].0;
+                m.is_closed()
+                    && self
+                        .lights
+                        .iter()
+                        .filter(|l| !l.is_directional())
+                        .all(|l| side(m, l.position()) == Side::Outside)
+            })
+            .collect()
+    }
+
+    /// Whether `p` [m] lies clearly inside the closed mesh `meshes[k]`
+    /// ([`crate::geometry::mesh_parity`]; not on its surface).
+    pub fn inside_mesh(&self, k: u32, p: DVec3) -> bool {
+        use crate::geometry::mesh_parity::{Side, side};
+        side(&self.meshes[k as usize].0, p) == Side::Inside
+    }
+
     /// Whether every shape that could block a segment is a sphere or box
     /// whose bit is set in `inside_both` (see [`Self::inside_mask`]).
     #[inline]
