@@ -1,7 +1,7 @@
 //! Light-tracing Markov chains: emission -> collisions -> Russian roulette.
 //!
 //! A chain starts at a light picked in proportion to its power, with weight
-//! `Q_1` equal to the flux of the sampled ray [lm] divided by the pick
+//! `Q_1` equal to the flux of the sampled ray \[lm\] divided by the pick
 //! probability, so that `E[sum_n Q_n delta(x - x_n)]` is the collision density
 //! (the illuminance arriving at surface points, all orders). At each collision
 //! on a front side the chain reports a [`Collision`], then continues by
@@ -29,13 +29,13 @@ use glam::DVec3;
 /// One collision of a chain with a surface's front side.
 #[derive(Clone, Copy, Debug)]
 pub struct Collision {
-    /// Collision point [m].
+    /// Collision point \[m\].
     pub p: DVec3,
     /// Unit front normal at `p`.
     pub n: DVec3,
     /// Unit direction towards where the light came from (away from the surface).
     pub wi: DVec3,
-    /// Flux weight arriving at the collision [lm].
+    /// Flux weight arriving at the collision \[lm\].
     pub q: f64,
     /// Surface index.
     pub surface: u32,

@@ -7,8 +7,8 @@
 //!
 //! ## Units and conventions
 //!
-//! - Lengths in metres [m]; luminous intensity in candela [cd]; flux in lumen
-//!   [lm]; illuminance in lux [lx = lm/m^2]; luminance in [cd/m^2]. The scene
+//! - Lengths in metres \[m\]; luminous intensity in candela \[cd\]; flux in lumen
+//!   \[lm\]; illuminance in lux [lx = lm/m^2]; luminance in [cd/m^2]. The scene
 //!   file uses the same units; a light given by `flux` is converted to
 //!   intensity once, when the scene is compiled.
 //! - A surface's front side is the side its normal faces. Light arriving on
@@ -28,13 +28,18 @@
 //!
 //! ## Glossary
 //!
-//! `p` point, `n` normal, `u` uniforms, `pdf` density, `q` chain weight [lm],
-//! `phi` flux [lm], `i` intensity [cd], `e` illuminance [lx], `l` luminance.
+//! `p` point, `n` normal, `u` uniforms, `pdf` density, `q` chain weight \[lm\],
+//! `phi` flux \[lm\], `i` intensity \[cd\], `e` illuminance \[lx\], `l` luminance.
 // No unsafe code, except the two calls that install the signal handler
 // (`io::interrupt`, which allows it for itself): no signal crate is vendored;
 // and the call of the AVX2 scoring kernel after the CPU check
 // (`estimator/open_kernel.rs`).
 #![deny(unsafe_code)]
+// The docs are written for the crate's developers as much as its users: some
+// public items point to the private code that does their work (build with
+// `cargo doc --document-private-items` to follow them). Units in doc text
+// are written `\[m\]`, escaped, so that rustdoc does not read them as links.
+#![allow(rustdoc::private_intra_doc_links)]
 
 pub mod cases;
 pub mod chain;

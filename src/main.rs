@@ -16,7 +16,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Illuminance [lx] at CSV points by light-tracing chains and the local estimate.
+    /// Illuminance \[lx\] at CSV points by light-tracing chains and the local estimate.
     Illuminance(illuminance::IlluminanceArgs),
     /// Luminance [cd/m^2] along CSV views by the double local estimate.
     Luminance(illuminance::LuminanceArgs),

@@ -98,7 +98,7 @@ fn blocked(x: DVec3, y: DVec3) -> bool {
     t0 < t1
 }
 
-/// Direct illuminance [lx] at `x` (normal `n`) from the panel at height
+/// Direct illuminance \[lx\] at `x` (normal `n`) from the panel at height
 /// `z` (emitting down, 1000 cd/m^2), by an `m x 2m` midpoint rule over its
 /// area, with the blocker if `block`.
 fn panel_brute(x: DVec3, n: DVec3, z: f64, block: bool, m: usize) -> f64 {

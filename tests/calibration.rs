@@ -81,7 +81,7 @@ fn library_default_is_the_command_lines() {
     assert_eq!(format!("{cli:?}"), format!("{:?}", cli_default(4096, 9)));
 }
 
-/// Estimates `(E, se)` [lx] of every point of one run.
+/// Estimates `(E, se)` \[lx\] of every point of one run.
 fn estimates(r: &RunResult) -> Vec<(f64, f64)> {
     (0..r.direct.len())
         .map(|j| {

@@ -21,7 +21,7 @@ fn scene(src: &str) -> Scene {
     parse(src, Path::new("distant.toml")).unwrap()
 }
 
-/// The sun's travel direction at elevation `el` and azimuth `az` [deg]
+/// The sun's travel direction at elevation `el` and azimuth `az` \[deg\]
 /// (azimuth from +x towards +y of the direction *towards* the sun).
 fn sun(el: f64, az: f64) -> DVec3 {
     let (el, az) = (el.to_radians(), az.to_radians());

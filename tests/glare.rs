@@ -176,7 +176,7 @@ fn lumest() -> Command {
 /// H = 2 m above the eye at 1.2 m), 16 x 16 luminaires at the spacing
 /// 0.25 H, reflectances 0.7 / 0.5 / 0.2, the observer at the middle of a
 /// wall looking across the room along `+x`. The luminaire `file` (in
-/// `dir`) turned by `rotate` [deg] about its nadir.
+/// `dir`) turned by `rotate` \[deg\] about its nadir.
 fn standard_room(dir: &std::path::Path, file: &str, rotate: f64) -> std::path::PathBuf {
     let mut s = String::from(
         "[[surface]]\ntype = \"box\"\nname = \"room\"\nmin = [0, 0, 0]\nmax = [8, 8, 3.2]\n\

@@ -40,7 +40,7 @@ fn runs() -> u64 {
         .unwrap_or(400)
 }
 
-/// One run's figures and its point means (direct part included) [lx].
+/// One run's figures and its point means (direct part included) \[lx\].
 fn one_run(seed: u64) -> (SurfaceFigures, Vec<f64>) {
     let file = Path::new("calib.toml");
     let scene = lumest::scene::parse(SCENE, file).unwrap();

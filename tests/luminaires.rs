@@ -13,8 +13,8 @@ use lumest::reference::Sobolev;
 use lumest::scene::Scene;
 use lumest::tally::sidak_bound;
 
-/// An IES (LM-63-2002, type C, one C-plane) with `intensity(gamma)` [cd] at
-/// the given vertical angles [deg].
+/// An IES (LM-63-2002, type C, one C-plane) with `intensity(gamma)` \[cd\] at
+/// the given vertical angles \[deg\].
 fn ies(v: &[f64], intensity: impl Fn(f64) -> f64) -> String {
     let vals: Vec<String> = v
         .iter()

@@ -56,7 +56,7 @@ fn scene_in(dir: &Path, light: &str) -> Scene {
 }
 
 /// Mean and standard error of `n` direct-light samples at receiver `j`,
-/// asserted to agree with `exact` [lx] within `bound` standard errors and
+/// asserted to agree with `exact` \[lx\] within `bound` standard errors and
 /// to carry a standard error under 0.5 % of it (so that a 2 % error is
 /// more than 4 standard errors off, beyond every bound used here).
 fn sampled_matches(
@@ -94,7 +94,7 @@ fn sample_mean(s: &Scene, rec: &Receivers, j: usize, n: u64, seed: u64) -> (f64,
     (mean, (var / n as f64).sqrt())
 }
 
-/// Illuminance [lx] at `x` (unit normal `n`) from a Lambertian sphere of
+/// Illuminance \[lx\] at `x` (unit normal `n`) from a Lambertian sphere of
 /// luminance `l`, centre `c`, radius `r`: `l int_cone max(0, n . w) dw` by
 /// the midpoint rule over the cone (polar angle from its axis, azimuth).
 fn sphere_quadrature(x: DVec3, n: DVec3, c: DVec3, r: f64, l: f64) -> f64 {
@@ -259,7 +259,7 @@ fn cylinder_faces(c: DVec3, r: f64, hz: f64) -> Vec<Face> {
     faces
 }
 
-/// Illuminance [lx] at `x` (unit normal `n`) from a convex luminous solid
+/// Illuminance \[lx\] at `x` (unit normal `n`) from a convex luminous solid
 /// of luminance `lum(w)` [cd/m^2] towards every direction `w`, by the
 /// midpoint rule over its faces (`m x m` cells each).
 fn solid_quadrature(
@@ -431,7 +431,7 @@ fn sloped_ies(width: f64, length: f64, height: f64) -> String {
     )
 }
 
-/// The intensity [cd] of [`sloped_ies`] towards unit direction `w` (the
+/// The intensity \[cd\] of [`sloped_ies`] towards unit direction `w` (the
 /// luminaire unrotated: the nadir `-z`).
 fn sloped_intensity(w: DVec3) -> f64 {
     I0 * (2.0 - (-w.z).clamp(-1.0, 1.0).acos() / PI)
@@ -612,7 +612,7 @@ fn a_flat_opening_lights_a_receiver_in_its_own_plane_as_just_beside_it() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Illuminance [lx] at `x` (unit normal `n`) from a flat face emitting
+/// Illuminance \[lx\] at `x` (unit normal `n`) from a flat face emitting
 /// `I0 dA / A` from every element `dA` towards both sides: the midpoint rule
 /// over the rectangle `c + s e1 + t e2` (`s, t` in `[-1, 1]`) or, with
 /// `round`, over the ellipse of semi-axis vectors `e1`, `e2` in polar

@@ -16,7 +16,7 @@ use lumest::reference::Sobolev;
 use lumest::run::RunConfig;
 use lumest::tally::sidak_bound;
 
-/// Reflected illuminance [lx] at height `dz` above the source's foot on the
+/// Reflected illuminance \[lx\] at height `dz` above the source's foot on the
 /// floor (reflectance `rho`, illuminance `e(s)`), facing it: a 1-D integral
 /// over the distance `s` with panels graded at the scale `dz`.
 fn from_floor(rho: f64, dz: f64, e: impl Fn(f64) -> f64) -> f64 {

@@ -12,7 +12,7 @@ use lumest::reference::Sobolev;
 use lumest::run::{RunConfig, Stop};
 use lumest::tally::sidak_bound;
 
-/// Reflected illuminance at height `dz` [m] straight above (or below) the foot
+/// Reflected illuminance at height `dz` \[m\] straight above (or below) the foot
 /// of the source on a plane of reflectance `rho`, whose illuminance is `e(s)`,
 /// by Gauss-Legendre panels in the distance `s` along the plane.
 fn from_plane(rho: f64, dz: f64, e: impl Fn(f64) -> f64) -> f64 {

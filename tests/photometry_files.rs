@@ -236,9 +236,9 @@ fn the_ies_and_ldt_pair_give_the_same_illuminance() {
     }
 }
 
-/// The direct illuminance [lx] at `point` with normal `normal` from one
+/// The direct illuminance \[lx\] at `point` with normal `normal` from one
 /// light of the IES file `text` written as `t.ies`, placed by `light` (the
-/// TOML lines after `file`), with the scene's total flux [lm].
+/// TOML lines after `file`), with the scene's total flux \[lm\].
 fn one_ies_light(text: &str, light: &str, point: DVec3, normal: DVec3) -> (f64, f64) {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("t.ies"), text).unwrap();

@@ -27,7 +27,7 @@ use statrs::distribution::{ContinuousCDF, StudentsT};
 
 /// `runs` runs of `chains` chains with `qmc` on a Sobolev case (8 points):
 /// `(E, se)` per run and point, the exact values and the batch count.
-/// `(E, se)` [lx] per run and point.
+/// `(E, se)` \[lx\] per run and point.
 type Runs = Vec<Vec<(f64, f64)>>;
 
 fn sobolev_runs(qmc: Qmc, chains: u64, runs: u64) -> (Runs, Vec<f64>, u64) {

@@ -211,7 +211,7 @@ fn sphere_source_sampled_direct_matches_quadrature() {
 }
 
 /// The integrating sphere (radius `rad` about `c`, reflectance `rho`) with
-/// an isotropic source of `i` [cd] at its centre.
+/// an isotropic source of `i` \[cd\] at its centre.
 fn integrating_sphere(c: DVec3, rad: f64, rho: f64, i: f64) -> Scene {
     let spec = SurfaceSpec::Sphere(
         "sphere".into(),
@@ -289,7 +289,7 @@ fn every_type_reads_pi_l_in_the_integrating_sphere() {
 }
 
 /// The floor's once-reflected light at `p` (height `h` above a Lambertian
-/// floor of reflectance `rho` lit by `i` [cd] at `s`), read with response
+/// floor of reflectance `rho` lit by `i` \[cd\] at `s`), read with response
 /// `r`: `int L(x) r(w) dw` over the floor with `L = rho E(x) / pi`,
 /// `E(x) = I s_z / |s - x|^3`, in the polar angle `t` and azimuth about
 /// the foot of `p` (`dw = sin t dt dphi`).

@@ -22,7 +22,7 @@ const WALL: f64 = 2.0;
 const GAP: f64 = 0.01;
 const LO: f64 = 0.6;
 const HI: f64 = 1.4;
-/// The floor's reflectance and the point source (isotropic, [cd], [m]).
+/// The floor's reflectance and the point source (isotropic, \[cd\], \[m\]).
 const RHO: f64 = 0.5;
 const I: f64 = 1000.0;
 const LIGHT: [f64; 3] = [1.0, 1.0, 1.5];
@@ -61,7 +61,7 @@ intensity = {I}
     parse(&src, std::path::Path::new("slot.toml")).unwrap()
 }
 
-/// Illuminance [lx] at `(WALL, yx, zx)` facing `-x`: the floor's radiance
+/// Illuminance \[lx\] at `(WALL, yx, zx)` facing `-x`: the floor's radiance
 /// `RHO E_d / pi` over the floor points `(WALL - delta, y, 0)` seen through
 /// the slit. The segment to such a point crosses the board's plane at the
 /// fraction `f = GAP / delta` of its length, below the board where

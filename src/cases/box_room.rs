@@ -47,7 +47,7 @@ pub struct BoxRoom {
     /// Add the second point light (200 cd at `(4, 2.5, 2.7)`) to the first
     /// (300 cd at `(1.5, 2, 2.7)`).
     pub second_light: bool,
-    /// Length scale [1].
+    /// Length scale \[1\].
     pub scale: f64,
 }
 

@@ -14,7 +14,7 @@ use std::path::PathBuf;
 /// Run controls and report of a validation case.
 #[derive(Args, Clone, Debug)]
 pub struct CaseArgs {
-    /// Wall-clock time of the run [s].
+    /// Wall-clock time of the run \[s\].
     #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub time: f64,
     /// Seed.
@@ -41,7 +41,7 @@ pub struct Case {
     pub scene: Scene,
     /// Receivers (illuminance points).
     pub receivers: Vec<Receiver>,
-    /// Exact illuminance [lx] at each receiver.
+    /// Exact illuminance \[lx\] at each receiver.
     pub exact: Vec<f64>,
 }
 

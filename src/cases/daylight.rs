@@ -66,7 +66,7 @@ pub struct DaylightArgs {
     #[arg(long)]
     pub probe: Option<PathBuf>,
     /// Run controls and report: the runs of each reference double their chains
-    /// until one lasts `--time / 2` [s] or more (about `2 T` per reference).
+    /// until one lasts `--time / 2` \[s\] or more (about `2 T` per reference).
     #[command(flatten)]
     pub case: CaseArgs,
 }
@@ -103,7 +103,7 @@ impl Verdict {
     }
 }
 
-/// One reference: a scene, its receivers and their exact values [lx].
+/// One reference: a scene, its receivers and their exact values \[lx\].
 struct Reference {
     /// File-name key, `daylight_<key>_*`.
     key: String,
@@ -113,7 +113,7 @@ struct Reference {
     /// Point labels (no spaces).
     labels: Vec<String>,
     receivers: Vec<Receiver>,
-    /// Exact illuminance [lx]; the zeros come last.
+    /// Exact illuminance \[lx\]; the zeros come last.
     exact: Vec<f64>,
     /// Median cut: an approximation, not z-tested.
     approximation: bool,
@@ -126,17 +126,17 @@ pub struct Row {
     pub reference: String,
     /// Point label.
     pub point: String,
-    /// Receiver position [m] and normal.
+    /// Receiver position \[m\] and normal.
     pub p: DVec3,
     /// Receiver normal.
     pub n: DVec3,
-    /// Exact illuminance [lx].
+    /// Exact illuminance \[lx\].
     pub exact: f64,
-    /// Estimate [lx].
+    /// Estimate \[lx\].
     pub estimate: f64,
-    /// Its standard error [lx].
+    /// Its standard error \[lx\].
     pub std_error: f64,
-    /// Exact (unsampled) direct part of the estimate [lx].
+    /// Exact (unsampled) direct part of the estimate \[lx\].
     pub direct: f64,
     /// z against the exact value ([`z_against_exact`]).
     pub z: f64,
@@ -144,11 +144,11 @@ pub struct Row {
     pub bound: f64,
     /// Diagnostics flag (`ok` or the failed checks).
     pub flag: String,
-    /// Batches, chains and wall time [s] of the run.
+    /// Batches, chains and wall time \[s\] of the run.
     pub batches: u64,
     /// Chains of the run.
     pub chains: u64,
-    /// Wall time [s].
+    /// Wall time \[s\].
     pub time: f64,
     /// Verdict.
     pub verdict: Verdict,
@@ -313,7 +313,7 @@ fn overcast_sky(dir: &Path) -> anyhow::Result<Reference> {
 }
 
 /// (c) A distant light (E_n = 80,000 lx, 35 degrees up) over a black floor,
-/// a point (`diameter` 0) or a disc of `diameter` [deg]; receivers at
+/// a point (`diameter` 0) or a disc of `diameter` \[deg\]; receivers at
 /// angles 0-120 degrees to the beam. A uniform disc wholly above the
 /// receiver's horizon gives exactly `E_n cos` too (`L n . int_cap w dw`
 /// with `int_cap w dw = pi sin^2(d/2)` times the axis); none of the angles

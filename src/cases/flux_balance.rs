@@ -1,4 +1,4 @@
-//! Flux bookkeeping of a closed scene: absorbed against emitted flux [lm].
+//! Flux bookkeeping of a closed scene: absorbed against emitted flux \[lm\].
 
 use crate::chain::{ChainEnd, ChainParams, trace_ex};
 use crate::sampling::Philox4x32;
@@ -6,18 +6,18 @@ use crate::scene::Scene;
 use crate::tally::Welford;
 use rayon::prelude::*;
 
-/// Flux bookkeeping of a closed room, per face and in total [lm].
+/// Flux bookkeeping of a closed room, per face and in total \[lm\].
 #[derive(Clone, Debug)]
 pub struct FluxBalance {
-    /// Flux absorbed by each surface [lm], mean and error over batches.
+    /// Flux absorbed by each surface \[lm\], mean and error over batches.
     pub absorbed: Vec<Welford>,
-    /// Total absorbed [lm] per chain-batch mean.
+    /// Total absorbed \[lm\] per chain-batch mean.
     pub total: Welford,
     /// Chains that left the scene (a leak) or met a black back side.
     pub escaped: u64,
     /// Chains that met a black back side.
     pub back_side: u64,
-    /// Emitted flux [lm].
+    /// Emitted flux \[lm\].
     pub emitted: f64,
 }
 

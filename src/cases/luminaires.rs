@@ -81,17 +81,17 @@ fn build(src: &str, dir: &Path) -> anyhow::Result<Scene> {
     parse(src, &dir.join("luminaires.toml")).map_err(|e| anyhow::anyhow!("{e}"))
 }
 
-/// A row of the flux balance: the light kind, its power [lm], the absorbed
-/// flux [lm] with its standard error, and the chains that escaped.
+/// A row of the flux balance: the light kind, its power \[lm\], the absorbed
+/// flux \[lm\] with its standard error, and the chains that escaped.
 #[derive(Clone, Debug)]
 pub struct BalanceRow {
     /// What was emitted.
     pub kind: String,
-    /// Power [lm].
+    /// Power \[lm\].
     pub power: f64,
-    /// Absorbed flux [lm].
+    /// Absorbed flux \[lm\].
     pub absorbed: f64,
-    /// Its standard error [lm].
+    /// Its standard error \[lm\].
     pub std_error: f64,
     /// Chains that left the box.
     pub escaped: u64,
@@ -697,7 +697,7 @@ pub fn validate_luminaires(a: &LuminairesArgs) -> anyhow::Result<()> {
 }
 
 /// The radial profiles of the disc cases: scene value, reference name,
-/// turning radius or offset [m] (the disc's radius is 0.4 m), and the
+/// turning radius or offset \[m\] (the disc's radius is 0.4 m), and the
 /// kinks of the profile for the reference's panels.
 pub const DISC_PROFILES: [(&str, &str, f64); 8] = [
     ("\"uniform\"", "uniform", 0.0),

@@ -17,7 +17,7 @@ use std::path::Path;
 /// Error of a Monte Carlo estimate against exact values at one moment.
 #[derive(Clone, Copy, Debug)]
 pub struct Checkpoint {
-    /// Wall time [s].
+    /// Wall time \[s\].
     pub time: f64,
     /// Chains folded in.
     pub chains: u64,
@@ -50,7 +50,7 @@ pub fn z_against_exact(e: f64, se: f64, direct: f64, exact: f64) -> f64 {
     zcheck::z_score(e, se.hypot(allowance), exact)
 }
 
-/// Compare the current estimate with exact totals ([lx] or [cd/m^2]) over
+/// Compare the current estimate with exact totals (\[lx\] or [cd/m^2]) over
 /// the receivers `range`.
 pub fn checkpoint(p: &Progress, exact: &[f64], range: Range<usize>) -> Checkpoint {
     let n = range.len() as f64;

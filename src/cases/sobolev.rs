@@ -30,7 +30,7 @@ pub struct ValidateSobolevArgs {
     /// Number of views (luminance), half looking at each plane.
     #[arg(long, default_value_t = 50, allow_negative_numbers = true)]
     pub views: usize,
-    /// Largest horizontal distance of the points [m].
+    /// Largest horizontal distance of the points \[m\].
     #[arg(long = "r-max", default_value_t = 3.0, allow_negative_numbers = true)]
     pub r_max: f64,
     #[command(flatten)]
@@ -70,7 +70,7 @@ fn layout(j: usize, n: usize, r_max: f64) -> (u8, f64, f64) {
 }
 
 /// The Sobolev problem `s` as a scene: plane 1 `z = 0` (normal +z,
-/// reflectance `rho1`), the point source of `I` [cd] at `z = h1`, plane 2
+/// reflectance `rho1`), the point source of `I` \[cd\] at `z = h1`, plane 2
 /// `z = h1 + h2` (normal -z, reflectance `rho2`).
 pub fn sobolev_scene(s: &Sobolev) -> Scene {
     Scene::from_parts(
@@ -95,7 +95,7 @@ pub fn sobolev_scene(s: &Sobolev) -> Scene {
 }
 
 /// The point of plane `plane` (1 or 2) of [`sobolev_scene`] at horizontal
-/// distance `r` [m] from the foot of the source and azimuth `phi` [rad],
+/// distance `r` \[m\] from the foot of the source and azimuth `phi` \[rad\],
 /// with the plane's normal (towards the source): `(r cos phi, r sin phi, z)`
 /// with `z = 0` on plane 1 and `z = h1 + h2` on plane 2.
 pub fn plane_point(s: &Sobolev, plane: u8, r: f64, phi: f64) -> (DVec3, DVec3) {
@@ -175,7 +175,7 @@ pub fn sobolev_views(
 }
 
 /// Points then views of the Sobolev case as receivers, with the exact value
-/// of each (E [lx] for points, L [cd/m^2] for views).
+/// of each (E \[lx\] for points, L [cd/m^2] for views).
 pub fn sobolev_receivers(
     s: &Sobolev,
     n_points: usize,

@@ -17,7 +17,7 @@ use crate::material::Material;
 use crate::scene::{Scene, Sides, SurfaceSpec};
 use glam::DVec3;
 
-/// Room size [m].
+/// Room size \[m\].
 const ROOM: [f64; 3] = [10.0, 8.0, 3.0];
 
 /// Most tile layers.

@@ -100,7 +100,7 @@ pub struct BenchArgs {
 /// in loops and once in the BVH (both give the same answers bit for bit),
 /// each for the same time; the bare room (the six planes alone) runs first.
 /// Prints chains/s and the ratio to the bare room, and which of the two
-/// the default ([`Accel::Auto`]) picks.
+/// the default ([`crate::scene::Accel::Auto`]) picks.
 pub fn shapes(a: &BenchArgs, list: &str) -> anyhow::Result<()> {
     use crate::cases::tiled_room::tiled_room;
     use crate::scene::{AUTO_MIN_SHAPES, Accel};
@@ -324,7 +324,7 @@ pub fn luminaires(_a: &BenchArgs) -> anyhow::Result<()> {
 
 /// The scene `src` loaded from a temporary folder that also holds the
 /// bundled photometric file `data_file` (relative to the crate) as
-/// `name`, and the load time [s].
+/// `name`, and the load time \[s\].
 fn temp_scene(
     data_file: &str,
     name: &str,
@@ -534,7 +534,7 @@ pub fn named_cases(list: &str) -> anyhow::Result<Vec<NamedCase>> {
 
 /// Points of the Sobolev grid case: a `side` x `side` grid on [-3, 3]^2
 /// of plane 1 (z = 0, normal +z), row by row in x then y, with each
-/// point's exact illuminance [lx] (one Sobolev integral per distinct
+/// point's exact illuminance \[lx\] (one Sobolev integral per distinct
 /// radius: the grid's symmetry leaves about an eighth of them).
 pub fn sobolev_grid(s: &Sobolev, side: usize) -> (Vec<(glam::DVec3, glam::DVec3)>, Vec<f64>) {
     use rayon::prelude::*;
@@ -647,7 +647,7 @@ fn case_header() {
 
 /// Run one case for `--case-time` seconds and print its row; the set-up
 /// is timed from `t0` (loading the scene and points) to the first batch.
-/// Returns the run and the set-up time [s].
+/// Returns the run and the set-up time \[s\].
 fn case_row(
     a: &BenchArgs,
     name: &str,

@@ -28,7 +28,7 @@ use crate::run::{RunConfig, Stop};
 use glam::DVec3;
 use std::time::Instant;
 
-/// Hall size [m]: length, width, height.
+/// Hall size \[m\]: length, width, height.
 const HALL: [f64; 3] = [50.0, 25.0, 5.0];
 
 /// The hall with `n` luminaires on a grid (aspect of the hall).
@@ -86,7 +86,7 @@ fn points() -> Vec<(DVec3, DVec3)> {
         .collect()
 }
 
-/// Peak resident memory of the process [MiB] (`VmHWM`), if the system
+/// Peak resident memory of the process \[MiB\] (`VmHWM`), if the system
 /// tells.
 fn peak_mib() -> Option<f64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;

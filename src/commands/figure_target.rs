@@ -22,11 +22,11 @@ use crate::tally::surface_figures::Figure;
 /// A figure of a grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FigureKind {
-    /// Area-weighted average [lx].
+    /// Area-weighted average \[lx\].
     EAvg,
-    /// Minimum [lx].
+    /// Minimum \[lx\].
     EMin,
-    /// Maximum [lx].
+    /// Maximum \[lx\].
     EMax,
     /// `E_min / E_avg`.
     U0,

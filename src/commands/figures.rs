@@ -90,7 +90,7 @@ pub struct GridFigures {
     pub in_scene: bool,
     /// The figures (None when every point was left out).
     pub figures: Option<SurfaceFigures>,
-    /// Required `E_avg` [lx] and its verdict.
+    /// Required `E_avg` \[lx\] and its verdict.
     pub em: Option<(f64, Verdict)>,
     /// Required `U0` and its verdict.
     pub u0: Option<(f64, Verdict)>,

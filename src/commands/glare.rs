@@ -24,7 +24,7 @@ pub struct GlareArgs {
     /// Scene file (TOML).
     #[arg(long)]
     pub scene: std::path::PathBuf,
-    /// Observers CSV: eye position `x,y,z` [m] and line of sight
+    /// Observers CSV: eye position `x,y,z` \[m\] and line of sight
     /// `dx,dy,dz` (not vertical), optionally a `name` column (`-`: stdin).
     /// Without it, the scene file's `[[observer]]` tables (`name`, `eye`,
     /// `view`).
@@ -66,9 +66,9 @@ pub const GLARE_COLUMNS: [&str; 12] = [
 pub struct ObserverGlare {
     /// The rating with its uncertainty.
     pub ugr: Ugr,
-    /// Indirect vertical illuminance at the eye [lx] and its standard error.
+    /// Indirect vertical illuminance at the eye \[lx\] and its standard error.
     pub e_ind: (f64, f64),
-    /// Direct vertical illuminance at the eye [lx] (exact plus sampled).
+    /// Direct vertical illuminance at the eye \[lx\] (exact plus sampled).
     pub e_direct: f64,
     /// The luminaires that count.
     pub terms: Vec<GlareTerm>,

@@ -133,7 +133,7 @@ pub struct LuminanceArgs {
     pub run: RunArgs,
 }
 
-/// Result columns for quantity `q` (`E` [lx] or `L` [cd/m^2]).
+/// Result columns for quantity `q` (`E` \[lx\] or `L` [cd/m^2]).
 ///
 /// Orders: for illuminance `E_order{k}` is light reflected `k` times
 /// (`E_direct` is order 0); for luminance `L_direct` is light reflected once
@@ -204,7 +204,7 @@ pub fn result_cells_plus(r: &RunResult, j: usize, extra: f64) -> Vec<String> {
 pub const DAYLIGHT_COLUMNS: [&str; 4] = ["DF", "DF_stderr", "DF_sky", "DF_sky_stderr"];
 
 /// Daylight factor cells of receiver `j` for the unobstructed horizontal
-/// illuminance `e_h` [lx] (exact): `100 E / e_h` and the sky component
+/// illuminance `e_h` \[lx\] (exact): `100 E / e_h` and the sky component
 /// `100 E_direct / e_h` (the direct light: exact plus sampled), with their
 /// standard errors (those of `E` and of the sampled direct light, scaled).
 fn daylight_cells(r: &RunResult, j: usize, e_h: f64) -> Vec<String> {
@@ -220,7 +220,7 @@ fn daylight_cells(r: &RunResult, j: usize, e_h: f64) -> Vec<String> {
     ]
 }
 
-/// The illuminance [lx] the scene's daylight (sky, sun, environment and
+/// The illuminance \[lx\] the scene's daylight (sky, sun, environment and
 /// other distant lights) gives on an unobstructed horizontal plane facing
 /// up, exactly; `None` when the scene has none.
 pub fn daylight_reference(scene: &Scene) -> Option<f64> {
@@ -546,7 +546,7 @@ pub struct Job {
     /// The compiled receivers: points first, then the views that meet a front side.
     pub receivers: Receivers,
     /// With `--daylight-factor`: the unobstructed horizontal illuminance
-    /// [lx] that daylight factors divide by.
+    /// \[lx\] that daylight factors divide by.
     pub daylight: Option<f64>,
 }
 
@@ -1226,7 +1226,7 @@ pub(crate) fn measure_full(
 }
 
 /// The lighting engineer's figures over the first `n` receivers (the
-/// illuminance points): average, minimum and maximum illuminance [lx] and
+/// illuminance points): average, minimum and maximum illuminance \[lx\] and
 /// the uniformity `U0 = E_min / E_avg`, with the standard error of `E_avg`.
 pub fn grid_summary(r: &RunResult, n: usize) -> Option<String> {
     if n == 0 {

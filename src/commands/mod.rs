@@ -72,7 +72,7 @@ pub struct RunArgs {
     /// other stopping rule is given.
     #[arg(long, value_parser = parse_count, allow_negative_numbers = true)]
     pub chains: Option<u64>,
-    /// Wall-clock limit [s].
+    /// Wall-clock limit \[s\].
     #[arg(long, allow_negative_numbers = true)]
     pub time: Option<f64>,
     /// Stop when the largest relative standard error of E over the points is below this.
@@ -108,7 +108,7 @@ pub struct RunArgs {
     pub rr_weight: f64,
     /// Near/far split against the singular kernel and for far points: `auto`
     /// (the default: where a point has a surface closer than a tenth of its
-    /// distance to the nearest light, with that radius), a radius [m] for
+    /// distance to the nearest light, with that radius), a radius \[m\] for
     /// every point, or `0` (off: the plain local estimate). Collisions closer
     /// than the radius leave their share to backward paths from the point
     /// (unbiased; keeps the variance finite next to walls and in corners, and

@@ -47,7 +47,7 @@ pub fn pairs(receivers: &[Receiver], n: usize) -> Vec<Pair> {
 
 /// The ratio `E_z / E_h` of a pair and its standard error from the batch
 /// means `bm` of the receivers (totals but for the exact direct parts
-/// `direct` [lx]); `None` when `E_h` is not positive or fewer than 2
+/// `direct` \[lx\]); `None` when `E_h` is not positive or fewer than 2
 /// batches are kept.
 pub fn ratio(bm: &BatchMeans, direct: &[f64], pair: Pair) -> Option<(f64, f64)> {
     let b = bm.batches();

@@ -8,7 +8,7 @@ pub fn reset() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
 }
 
-/// Peak resident set size [bytes] since the start or the last [`reset`];
+/// Peak resident set size \[bytes\] since the start or the last [`reset`];
 /// `None` where unsupported.
 pub fn peak() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -28,7 +28,7 @@ fn parse_hwm(status: &str) -> Option<u64> {
     Some(kb * 1024)
 }
 
-/// A peak [bytes] as MiB for a table, or `n/a`.
+/// A peak \[bytes\] as MiB for a table, or `n/a`.
 pub fn format_mib(peak: Option<u64>) -> String {
     peak.map_or_else(
         || "n/a".to_string(),

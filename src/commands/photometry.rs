@@ -20,8 +20,8 @@ pub struct PhotometryArgs {
     pub plot: Option<String>,
 }
 
-/// In-plane intensity [cd] at angle `theta` [deg] in `[-180, 180]` from the
-/// nadir, in the plane of C-angle `c` [deg] (positive `theta`: that C-plane,
+/// In-plane intensity \[cd\] at angle `theta` \[deg\] in `[-180, 180]` from the
+/// nadir, in the plane of C-angle `c` \[deg\] (positive `theta`: that C-plane,
 /// negative: the opposite one).
 pub fn plane_intensity(g: &Goniometric, c: f64, theta: f64) -> f64 {
     let (c, gamma) = if theta >= 0.0 {
@@ -37,7 +37,7 @@ pub fn plane_intensity(g: &Goniometric, c: f64, theta: f64) -> f64 {
     g.intensity(d)
 }
 
-/// Full angle [deg] about the peak of a plane's curve (0.1 degree steps)
+/// Full angle \[deg\] about the peak of a plane's curve (0.1 degree steps)
 /// within which the intensity stays at or above `fraction` of the plane's
 /// peak: the beam angle at 0.5, the field angle at 0.1 (CIE / IES
 /// definitions); `None` for a dark plane.

@@ -91,7 +91,7 @@ pub fn table_text(rows: &[UgrRow]) -> String {
     s
 }
 
-/// The smallest `--spacing` [H] accepted.
+/// The smallest `--spacing` \[H\] accepted.
 const MIN_SPACING: f64 = 0.05;
 
 /// The first entry of the table that is not a finite rating, in words

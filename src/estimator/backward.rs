@@ -39,7 +39,7 @@ const BACKWARD_KEY: u64 = 0x6261_636b_7761_7264; // "backward"
 struct BackwardWork<'a> {
     scene: &'a Scene,
     receivers: &'a Receivers,
-    /// Each light's neighbourhood: centre [m] and squared radius [m^2] (see [`light_reach`]).
+    /// Each light's neighbourhood: centre \[m\] and squared radius [m^2] (see [`light_reach`]).
     reach: Vec<(DVec3, f64)>,
 }
 
@@ -81,7 +81,7 @@ pub fn run(
     )
 }
 
-/// Radius [m] of a light's neighbourhood: ten times the median distance
+/// Radius \[m\] of a light's neighbourhood: ten times the median distance
 /// from its centre to the first surface along 16 directions spread evenly
 /// over the sphere (a Fibonacci lattice); infinite when half of them or
 /// more escape (an open scene: every vertex then counts). The mirror image
@@ -283,7 +283,7 @@ impl Pool {
 
 /// How a backward path is traced (see [`trace`]).
 pub(crate) struct PathSetup<'a> {
-    /// A path whose first surface lies at or beyond this distance [m] from
+    /// A path whose first surface lies at or beyond this distance \[m\] from
     /// the receiver contributes nothing (the near part of the local
     /// estimator's near/far split); `f64::INFINITY` for a full path.
     pub(crate) first_max: f64,
@@ -298,7 +298,7 @@ pub(crate) struct PathSetup<'a> {
     pub(crate) grazing: Option<&'a GrazingTable>,
     /// The batch's light-tracing collisions, for the recursive split.
     pub(crate) pool: Option<&'a Pool>,
-    /// Light neighbourhoods (centre [m], squared radius [m^2]) whose
+    /// Light neighbourhoods (centre \[m\], squared radius [m^2]) whose
     /// vertices the path counts for the `sparse` check; empty: none.
     pub(crate) reach: &'a [(DVec3, f64)],
 }
@@ -565,7 +565,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     }
 }
 
-/// Split radius [m] at a path vertex `x` of the near part:
+/// Split radius \[m\] at a path vertex `x` of the near part:
 /// `max(r, d / 2)` with `r` the receiver's radius and `d` the distance from
 /// `x` to the nearest light. Light from surfaces within it comes by the
 /// path, from farther ones by the pool: every surface nearer the light than
@@ -923,7 +923,7 @@ impl VertexLight<'_> {
 /// Strategy B of the light-guided connection from vertex `x` (on surface and
 /// primitive `from`, if any): a photon from a light picked by power, leaving
 /// its centre isotropically (a goniometric light: by its emission sampler), lands at its first hit `y`; if `x` sees `y`'s
-/// front side within `max_t` [m], the score `T N(y) / (p_A + p_B)` (see
+/// front side within `max_t` \[m\], the score `T N(y) / (p_A + p_B)` (see
 /// [`trace`]). `transfer(w)` gives `x`'s transfer towards unit world
 /// direction `w` (path weight times BRDF or response, times `cos_x`) and the
 /// solid-angle density of its own sampling there.

@@ -177,7 +177,7 @@ fn response(rec: &Receiver, frame: &Frame, wi: DVec3) -> (f64, f64) {
     rec.transfer(frame, wi)
 }
 
-/// Solid angle [sr] of the cone that a sphere of radius `r` subtends from
+/// Solid angle \[sr\] of the cone that a sphere of radius `r` subtends from
 /// distance `dist > r`, and the cosine of its half-angle.
 #[inline]
 fn cone(r: f64, dist: f64) -> (f64, f64) {

@@ -56,7 +56,7 @@ pub fn run(
 struct LocalWork<'a> {
     scene: &'a Scene,
     receivers: &'a Receivers,
-    /// With the near/far split: each light's core, centre [m] and squared
+    /// With the near/far split: each light's core, centre \[m\] and squared
     /// radius [m^2], the radius being the median distance from the light to
     /// the first surface (a tenth of [`backward::light_reach`]), for the
     /// near part's reach count ([`crate::tally::Diagnostics::near_reach`]);

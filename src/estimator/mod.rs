@@ -7,7 +7,7 @@
 //! `E_ind(p) = E[ sum_n Q_n f_r(wi_n, wo_n) cos(theta_n) cos(theta_p) / d_n^2 V(x_n, p) ]`
 //!
 //! where `x_n` are the collisions of a light-tracing chain with weights `Q_n`
-//! [lm], `wo_n` the unit direction from `x_n` to `p`, `theta_n` the angle
+//! \[lm\], `wo_n` the unit direction from `x_n` to `p`, `theta_n` the angle
 //! between `wo_n` and the surface normal at `x_n`, `theta_p` the angle between
 //! `-wo_n` and `n_p`, `d_n = |p - x_n|`, and `V` the visibility.
 //!
@@ -61,7 +61,7 @@ pub use solid::{RECEIVER_TYPES, Solid};
 /// `n_p`; zero when either cosine is not positive.
 ///
 /// This is the one place the kernel is written: the vectorised open-score
-/// loop ([`open_term`]), the per-pair loop and the near part's pool
+/// loop (`open_kernel::open_term`), the per-pair loop and the near part's pool
 /// connections ([`crate::backward`]) all evaluate it through
 /// [`kernel_parts`].
 #[inline]
@@ -106,22 +106,22 @@ pub fn kernel_parts(x: DVec3, n: DVec3, p: [f64; 3], np: [f64; 3]) -> [f64; 3] {
 /// What a receiver measures.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Response {
-    /// Illuminance [lx] on the side the normal faces.
+    /// Illuminance \[lx\] on the side the normal faces.
     Illuminance,
     /// Luminance [cd/m^2] leaving a surface point towards an observer: the
     /// surface's `material` and the unit direction `wo` to the observer in the
     /// local frame of the receiver's normal.
     Luminance { material: Material, wo: DVec3 },
-    /// Illuminance [lx] of a small solid ([`Solid`]: cylindrical,
+    /// Illuminance \[lx\] of a small solid ([`Solid`]: cylindrical,
     /// semi-cylindrical, hemispherical, spherical), whose response to light
     /// from `wi` replaces the plane's cosine and covers the whole sphere.
     Solid(Solid),
 }
 
-/// A receiver: a point [m], its unit normal and its response.
+/// A receiver: a point \[m\], its unit normal and its response.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Receiver {
-    /// Position [m]: the point itself, or the sub-point of a view.
+    /// Position \[m\]: the point itself, or the sub-point of a view.
     pub p: DVec3,
     /// Unit normal: the point's, or the front normal at the sub-point.
     pub n: DVec3,
@@ -304,7 +304,7 @@ pub fn exact_direct(scene: &Scene, k: usize) -> bool {
 
 /// Emitted luminance [cd/m^2] seen along the ray `o + t d` (unit `d`) from
 /// an observer at `o`: that of the sphere lights it enters before `t_max`
-/// [m] (they do not block what lies behind them), plus that of an area
+/// \[m\] (they do not block what lies behind them), plus that of an area
 /// source whose emitting side is the first surface it meets (within
 /// `t_max`).
 pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
@@ -337,7 +337,7 @@ pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
     spheres + area + sky
 }
 
-/// Trace the view ray from observer `o` [m] looking along unit `d` to its sub-point.
+/// Trace the view ray from observer `o` \[m\] looking along unit `d` to its sub-point.
 pub fn view_target(scene: &Scene, o: DVec3, d: DVec3) -> ViewTarget {
     match scene.first_hit_from(o, d) {
         None => ViewTarget::Miss,
@@ -428,21 +428,21 @@ const MAX_CELL_MASKS: usize = 8_000_000;
 /// Receivers compiled against a scene.
 #[derive(Clone, Debug)]
 pub struct Receivers {
-    /// Near-field radius [m] and backward paths per receiver and batch
+    /// Near-field radius \[m\] and backward paths per receiver and batch
     /// (radius 0: off).
     /// Backward paths per receiver and batch for the near part (0: off) and
-    /// each receiver's near-field radius [m] (0: plain local estimate).
+    /// each receiver's near-field radius \[m\] (0: plain local estimate).
     near_paths: u32,
     near_r: Vec<f64>,
     /// Per receiver: its own paths for every 256 chains
     /// ([`Self::with_allocated_near_paths`]); empty: `near_paths` each.
     near_per: Vec<u32>,
-    /// Radius [m] of each receiver's neighbourhood that holds almost all of
+    /// Radius \[m\] of each receiver's neighbourhood that holds almost all of
     /// its view (0: none, or not an illuminance point).
     view_r: Vec<f64>,
     /// Per receiver: whether it is enclosed ([`view_probe`]).
     enclosed: Vec<bool>,
-    /// Per receiver: the near/far radius [m] it needs, a tenth of its
+    /// Per receiver: the near/far radius \[m\] it needs, a tenth of its
     /// distance to the nearest light where a surface lies closer than that
     /// (0: none needed); see [`near_need`].
     need_r: Vec<f64>,
@@ -470,7 +470,7 @@ pub struct Receivers {
 }
 
 impl Receivers {
-    /// Compile illuminance points `p` [m] with unit normals `n` against `scene`.
+    /// Compile illuminance points `p` \[m\] with unit normals `n` against `scene`.
     pub fn new(scene: &Scene, points: &[(DVec3, DVec3)]) -> Result<Self, ReceiverError> {
         let r: Vec<Receiver> = points
             .iter()
@@ -962,7 +962,7 @@ impl Receivers {
         self.enclosed[j]
     }
 
-    /// Radius [m] of receiver `j`'s watched neighbourhood (0: none); see
+    /// Radius \[m\] of receiver `j`'s watched neighbourhood (0: none); see
     /// [`view_radius`].
     pub fn view_radius(&self, j: usize) -> f64 {
         self.view_r[j]
@@ -988,7 +988,7 @@ impl Receivers {
         &self.all
     }
 
-    /// Exact first order at each receiver: illuminance [lx] straight from the
+    /// Exact first order at each receiver: illuminance \[lx\] straight from the
     /// sources, or the luminance [cd/m^2] of light reflected once at the
     /// sub-point; without the sources that are sampled there
     /// ([`Self::sampled_direct`]).
@@ -1048,7 +1048,7 @@ impl Receivers {
         }
     }
 
-    /// The near/far split: collisions closer than `radius` [m] to a
+    /// The near/far split: collisions closer than `radius` \[m\] to a
     /// receiver no longer score into it, and each batch adds, per receiver,
     /// `paths` backward paths whose first surface lies within `radius`. Both
     /// parts are unbiased; the far kernel is bounded by `1 / radius^2`, so
@@ -1069,7 +1069,7 @@ impl Receivers {
         self.with_near_radii(r, paths)
     }
 
-    /// The split with radius `radii[j]` [m] at receiver `j` (0: plain).
+    /// The split with radius `radii[j]` \[m\] at receiver `j` (0: plain).
     fn with_near_radii(mut self, radii: Vec<f64>, paths: u32) -> Self {
         let on = paths > 0 && radii.iter().any(|&r| r > 0.0);
         self.near_paths = if on { paths } else { 0 };
@@ -1134,7 +1134,7 @@ impl Receivers {
 
     /// How receiver `j`'s near paths are traced: the table of grazing
     /// directions their first direction is drawn from, if it is in a slot,
-    /// and the split radius [m] at their vertices (see
+    /// and the split radius \[m\] at their vertices (see
     /// [`Self::with_auto_near_field`]).
     pub fn near_path_setup(&self, j: usize) -> (Option<&GrazingTable>, f64) {
         match self.slots.binary_search_by_key(&(j as u32), |s| s.0) {
@@ -1151,7 +1151,7 @@ impl Receivers {
     }
 
     /// Paths per receiver and batch of the near part (0: off) and each
-    /// receiver's near-field radius [m] (0: plain local estimate there).
+    /// receiver's near-field radius \[m\] (0: plain local estimate there).
     pub fn near_field(&self) -> (u32, &[f64]) {
         (self.near_paths, &self.near_r)
     }
@@ -1199,7 +1199,7 @@ impl Receivers {
         self.total_len
     }
 
-    /// Add the scores of collision `c` (local estimate [lx] or double local
+    /// Add the scores of collision `c` (local estimate \[lx\] or double local
     /// estimate [cd/m^2]) into `acc` (one bucket of length
     /// [`Self::accumulator_len`]), and, when `near` (same layout) is given,
     /// one into it for each receiver it scores into from within that
@@ -1572,7 +1572,7 @@ fn collision_context(scene: &Scene, list: &ReceiverList, x: DVec3) -> (SideMask,
     (xm, x_inside, open, shapes_open)
 }
 
-/// The near/far radius [m] a receiver at `p` (normal frame `frame`) needs:
+/// The near/far radius \[m\] a receiver at `p` (normal frame `frame`) needs:
 /// a tenth of the distance to the nearest light, `R = 0.1 min_l |p - x_l|`,
 /// where one of 64 probe rays over the receiver's hemisphere (a Fibonacci
 /// spiral, cosine-distributed; over the whole sphere for a solid receiver,
@@ -1613,7 +1613,7 @@ const SLOT_REACH: f64 = 0.01;
 /// `cos^2 theta` at which a ray from `p` still meets the front of a surface
 /// (bisection in `log cos^2 theta` over `[1e-8, 1]` at the 32 bin edges;
 /// a bin takes 1.25 times the larger of its edges'), and the farthest
-/// such first hit [m] (times 1.01). `None` where no direction gets
+/// such first hit \[m\] (times 1.01). `None` where no direction gets
 /// through. On a wall behind a board hung 1 cm off it (the board's back
 /// black) the light comes in only through the slit round the board, almost
 /// parallel to the wall: cosine sampling finds it once in 10^3-10^4 paths,
@@ -1665,7 +1665,7 @@ pub fn slot_table(scene: &Scene, p: DVec3, frame: &Frame) -> Option<(GrazingTabl
     Some((table, 1.01 * farthest))
 }
 
-/// Radius [m] of the neighbourhood holding almost all of what an
+/// Radius \[m\] of the neighbourhood holding almost all of what an
 /// illuminance point at `p` (normal frame `frame`) sees: ten times the
 /// median distance along 16 cosine-distributed probe rays (a Fibonacci
 /// spiral over its hemisphere), 0 when half of them or more escape. Facing

@@ -19,7 +19,7 @@
 //! receivers only, never on the seed, the thread count or the machine
 //! (shards and MPI ranks all allocate alike). Costs are counted, not
 //! timed: a chain costs its collisions and `score_cost / 16` per score, a
-//! path its rays ([`crate::backward::Walk::rays`]).
+//! path its rays (`backward::Walk::rays`).
 //!
 //! The pilot's chains are independent, while the run's batches are
 //! stratified nets, whose far part has a smaller variance per chain: the
@@ -89,7 +89,7 @@ pub struct Allocation {
     /// per path, relative to the pilot's `E^2` (0 without a near part).
     pub far_var: Vec<f64>,
     pub near_var: Vec<f64>,
-    /// Cost of a chain and, per receiver, of a path [rays].
+    /// Cost of a chain and, per receiver, of a path \[rays\].
     pub chain_cost: f64,
     pub path_cost: Vec<f64>,
 }

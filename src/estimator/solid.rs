@@ -1,7 +1,7 @@
 //! Receiver types other than the plane: small solids whose illuminance is
 //! the flux on their curved surface divided by its area.
 //!
-//! A receiver of any type reads `E = int_{S^2} L(wi) r(wi) dwi` [lx] with a
+//! A receiver of any type reads `E = int_{S^2} L(wi) r(wi) dwi` \[lx\] with a
 //! *response* `r` of the unit direction `wi` towards the source. A beam of
 //! normal illuminance `E_n` from `wi` puts the flux `E_n A_proj(wi)` on a
 //! small convex body (`A_proj`: the projected area of its lit part, which
@@ -68,14 +68,14 @@ pub const RECEIVER_TYPES: [&str; 5] = [
 /// A solid receiver type (the plane is [`super::Response::Illuminance`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Solid {
-    /// Cylindrical illuminance `E_z` [lx] about the axis `n`.
+    /// Cylindrical illuminance `E_z` \[lx\] about the axis `n`.
     Cylindrical,
-    /// Semi-cylindrical illuminance `E_sz` [lx]: vertical (world z) axis,
+    /// Semi-cylindrical illuminance `E_sz` \[lx\]: vertical (world z) axis,
     /// facing the horizontal unit `n`.
     Semicylindrical,
-    /// Hemispherical illuminance `E_hs` [lx], pole `n`.
+    /// Hemispherical illuminance `E_hs` \[lx\], pole `n`.
     Hemispherical,
-    /// Scalar (mean spherical) illuminance `E_o` [lx].
+    /// Scalar (mean spherical) illuminance `E_o` \[lx\].
     Spherical,
 }
 
@@ -106,7 +106,7 @@ impl Solid {
         }
     }
 
-    /// The response `r(wi)` [1] to light arriving from unit world direction
+    /// The response `r(wi)` \[1\] to light arriving from unit world direction
     /// `wi` (towards the source), `n` the receiver's unit normal (axis, facing
     /// direction or pole; module docs): `E = int L r dw`.
     #[inline]

@@ -29,7 +29,7 @@ const CELLS_PER_SIDE_SOLID: usize = 12;
 /// One list's cells and their masks.
 #[derive(Clone, Debug)]
 pub(super) struct VisibilityCells {
-    /// The region's low corner [m] and cells per metre along each axis.
+    /// The region's low corner \[m\] and cells per metre along each axis.
     lo: DVec3,
     inv: DVec3,
     n: [usize; 3],
@@ -53,7 +53,7 @@ pub(super) struct VisibilityCells {
 }
 
 impl VisibilityCells {
-    /// The cell counts along each axis for a region of extents `e` [m]
+    /// The cell counts along each axis for a region of extents `e` \[m\]
     /// with at most `per_side` cells along its longest side (1 along a
     /// side under a thousandth of a cell).
     fn counts(e: DVec3, per_side: usize) -> [usize; 3] {
@@ -77,7 +77,7 @@ impl VisibilityCells {
         n[0] * n[1] * n[2] * (len + split + split.div_ceil(2))
     }
 
-    /// The cells of `region` [m] for entries at `points` whose occluders
+    /// The cells of `region` \[m\] for entries at `points` whose occluders
     /// are `occ[start[k]..start[k + 1]]`, at most `per_side` cells along
     /// the longest side (default through
     /// [`Self::per_side`]); with `split = Some(w)`, the first `w.len()`
@@ -155,7 +155,7 @@ impl VisibilityCells {
         }
     }
 
-    /// For a collision at `x` [m] (as [`Self::row`]): the open responses of
+    /// For a collision at `x` \[m\] (as [`Self::row`]): the open responses of
     /// the constant-response entries, the pairs left to a shadow test
     /// (entry, mask) and the cell's masks ([`Self::row`]); `None` unless
     /// the cells were built split.
@@ -173,7 +173,7 @@ impl VisibilityCells {
         ))
     }
 
-    /// The default most cells along the longest side of `region` [m]:
+    /// The default most cells along the longest side of `region` \[m\]:
     /// [`CELLS_PER_SIDE_FLAT`] where it takes one cell across (an extent
     /// under a thousandth of the longest, as [`Self::counts`] has it),
     /// else [`CELLS_PER_SIDE_SOLID`].
@@ -186,7 +186,7 @@ impl VisibilityCells {
         }
     }
 
-    /// The masks of the cell holding `x` [m] (a point of the region; one
+    /// The masks of the cell holding `x` \[m\] (a point of the region; one
     /// outside by rounding is taken to the nearest cell, whose box the
     /// masks were made for grown by the occluder lists' margin).
     #[inline(always)]

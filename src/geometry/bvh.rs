@@ -81,9 +81,9 @@ const TRAVERSAL_COST: f64 = 1.0;
 /// triangles.
 #[derive(Clone, Copy, Debug)]
 struct Node {
-    /// Lower corner of the (padded) box [m].
+    /// Lower corner of the (padded) box \[m\].
     lo: [f64; 3],
-    /// Upper corner of the (padded) box [m].
+    /// Upper corner of the (padded) box \[m\].
     hi: [f64; 3],
     /// Leaf: first triangle in leaf order. Interior: index of the right
     /// child (the left child is the next node).
@@ -95,7 +95,7 @@ struct Node {
 /// A ray prepared for the watertight triangle test and the box test.
 #[derive(Clone, Copy, Debug)]
 pub struct RayQuery {
-    /// Origin [m].
+    /// Origin \[m\].
     o: DVec3,
     /// Axis of the largest direction component (becomes `z` after shearing).
     kz: usize,
@@ -248,7 +248,7 @@ pub struct Bvh {
 #[derive(Clone, Debug)]
 pub struct TriangleBvh {
     tree: Bvh,
-    /// Triangle vertices [m] in leaf order.
+    /// Triangle vertices \[m\] in leaf order.
     tris: Vec<[DVec3; 3]>,
 }
 
@@ -288,7 +288,7 @@ fn half_area(lo: DVec3, hi: DVec3) -> f64 {
 }
 
 impl Bvh {
-    /// Build over boxes `(lower, upper)` [m] (finite; at most `u32::MAX`).
+    /// Build over boxes `(lower, upper)` \[m\] (finite; at most `u32::MAX`).
     /// Node boxes are padded by `BOX_PAD` of their largest coordinate; the
     /// caller's boxes must hold everything its leaf test can report.
     pub fn build(bounds: &[(DVec3, DVec3)]) -> Self {
@@ -457,7 +457,7 @@ impl Bvh {
 }
 
 impl TriangleBvh {
-    /// Build over `tris` (vertices [m], finite; at most `u32::MAX` triangles).
+    /// Build over `tris` (vertices \[m\], finite; at most `u32::MAX` triangles).
     pub fn build(tris: &[[DVec3; 3]]) -> Self {
         let bounds: Vec<(DVec3, DVec3)> = tris
             .iter()

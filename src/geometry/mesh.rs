@@ -1,6 +1,6 @@
 //! Triangle meshes: Wavefront OBJ input and output, a BVH, ray queries.
 //!
-//! A [`Mesh`] is a set of triangles over shared vertices [m]. Each triangle's
+//! A [`Mesh`] is a set of triangles over shared vertices \[m\]. Each triangle's
 //! front side is the side its counter-clockwise winding faces (right-hand
 //! rule: `(v1 - v0) x (v2 - v0)`); the geometric normal returned by the ray
 //! queries is that one, never flipped toward the ray. Triangles are opaque
@@ -42,7 +42,7 @@
 //!
 //! # Ray queries
 //!
-//! Rays are `o + t d` with unit `d` and `t` [m] in an open interval
+//! Rays are `o + t d` with unit `d` and `t` \[m\] in an open interval
 //! `(t_min, t_max)`; `skip` names the triangle a ray leaves (so a ray
 //! leaving a surface never re-hits it at `t ~ 0`).
 
@@ -105,16 +105,16 @@ fn file_error(file: &str, message: impl Into<String>) -> MeshError {
 /// A triangle mesh with a BVH for ray queries.
 #[derive(Clone)]
 pub struct Mesh {
-    /// Vertices [m].
+    /// Vertices \[m\].
     vertices: Vec<DVec3>,
     /// Kept (non-degenerate) triangles, CCW, indices into `vertices`.
     triangles: Vec<[u32; 3]>,
-    /// Bounds of the triangles' vertices [m].
+    /// Bounds of the triangles' vertices \[m\].
     lo: DVec3,
     hi: DVec3,
     /// Zero-area triangles dropped when built.
     dropped: usize,
-    /// Largest distance [m] of a kept triangle's corner from the centre of
+    /// Largest distance \[m\] of a kept triangle's corner from the centre of
     /// the bounds: the ball there of this radius holds every triangle.
     reach: f64,
     bvh: TriangleBvh,
@@ -284,7 +284,7 @@ impl Mesh {
         Self::build(&file, vertices, triangles)
     }
 
-    /// Mesh from vertices [m] and counter-clockwise triangles (indices into
+    /// Mesh from vertices \[m\] and counter-clockwise triangles (indices into
     /// `vertices`). Rejects non-finite vertices and out-of-range indices;
     /// drops zero-area triangles (see [`Mesh::dropped_triangles`]); an error
     /// if no triangle is left.
@@ -457,7 +457,7 @@ impl Mesh {
         self.triangles.len()
     }
 
-    /// Vertices [m].
+    /// Vertices \[m\].
     pub fn vertices(&self) -> &[DVec3] {
         &self.vertices
     }
@@ -472,7 +472,7 @@ impl Mesh {
         self.dropped
     }
 
-    /// Corners [m] of triangle `tri`.
+    /// Corners \[m\] of triangle `tri`.
     pub fn corners(&self, tri: u32) -> [DVec3; 3] {
         self.triangles[tri as usize].map(|i| self.vertices[i as usize])
     }
@@ -498,19 +498,19 @@ impl Mesh {
             + self.bvh.storage_bytes()
     }
 
-    /// Axis-aligned bounds `(lower, upper)` of the triangles [m].
+    /// Axis-aligned bounds `(lower, upper)` of the triangles \[m\].
     pub fn bounds(&self) -> (DVec3, DVec3) {
         (self.lo, self.hi)
     }
 
     /// A ball holding every triangle: the centre of [`Self::bounds`] and
-    /// the largest distance of a corner from it [m] (for a round mesh
+    /// the largest distance of a corner from it \[m\] (for a round mesh
     /// tighter than the ball round its box, by up to `sqrt 3`).
     pub fn bounding_ball(&self) -> (DVec3, f64) {
         (0.5 * (self.lo + self.hi), self.reach)
     }
 
-    /// Nearest hit of the ray `o + t d` (unit `d`) with `t` [m] in
+    /// Nearest hit of the ray `o + t d` (unit `d`) with `t` \[m\] in
     /// `(t_min, t_max)`, skipping triangle `skip`: `(t, unit geometric
     /// normal by CCW winding, not flipped toward the ray, triangle index)`.
     pub fn first_hit(
@@ -527,7 +527,7 @@ impl Mesh {
     }
 
     /// Whether the ray `o + t d` (unit `d`) hits any triangle but `skip`
-    /// with `t` [m] in `(t_min, t_max)` (shadow ray; stops at the first hit
+    /// with `t` \[m\] in `(t_min, t_max)` (shadow ray; stops at the first hit
     /// found).
     pub fn occluded(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64, skip: Option<u32>) -> bool {
         let q = RayQuery::new(o, d);
@@ -567,7 +567,7 @@ impl Mesh {
 
 /// A closed star-shaped mesh: a UV sphere whose vertex at polar angle
 /// `theta` (from `+z`) and azimuth `phi` (from `+x` toward `+y`) lies at
-/// distance `radius(theta, phi)` [m] from the origin.
+/// distance `radius(theta, phi)` \[m\] from the origin.
 ///
 /// `n_theta >= 2` bands in `theta`, `n_phi >= 3` sectors in `phi`. Vertices:
 /// the north pole (index 0, at `radius(0, 0)`), rings `i = 1..n_theta` of
@@ -998,7 +998,7 @@ mod tests {
         }
     }
 
-    /// Whether `q` is strictly inside a convex closed mesh, by `eps` [m].
+    /// Whether `q` is strictly inside a convex closed mesh, by `eps` \[m\].
     fn inside_convex(m: &Mesh, q: DVec3, eps: f64) -> bool {
         (0..m.triangle_count() as u32).all(|k| m.normal(k).dot(q - m.corners(k)[0]) < -eps)
     }
@@ -1428,7 +1428,7 @@ f 9
         }
     }
 
-    /// CPU time of the calling thread [s] (Linux; wall-clock time elsewhere),
+    /// CPU time of the calling thread \[s\] (Linux; wall-clock time elsewhere),
     /// so that timings are not skewed by other processes sharing the cores.
     fn thread_cpu_seconds(wall: std::time::Instant) -> f64 {
         std::fs::read_to_string("/proc/thread-self/schedstat")

@@ -28,10 +28,10 @@ use std::collections::HashMap;
 /// A box inside a closed mesh ([module docs](self)).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Core {
-    /// The box [m].
+    /// The box \[m\].
     pub lo: DVec3,
     pub hi: DVec3,
-    /// A lower bound on the distance [m] from the box to every triangle
+    /// A lower bound on the distance \[m\] from the box to every triangle
     /// (and the margin by which an end must lie outside the mesh's bounds).
     pub gap: f64,
 }
@@ -47,7 +47,7 @@ const KEEP: f64 = 0.95;
 pub const MARGIN_SHARE: f64 = 0.5;
 
 impl Core {
-    /// The core of the closed mesh of triangles `corners` [m] (indices
+    /// The core of the closed mesh of triangles `corners` \[m\] (indices
     /// `triangles` into a shared vertex list, for the closedness check),
     /// bounds `[lo, hi]`; `None` when open or no core is found.
     pub fn find(
@@ -76,7 +76,7 @@ impl Core {
 
     /// Whether the segment from `a` to `b` provably crosses the mesh of
     /// bounds `[lo, hi]` whose core this is, for a shadow ray that leaves
-    /// out `margin` [m] at each end: `margin` within [`Self::margin_fits`],
+    /// out `margin` \[m\] at each end: `margin` within [`Self::margin_fits`],
     /// an end outside the bounds by more than the gap, and the segment
     /// through the core. `false` says nothing (the BVH decides).
     #[inline]
@@ -85,7 +85,7 @@ impl Core {
         self.margin_fits(margin) && (out(a) || out(b)) && segment_meets_box(a, b, self.lo, self.hi)
     }
 
-    /// Whether a shadow ray's end margin [m] leaves the crossing (at least
+    /// Whether a shadow ray's end margin \[m\] leaves the crossing (at least
     /// `gap` from either end) inside its range with room for the rounding
     /// of the ray's distances: at most [`MARGIN_SHARE`] of the gap. (With
     /// `margin` just below `gap`, a crossing `gap` from an end of a long

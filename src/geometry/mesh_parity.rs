@@ -34,7 +34,7 @@ const DIRS: [[f64; 3]; 3] = [
     [0.8128, -0.4551, 0.3637],
 ];
 
-/// The side of `mesh` that `q` [m] lies on.
+/// The side of `mesh` that `q` \[m\] lies on.
 pub fn side(mesh: &Mesh, q: DVec3) -> Side {
     if !mesh.is_closed() {
         return Side::Unknown;

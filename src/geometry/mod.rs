@@ -18,7 +18,7 @@ use glam::DVec3;
 /// A ray `o + t d`, `t > 0`, with unit direction `d`.
 #[derive(Clone, Copy, Debug)]
 pub struct Ray {
-    /// Origin [m].
+    /// Origin \[m\].
     pub o: DVec3,
     /// Unit direction.
     pub d: DVec3,
@@ -27,9 +27,9 @@ pub struct Ray {
 /// Where a ray meets a surface.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
-    /// Distance along the ray [m].
+    /// Distance along the ray \[m\].
     pub t: f64,
-    /// Hit point [m], on the surface.
+    /// Hit point \[m\], on the surface.
     pub p: DVec3,
     /// Unit normal of the surface's front side.
     pub n: DVec3,
@@ -42,11 +42,11 @@ pub struct Hit {
 /// An infinite plane `n . x = c`, front side towards `n`.
 #[derive(Clone, Copy, Debug)]
 pub struct Plane {
-    /// A point of the plane [m].
+    /// A point of the plane \[m\].
     pub p: DVec3,
     /// Unit normal (front side).
     pub n: DVec3,
-    /// Offset `n . p` [m].
+    /// Offset `n . p` \[m\].
     pub c: f64,
 }
 
@@ -65,7 +65,7 @@ impl Plane {
         Self { p, n, c: n.dot(p) }
     }
 
-    /// Signed distance of `q` from the plane [m], positive on the front side.
+    /// Signed distance of `q` from the plane \[m\], positive on the front side.
     #[inline]
     pub fn signed_distance(&self, q: DVec3) -> f64 {
         self.n.dot(q - self.p)

@@ -32,11 +32,11 @@ const ON_REL: f64 = 1e-10;
 /// `e1 x e2` (right-hand rule).
 #[derive(Clone, Copy, Debug)]
 pub struct Rect {
-    /// Corner [m].
+    /// Corner \[m\].
     pub o: DVec3,
-    /// First edge [m].
+    /// First edge \[m\].
     pub e1: DVec3,
-    /// Second edge [m].
+    /// Second edge \[m\].
     pub e2: DVec3,
     /// Supporting plane, normal `e1 x e2` normalised.
     pub plane: Plane,
@@ -97,7 +97,7 @@ impl Flat for Rect {
 pub struct Disc {
     /// Supporting plane through the centre.
     pub plane: Plane,
-    /// Radius [m].
+    /// Radius \[m\].
     pub r: f64,
 }
 
@@ -164,12 +164,12 @@ pub enum Inside {
     Out,
 }
 
-/// A sphere: centre `c` [m], radius `r` [m]; geometric normal outward.
+/// A sphere: centre `c` \[m\], radius `r` \[m\]; geometric normal outward.
 #[derive(Clone, Copy, Debug)]
 pub struct Sphere {
-    /// Centre [m].
+    /// Centre \[m\].
     pub c: DVec3,
-    /// Radius [m].
+    /// Radius \[m\].
     pub r: f64,
 }
 
@@ -253,9 +253,9 @@ pub const BOX_FACES: [&str; 6] = ["x_min", "x_max", "y_min", "y_max", "z_min", "
 /// An axis-aligned box `[lo, hi]`.
 #[derive(Clone, Copy, Debug)]
 pub struct AaBox {
-    /// Lower corner [m].
+    /// Lower corner \[m\].
     pub lo: DVec3,
-    /// Upper corner [m].
+    /// Upper corner \[m\].
     pub hi: DVec3,
 }
 
@@ -283,7 +283,7 @@ impl AaBox {
         (ON_REL * (self.hi - self.lo).max_element()).max(ulps)
     }
 
-    /// The distance [m] within which a point counts as on the surface
+    /// The distance \[m\] within which a point counts as on the surface
     /// ([`Self::classify`]); [`Self::crosses`] tests the box shrunk by it.
     pub fn tolerance(&self) -> f64 {
         self.tol()

@@ -6,11 +6,11 @@
 //! - `L_i` [cd/m^2]: the luminance of luminaire `i`'s luminous parts seen
 //!   from the eye, `I_i(w) / A_p` with `I_i(w)` its intensity towards the
 //!   eye and `A_p` the luminous area projected on the plane normal to `w`;
-//! - `omega_i = A_p / d^2` [sr]: their solid angle from the eye at distance
+//! - `omega_i = A_p / d^2` \[sr\]: their solid angle from the eye at distance
 //!   `d` (CIE 117's definition);
 //! - `p_i`: Guth's position index ([`position_index`]);
 //! - `L_b = E_ind / pi` [cd/m^2]: the background luminance, with `E_ind`
-//!   [lx] the indirect illuminance at the eye on the plane normal to the
+//!   \[lx\] the indirect illuminance at the eye on the plane normal to the
 //!   line of sight (light reflected at least once; the local estimate gives
 //!   it directly, with its standard error).
 //!
@@ -54,9 +54,9 @@ use glam::DVec3;
 use std::f64::consts::{LN_10, PI};
 
 /// Guth's position index from the angles of the source seen by the eye:
-/// `tau` [deg], the angle from the vertical of the plane through the line
+/// `tau` \[deg\], the angle from the vertical of the plane through the line
 /// of sight and the source (0: straight above the line of sight, 90: level
-/// with it, to the side), and `sigma` [deg], the angle between the line of
+/// with it, to the side), and `sigma` \[deg\], the angle between the line of
 /// sight and the direction of the source.
 ///
 /// `ln p = (35.2 - 0.31889 tau - 1.22 e^(-2 tau / 9)) 1e-3 sigma
@@ -79,8 +79,8 @@ pub fn guth_index(tau_deg: f64, sigma_deg: f64) -> f64 {
     (a * s + b * s * s).exp()
 }
 
-/// Guth's position index of a source at `r` [m] ahead along the line of
-/// sight, `t` [m] to the side and `h` [m] above it (CIE 117's `R`, `T`,
+/// Guth's position index of a source at `r` \[m\] ahead along the line of
+/// sight, `t` \[m\] to the side and `h` \[m\] above it (CIE 117's `R`, `T`,
 /// `H`; only ratios matter): [`guth_index`] of `tau = atan2(|t|, h)` and
 /// `sigma = atan2(sqrt(t^2 + h^2), r)`. 1 on the line of sight.
 pub fn position_index(r: f64, t: f64, h: f64) -> f64 {
@@ -93,8 +93,8 @@ pub fn position_index(r: f64, t: f64, h: f64) -> f64 {
     guth_index(tau, sigma)
 }
 
-/// Whether a source at `r` [m] ahead along the line of sight, `t` [m] to
-/// the side and `h` [m] above it lies in the field of CIE 117-1995's Table
+/// Whether a source at `r` \[m\] ahead along the line of sight, `t` \[m\] to
+/// the side and `h` \[m\] above it lies in the field of CIE 117-1995's Table
 /// 4.1 of position indices, the field a rating counts: ahead (`R > 0`) and
 /// at or above the line of sight (`H >= 0`), where the table's nearest
 /// node (steps of 0.1 in `T/R` and `H/R`) has an index: `T/R` up to 3 and
@@ -113,12 +113,12 @@ pub fn in_position_field(r: f64, t: f64, h: f64) -> bool {
     tr < 3.05 && hr < 1.95 && !hidden
 }
 
-/// An observer: the eye [m] and the unit line of sight, with the frame
+/// An observer: the eye \[m\] and the unit line of sight, with the frame
 /// the position index is measured in (`up`: the world `+z` made normal to
 /// the line of sight; `side` completes it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Observer {
-    /// Eye position [m].
+    /// Eye position \[m\].
     pub eye: DVec3,
     /// Unit line of sight.
     pub view: DVec3,
@@ -151,14 +151,14 @@ impl Observer {
 #[derive(Clone, Debug, PartialEq)]
 pub enum LuminousArea {
     /// A goniometric luminaire: its file's luminous shape (LM-63-2002's
-    /// shapes; EULUMDAT's rectangle or disc) and half its extents [m]
+    /// shapes; EULUMDAT's rectangle or disc) and half its extents \[m\]
     /// along the local `x` (C0, the length), `y` (C90, the width) and `z`
     /// (the height) axes: for a rectangle or an ellipse facing down, `z`
     /// is half the height of its luminous sides (0: none).
     Gonio {
         /// The shape.
         shape: OpeningShape,
-        /// Half the extents [m] along local `x`, `y`, `z`.
+        /// Half the extents \[m\] along local `x`, `y`, `z`.
         half: DVec3,
     },
     /// A flat Lambertian source of `area` [m^2] facing `normal`, of average
@@ -173,9 +173,9 @@ pub enum LuminousArea {
         /// Average luminance [cd/m^2].
         l: f64,
     },
-    /// A Lambertian sphere of radius `r` [m] and luminance `l` [cd/m^2].
+    /// A Lambertian sphere of radius `r` \[m\] and luminance `l` [cd/m^2].
     Sphere {
-        /// Radius [m].
+        /// Radius \[m\].
         r: f64,
         /// Luminance [cd/m^2].
         l: f64,
@@ -184,7 +184,7 @@ pub enum LuminousArea {
 
 impl LuminousArea {
     /// The luminous parts a photometric file gives (its shape and its
-    /// dimensions [m]); an error when it gives none, or a shape with a
+    /// dimensions \[m\]); an error when it gives none, or a shape with a
     /// zero or non-finite dimension.
     pub fn of_file(o: &crate::io::photometry::Opening) -> Result<Self, GlareError> {
         // The luminous shape the near-field emission takes, too.
@@ -287,7 +287,7 @@ pub struct GlareTerm {
     pub light: usize,
     /// Luminance of its luminous parts towards the eye [cd/m^2].
     pub l: f64,
-    /// Solid angle of its luminous parts that the eye sees [sr]: `seen`
+    /// Solid angle of its luminous parts that the eye sees \[sr\]: `seen`
     /// times that of the whole parts.
     pub omega: f64,
     /// The fraction of the luminous parts' projected area that the eye
@@ -296,7 +296,7 @@ pub struct GlareTerm {
     pub seen: f64,
     /// Guth's position index.
     pub p: f64,
-    /// Distance from the eye to its centre [m].
+    /// Distance from the eye to its centre \[m\].
     pub d: f64,
 }
 
@@ -307,7 +307,7 @@ impl GlareTerm {
     }
 }
 
-/// A luminaire's centre [m], intensity [cd] towards unit world direction
+/// A luminaire's centre \[m\], intensity \[cd\] towards unit world direction
 /// `w`, and local frame; `None` for lights at infinity.
 fn centre_and_intensity(
     light: &Light,
@@ -373,7 +373,7 @@ pub fn glare_term(
 
 /// CIE 117's formula: `8 log10(0.25 sum / L_b)` with `L_b = e / pi`, from
 /// the glare sum `sum` [(cd/m^2)^2 sr] and the background illuminance `e`
-/// [lx] (at the eye, or the walls' average in the tabular method).
+/// \[lx\] (at the eye, or the walls' average in the tabular method).
 pub fn ugr_formula(sum: f64, e: f64) -> f64 {
     8.0 * (0.25 * PI * sum / e).log10()
 }
@@ -400,8 +400,8 @@ pub struct Ugr {
 
 impl Ugr {
     /// The rating of a glare sum `sum` over a background from the
-    /// indirect illuminance `e_ind` [lx] at the eye, its standard error
-    /// `se` [lx] and the half-width factor `t` of its 95 % interval
+    /// indirect illuminance `e_ind` \[lx\] at the eye, its standard error
+    /// `se` \[lx\] and the half-width factor `t` of its 95 % interval
     /// (`t_{0.975, B-1}` for `B` batches).
     pub fn from_parts(sum: f64, e_ind: f64, se: f64, t: f64) -> Self {
         let lb = e_ind / PI;
@@ -429,7 +429,7 @@ impl Ugr {
     }
 }
 
-/// CIE 117's range of solid angles for which the formula holds [sr]:
+/// CIE 117's range of solid angles for which the formula holds \[sr\]:
 /// smaller sources (below 3e-4 sr) need CIE 147's correction, larger ones
 /// (above 0.1 sr) are large-area glare.
 pub const OMEGA_RANGE: (f64, f64) = (3e-4, 0.1);

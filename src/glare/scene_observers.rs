@@ -3,7 +3,7 @@
 //! ```toml
 //! [[observer]]
 //! name = "desk 1 looking along the room"   # optional
-//! eye = [0.6, 1.4, 1.2]                     # [m]
+//! eye = [0.6, 1.4, 1.2]                     # \[m\]
 //! view = [1, 0, 0]                          # line of sight, not vertical
 //! ```
 //!

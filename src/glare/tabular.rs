@@ -2,7 +2,7 @@
 //! luminaire in a regular array, as luminaire makers publish it (the UGR
 //! table, [`ugr_table`]), and an independent check of `lumest glare`.
 //!
-//! The standard room: a floor `across x along` [m] (CIE 117's `X`, across
+//! The standard room: a floor `across x along` \[m\] (CIE 117's `X`, across
 //! the line of sight, and `Y`, along it), luminaires in a regular grid in
 //! the ceiling plane at height `H` above the eye (the outer rows half a
 //! spacing from the walls), the observer at the middle of the wall `along
@@ -47,7 +47,7 @@ use std::sync::OnceLock;
 /// A luminaire as the tabular method needs it, in the room's frame: the
 /// line of sight along `+x`, across it `y`, up `+z`.
 pub trait TableLuminaire {
-    /// Intensity [cd] towards unit direction `w` (from the luminaire).
+    /// Intensity \[cd\] towards unit direction `w` (from the luminaire).
     fn intensity(&self, w: DVec3) -> f64;
     /// Its luminous area [m^2] projected on the plane normal to `w`.
     fn projected_area(&self, w: DVec3) -> f64;
@@ -100,17 +100,17 @@ impl View {
 /// A standard room with a grid of identical ceiling luminaires.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StandardRoom {
-    /// Room dimension across the line of sight [m] (CIE 117's `X`).
+    /// Room dimension across the line of sight \[m\] (CIE 117's `X`).
     pub across: f64,
-    /// Room dimension along the line of sight [m] (CIE 117's `Y`).
+    /// Room dimension along the line of sight \[m\] (CIE 117's `Y`).
     pub along: f64,
-    /// Eye height above the floor of the inter-reflecting box [m]: 0 in
+    /// Eye height above the floor of the inter-reflecting box \[m\]: 0 in
     /// the published tables (the floor cavity collapsed into the eye
     /// plane), 1.2 for a seated eye above a real floor.
     pub eye: f64,
-    /// Height of the luminaire (ceiling) plane above the eye [m].
+    /// Height of the luminaire (ceiling) plane above the eye \[m\].
     pub h: f64,
-    /// Luminaire spacing [m] in both directions (rounded per direction to
+    /// Luminaire spacing \[m\] in both directions (rounded per direction to
     /// a whole number of luminaires, at least one).
     pub spacing: f64,
     /// Reflectances of ceiling, walls and floor.
@@ -135,13 +135,13 @@ pub fn view_factor_parallel(a: f64, b: f64, c: f64) -> f64 {
 pub struct Tabular {
     /// `sum L^2 omega / p^2` over the room's luminaires [(cd/m^2)^2 sr].
     pub sum: f64,
-    /// Average indirect illuminance on the walls [lx].
+    /// Average indirect illuminance on the walls \[lx\].
     pub e_wall_ind: f64,
     /// The rating `8 log10(0.25 pi sum / E_W)`.
     pub ugr: f64,
 }
 
-/// The luminaires' direct flux [lm] on the room's surfaces.
+/// The luminaires' direct flux \[lm\] on the room's surfaces.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DirectFlux {
     /// On the ceiling: the upward flux (the luminaires are in its plane).
@@ -164,7 +164,7 @@ fn rule8() -> &'static [(f64, f64)] {
     })
 }
 
-/// A luminaire's upward and downward flux [lm]: `int I dw` over each
+/// A luminaire's upward and downward flux \[lm\]: `int I dw` over each
 /// hemisphere by the midpoint rule in `gamma` (0.05 degree) and `C` (0.25
 /// degree), which the bilinear photometric table meets to about 1e-6.
 pub fn hemisphere_fluxes(lum: &dyn TableLuminaire) -> (f64, f64) {
@@ -196,7 +196,7 @@ impl StandardRoom {
         (n(self.along), n(self.across))
     }
 
-    /// Luminaire positions [m]: `x` along the line of sight from the
+    /// Luminaire positions \[m\]: `x` along the line of sight from the
     /// observer's wall, `y` across from the side wall, `z` the ceiling
     /// plane `eye + h` above the floor.
     pub fn luminaires(&self) -> Vec<DVec3> {
@@ -215,7 +215,7 @@ impl StandardRoom {
         v
     }
 
-    /// The eye [m]: the middle of the wall `x = 0`.
+    /// The eye \[m\]: the middle of the wall `x = 0`.
     pub fn eye_position(&self) -> DVec3 {
         DVec3::new(0.0, 0.5 * self.across, self.eye)
     }
@@ -283,7 +283,7 @@ impl StandardRoom {
         }
     }
 
-    /// The walls' average indirect illuminance [lx] from the direct flux:
+    /// The walls' average indirect illuminance \[lx\] from the direct flux:
     /// the three surfaces, each of uniform illuminance, exchange light by
     /// the box's exact view factors, `E_k = E0_k + sum_j F_kj rho_j E_j`.
     pub fn wall_indirect(&self, flux: &DirectFlux) -> f64 {
@@ -344,7 +344,7 @@ fn rating(sum: f64, e_wall_ind: f64) -> f64 {
     }
 }
 
-/// The height `H` [m] a table is computed at (any other gives the same
+/// The height `H` \[m\] a table is computed at (any other gives the same
 /// ratings to rounding).
 pub const TABLE_H: f64 = 2.0;
 
@@ -425,7 +425,7 @@ pub fn reference_ugr(dist: &Goniometric, area: &LuminousArea) -> (f64, f64) {
     (c[0], e[0])
 }
 
-/// A file luminaire's upward and downward flux [lm] ([`hemisphere_fluxes`]).
+/// A file luminaire's upward and downward flux \[lm\] ([`hemisphere_fluxes`]).
 fn luminaire_fluxes(dist: &Goniometric, area: &LuminousArea) -> (f64, f64) {
     hemisphere_fluxes(&FileLuminaire {
         dist,
@@ -434,7 +434,7 @@ fn luminaire_fluxes(dist: &Goniometric, area: &LuminousArea) -> (f64, f64) {
     })
 }
 
-/// The ratings of one standard room `(X, Y)` [H], for each of
+/// The ratings of one standard room `(X, Y)` \[H\], for each of
 /// [`REFLECTANCES`], viewed crosswise and endwise.
 fn room_ratings(
     dist: &Goniometric,
@@ -487,8 +487,8 @@ mod tests {
     }
 
     /// An analytic luminaire: `down mu (1 + c2 cos 2C)` below (`mu` the
-    /// cosine from the nadir, `C` from `+x`), `up` [cd] everywhere above,
-    /// a square opening of side `side` [m] facing down.
+    /// cosine from the nadir, `C` from `+x`), `up` \[cd\] everywhere above,
+    /// a square opening of side `side` \[m\] facing down.
     struct Analytic {
         down: f64,
         up: f64,

@@ -21,26 +21,26 @@ use glam::DVec3;
 pub struct Lattice {
     /// Names of the two plane axes (`x`, `y`, `z`, or `u`, `v`).
     pub axes: [&'static str; 2],
-    /// The plane point of coordinates (0, 0) [m].
+    /// The plane point of coordinates (0, 0) \[m\].
     pub origin: DVec3,
     /// Unit first axis.
     pub u: DVec3,
     /// Unit second axis.
     pub v: DVec3,
-    /// Distinct first coordinates, increasing [m].
+    /// Distinct first coordinates, increasing \[m\].
     pub xs: Vec<f64>,
-    /// Distinct second coordinates, increasing [m].
+    /// Distinct second coordinates, increasing \[m\].
     pub ys: Vec<f64>,
     /// Node `(i, j)` of each point, in the input's order.
     pub nodes: Vec<(usize, usize)>,
-    /// The cells around the nodes `(x0, x1, y0, y1)` [m]: half a spacing
+    /// The cells around the nodes `(x0, x1, y0, y1)` \[m\]: half a spacing
     /// beyond the outer nodes (half the side of a point's own area when a
     /// lattice line is alone).
     pub bounds: (f64, f64, f64, f64),
 }
 
 impl Lattice {
-    /// Plane coordinates of a point `p` [m] (projected along the normal).
+    /// Plane coordinates of a point `p` \[m\] (projected along the normal).
     pub fn coords(&self, p: DVec3) -> (f64, f64) {
         let d = p - self.origin;
         (d.dot(self.u), d.dot(self.v))

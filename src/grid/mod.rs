@@ -11,7 +11,7 @@
 //!
 //! Each grid carries a receiver type name (stored and passed through), and
 //! the requirements its figures are checked against: the maintained
-//! average illuminance `em` [lx], the uniformity `u0`, and the maintenance
+//! average illuminance `em` \[lx\], the uniformity `u0`, and the maintenance
 //! factor applied to the computed illuminance.
 
 pub mod contour;
@@ -39,7 +39,7 @@ pub const MAX_GRID_POINTS: usize = 1_000_000;
 /// One calculation point of a grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridPoint {
-    /// Position [m].
+    /// Position \[m\].
     pub p: DVec3,
     /// Unit normal (the side the point faces).
     pub n: DVec3,
@@ -58,9 +58,9 @@ pub struct Grid {
     pub points: Vec<GridPoint>,
     /// Cells along the first and second edge (before a disc drops corners).
     pub cells: (usize, usize),
-    /// Cell sides along the first and second edge [m].
+    /// Cell sides along the first and second edge \[m\].
     pub cell_size: (f64, f64),
-    /// Required maintained average illuminance [lx], if any.
+    /// Required maintained average illuminance \[lx\], if any.
     pub em: Option<f64>,
     /// Required uniformity `U0 = E_min / E_avg`, if any.
     pub u0: Option<f64>,

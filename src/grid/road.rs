@@ -1,7 +1,7 @@
 //! The EN 13201-3 field of calculation of a road.
 //!
 //! The field runs along the road between two successive luminaires of a
-//! row (length `S` [m]) and across the carriageway. EN 13201-3 (2015,
+//! row (length `S` \[m\]) and across the carriageway. EN 13201-3 (2015,
 //! clause 7.3) spaces the transverse rows of points `D = S / N` apart,
 //! with `N = 10` for `S <= 30 m` and otherwise the smallest whole `N` with
 //! `D <= 3 m`; the first row lies `D / 2` beyond the first luminaire, so
@@ -15,7 +15,7 @@
 //! here) keep `d <= 1.5 m` for lanes up to 4.5 m wide (the usual 3-3.75
 //! m), with as many or more points; wider lanes are warned of.
 
-/// Transverse rows along a field of length `s` [m] (the spacing of the
+/// Transverse rows along a field of length `s` \[m\] (the spacing of the
 /// luminaires): `N = 10` up to 30 m, else the smallest `N` with `s / N <= 3 m`.
 pub fn rows_along(s: f64) -> usize {
     if s <= 30.0 {
@@ -28,7 +28,7 @@ pub fn rows_along(s: f64) -> usize {
 /// Points across each lane.
 pub const POINTS_PER_LANE: usize = 3;
 
-/// Largest transverse spacing `d` [m] EN 13201-3 allows across an
+/// Largest transverse spacing `d` \[m\] EN 13201-3 allows across an
 /// illuminance field.
 pub const MAX_ACROSS: f64 = 1.5;
 

@@ -3,9 +3,9 @@
 //! EN 12464-1 (2011, clause 4.4; the same rule in 2021) sizes the cells of
 //! a calculation grid by the longest cell side allowed,
 //!
-//! `p = 0.2 x 5^log10(d)`  [m], at most 10 m,
+//! `p = 0.2 x 5^log10(d)`  \[m\], at most 10 m,
 //!
-//! where `d` [m] is the longer side of the area, or the shorter one when the
+//! where `d` \[m\] is the longer side of the area, or the shorter one when the
 //! longer is at least twice the shorter. The number of cells along `d` is
 //! the smallest whole number `n >= d / p`; the cell side `d / n` found so is
 //! then used to count the cells along the other side the same way (the next
@@ -14,12 +14,12 @@
 //! exact at the powers of ten: 0.2 m for 1 m, 1 m for 10 m, 5 m for 100 m.
 
 /// Largest cell side allowed by EN 12464-1 for an area of relevant
-/// dimension `d` [m]: `min(0.2 x 5^log10(d), 10)` [m].
+/// dimension `d` \[m\]: `min(0.2 x 5^log10(d), 10)` \[m\].
 pub fn max_cell_size(d: f64) -> f64 {
     (0.2 * 5f64.powf(d.log10())).min(10.0)
 }
 
-/// The relevant dimension `d` [m] of an `a` x `b` area: the longer side,
+/// The relevant dimension `d` \[m\] of an `a` x `b` area: the longer side,
 /// or the shorter when the longer is at least twice the shorter.
 pub fn relevant_dimension(a: f64, b: f64) -> f64 {
     let (long, short) = if a >= b { (a, b) } else { (b, a) };
@@ -35,7 +35,7 @@ pub fn cells_along(len: f64, p: f64) -> usize {
     n.max(1.0) as usize
 }
 
-/// Cells along the two sides of an `a` x `b` area [m]: by the EN 12464-1
+/// Cells along the two sides of an `a` x `b` area \[m\]: by the EN 12464-1
 /// rule when `spacing` is `None`, else cells of side at most `spacing`
 /// along each side.
 pub fn cell_counts(a: f64, b: f64, spacing: Option<f64>) -> (usize, usize) {

@@ -13,7 +13,7 @@ use toml::Spanned;
 /// disc inscribed in it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Patch {
-    /// Corner [m].
+    /// Corner \[m\].
     pub origin: DVec3,
     /// Unit first edge direction.
     pub u: DVec3,
@@ -21,16 +21,16 @@ pub struct Patch {
     pub v: DVec3,
     /// Unit normal, `u x v`: the side the points face.
     pub n: DVec3,
-    /// Length along `u` [m].
+    /// Length along `u` \[m\].
     pub a: f64,
-    /// Length along `v` [m].
+    /// Length along `v` \[m\].
     pub b: f64,
-    /// A disc: its centre [m] and radius [m] (inscribed in the square).
+    /// A disc: its centre \[m\] and radius \[m\] (inscribed in the square).
     pub disc: Option<(DVec3, f64)>,
 }
 
 impl Patch {
-    /// The patch less a band of `border` [m] along its edges; `None` when
+    /// The patch less a band of `border` \[m\] along its edges; `None` when
     /// nothing is left.
     pub fn inset(&self, border: f64) -> Option<Patch> {
         let (a, b) = (self.a - 2.0 * border, self.b - 2.0 * border);
@@ -46,7 +46,7 @@ impl Patch {
         })
     }
 
-    /// The point at `(x, y)` [m] in the patch's frame, if it lies on the patch.
+    /// The point at `(x, y)` \[m\] in the patch's frame, if it lies on the patch.
     pub fn point(&self, x: f64, y: f64) -> Option<DVec3> {
         let p = self.origin + x * self.u + y * self.v;
         match self.disc {

@@ -35,7 +35,7 @@ pub struct PointTable {
     pub lines: Vec<u64>,
     /// Comment lines before the header (not rows).
     pub comment_lines: u64,
-    /// Position [m] and unit normal of each row (normal normalised here).
+    /// Position \[m\] and unit normal of each row (normal normalised here).
     pub points: Vec<(DVec3, DVec3)>,
 }
 
@@ -353,7 +353,7 @@ pub struct ViewTable {
     pub lines: Vec<u64>,
     /// Comment lines before the header (not rows).
     pub comment_lines: u64,
-    /// Observer position [m] and unit viewing direction of each row.
+    /// Observer position \[m\] and unit viewing direction of each row.
     pub views: Vec<(DVec3, DVec3)>,
 }
 

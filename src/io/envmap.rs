@@ -16,9 +16,9 @@ use std::path::Path;
 /// A map's pixels as luminance values, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LuminanceMap {
-    /// Width [pixels].
+    /// Width \[pixels\].
     pub width: usize,
-    /// Height [pixels].
+    /// Height \[pixels\].
     pub height: usize,
     /// `Y` of each pixel, row-major (the pixel value; see [`luminance_of`]),
     /// after the header's exposure and colour correction.

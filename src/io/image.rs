@@ -582,11 +582,11 @@ impl Rgb8Image {
     }
 }
 
-/// Cap height and descender depth [px] at text scale 1 (see `io/text.rs`).
+/// Cap height and descender depth \[px\] at text scale 1 (see `io/text.rs`).
 const GLYPH_H: i64 = super::text::CAP_HEIGHT;
 const DESCENT: i64 = super::text::DESCENT;
 
-/// Width [px] of `text` drawn at integer scale `s`.
+/// Width \[px\] of `text` drawn at integer scale `s`.
 fn text_width(text: &str, s: i64) -> i64 {
     super::text::text_width(text, s)
 }
@@ -670,7 +670,7 @@ impl ScaleBar {
         }
     }
 
-    /// Width [px] of the bar including its padding on both sides.
+    /// Width \[px\] of the bar including its padding on both sides.
     fn width(&self) -> i64 {
         let s = self.s;
         let labels = self
@@ -710,7 +710,7 @@ impl ScaleBar {
 // ---------------------------------------------------------------------------
 // False-colour image
 
-/// Images shorter than this [px] are enlarged by an integer factor (each
+/// Images shorter than this \[px\] are enlarged by an integer factor (each
 /// pixel a block) so that the scale bar has room for its labels.
 pub const FALSE_COLOUR_MIN_HEIGHT: usize = 256;
 
@@ -762,7 +762,7 @@ pub fn write_false_colour_png(img: &LuminanceImage, path: &str, scale: ColourSca
 // ---------------------------------------------------------------------------
 // Polar plot
 
-/// Radius [px] of the disc in polar plots.
+/// Radius \[px\] of the disc in polar plots.
 pub const POLAR_RADIUS: usize = 180;
 
 /// A rendered polar plot and where its disc lies.
@@ -770,15 +770,15 @@ pub const POLAR_RADIUS: usize = 180;
 pub struct PolarPlot {
     /// The picture.
     pub image: Rgb8Image,
-    /// Centre of the disc [px], (x right, y down), in pixel-edge coordinates.
+    /// Centre of the disc \[px\], (x right, y down), in pixel-edge coordinates.
     pub centre: (f64, f64),
-    /// Radius of the disc [px] (theta = pi/2 at the rim).
+    /// Radius of the disc \[px\] (theta = pi/2 at the rim).
     pub radius: f64,
 }
 
 impl PolarPlot {
-    /// The pixel (column, row) showing direction `theta` [rad] (0 at the
-    /// centre, pi/2 at the rim), `phi` [rad] (0 to the right, counterclockwise).
+    /// The pixel (column, row) showing direction `theta` \[rad\] (0 at the
+    /// centre, pi/2 at the rim), `phi` \[rad\] (0 to the right, counterclockwise).
     pub fn pixel_at(&self, theta: f64, phi: f64) -> (usize, usize) {
         let r = theta / FRAC_PI_2 * self.radius;
         let x = self.centre.0 + r * phi.cos();
@@ -792,11 +792,11 @@ impl PolarPlot {
 struct PolarGrid {
     thetas: Vec<f64>,
     phis: Vec<f64>,
-    /// `l[i * phis.len() + j]` at (thetas[i], phis[j]).
+    /// `l[i * phis.len() + j]` at (`thetas[i]`, `phis[j]`).
     l: Vec<f64>,
 }
 
-/// Tolerance [rad] when matching sample angles to grid nodes.
+/// Tolerance \[rad\] when matching sample angles to grid nodes.
 const ANGLE_TOL: f64 = 1e-9;
 
 /// Sorted distinct values of `v`, merging values within [`ANGLE_TOL`].

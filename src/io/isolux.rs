@@ -1,5 +1,5 @@
 //! Isolux plots of a grid (plotters, PNG and SVG from one drawing): the
-//! illuminance [lx] as a false-colour map (viridis, [`super::image::colour_map`])
+//! illuminance \[lx\] as a false-colour map (viridis, [`super::image::colour_map`])
 //! with a labelled colour scale, isolux lines at round levels (marching
 //! squares, [`crate::grid::contour`]) labelled with their value, the grid's
 //! cells as a dashed rectangle, the room's outline (the scene's surfaces
@@ -18,10 +18,10 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-/// A line through points `(x, y)` [m].
+/// A line through points `(x, y)` \[m\].
 pub type Polyline = Vec<(f64, f64)>;
 
-/// A line of the room's outline in plot coordinates [m].
+/// A line of the room's outline in plot coordinates \[m\].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Outline {
     /// Corners in order.
@@ -41,25 +41,25 @@ pub struct IsoluxPlot {
     pub x_label: String,
     /// Second axis name.
     pub y_label: String,
-    /// Lattice coordinates of the points [m], increasing.
+    /// Lattice coordinates of the points \[m\], increasing.
     pub xs: Vec<f64>,
-    /// Second lattice coordinates [m], increasing.
+    /// Second lattice coordinates \[m\], increasing.
     pub ys: Vec<f64>,
-    /// Illuminance [lx] at node `(i, j)`: `z[j xs.len() + i]`; NaN where no point.
+    /// Illuminance \[lx\] at node `(i, j)`: `z[j xs.len() + i]`; NaN where no point.
     pub z: Vec<f64>,
-    /// The grid's cells `(x0, x1, y0, y1)` [m].
+    /// The grid's cells `(x0, x1, y0, y1)` \[m\].
     pub bounds: (f64, f64, f64, f64),
     /// The room's outline.
     pub outlines: Vec<Outline>,
-    /// Luminaire positions [m].
+    /// Luminaire positions \[m\].
     pub luminaires: Vec<(f64, f64)>,
 }
 
-/// Canvas width [px].
+/// Canvas width \[px\].
 const WIDTH: u32 = 960;
-/// Width of the colour scale's area [px].
+/// Width of the colour scale's area \[px\].
 const BAR_W: u32 = 150;
-/// Label areas and margins [px].
+/// Label areas and margins \[px\].
 const Y_LABEL_W: u32 = 64;
 const X_LABEL_H: u32 = 48;
 const MARGIN: u32 = 16;
@@ -84,7 +84,7 @@ impl IsoluxPlot {
         ColourScale::from_data(&[lo, hi], false)
     }
 
-    /// The isolux levels [lx]: about 7 round values inside the range.
+    /// The isolux levels \[lx\]: about 7 round values inside the range.
     pub fn levels(&self) -> Vec<f64> {
         self.range()
             .map_or(Vec::new(), |(lo, hi)| levels(lo, hi, 7))
@@ -118,7 +118,7 @@ impl IsoluxPlot {
         Some(at(i, j)).filter(|v| v.is_finite())
     }
 
-    /// The shown area `(x0, x1, y0, y1)` [m]: the grid, the outline and the
+    /// The shown area `(x0, x1, y0, y1)` \[m\]: the grid, the outline and the
     /// luminaires (no farther than half the grid's size beyond it), plus 4 %.
     fn view(&self) -> (f64, f64, f64, f64) {
         let (gx0, gx1, gy0, gy1) = self.bounds;
@@ -143,7 +143,7 @@ impl IsoluxPlot {
         (x0 - pad, x1 + pad, y0 - pad, y1 + pad)
     }
 
-    /// Plot width and height [px] with equal scales on both axes (height
+    /// Plot width and height \[px\] with equal scales on both axes (height
     /// kept within 160-720 px).
     fn plot_size(&self) -> (u32, u32) {
         let (x0, x1, y0, y1) = self.view();
@@ -156,7 +156,7 @@ impl IsoluxPlot {
         }
     }
 
-    /// Canvas size [px].
+    /// Canvas size \[px\].
     pub fn size(&self) -> (u32, u32) {
         let (_, h) = self.plot_size();
         (WIDTH, TITLE_H + MARGIN + h + X_LABEL_H + MARGIN)

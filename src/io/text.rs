@@ -16,10 +16,10 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{FontFamily, FontStyle, register_font};
 use std::sync::Once;
 
-/// Cap height [px] at scale 1.
+/// Cap height \[px\] at scale 1.
 pub(crate) const CAP_HEIGHT: i64 = 7;
 
-/// Depth of descenders below the baseline [px] at scale 1.
+/// Depth of descenders below the baseline \[px\] at scale 1.
 pub(crate) const DESCENT: i64 = 2;
 
 /// Name under which the embedded font is registered with plotters.
@@ -52,7 +52,7 @@ fn font(s: i64) -> FontDesc<'static> {
     FontDesc::new(FontFamily::Name(FAMILY), size, FontStyle::Normal)
 }
 
-/// Width [px] of `text` at scale `s` (sum of the glyph advances).
+/// Width \[px\] of `text` at scale `s` (sum of the glyph advances).
 pub(crate) fn text_width(text: &str, s: i64) -> i64 {
     if text.is_empty() {
         return 0;

@@ -46,7 +46,7 @@
 use std::f64::consts::FRAC_1_SQRT_2;
 use std::f64::consts::PI;
 
-/// Widest angle [rad] a bucket may span (the asin series' range).
+/// Widest angle \[rad\] a bucket may span (the asin series' range).
 pub const BUCKET_MAX_ANGLE: f64 = 0.005;
 
 /// `1.5 * 2^52`: for `|x| < 2^51`, the sum `x + ROUND_MAGIC` holds `x`
@@ -85,13 +85,13 @@ impl AngleKind {
         }
     }
 
-    /// The angle [rad] of a key.
+    /// The angle \[rad\] of a key.
     #[cfg(test)]
     fn angle(self, k: f64) -> f64 {
         self.angle_of_raw(k * std::f64::consts::SQRT_2)
     }
 
-    /// The angle [rad] of a raw key: `pi/4 + asin((k - 1) / sqrt 2)` up
+    /// The angle \[rad\] of a raw key: `pi/4 + asin((k - 1) / sqrt 2)` up
     /// to a right angle, `3 pi/4 - asin((3 - k) / sqrt 2)` beyond
     /// (polar); an azimuth past the half turn mirrors it.
     fn angle_of_raw(self, k: f64) -> f64 {
@@ -114,13 +114,13 @@ impl AngleKind {
         }
     }
 
-    /// The key of an angle [rad], with right angles exact for an azimuth.
+    /// The key of an angle \[rad\], with right angles exact for an azimuth.
     #[cfg(test)]
     fn key_of(self, a: f64) -> f64 {
         FRAC_1_SQRT_2 * self.raw_of(a)
     }
 
-    /// The raw key of an angle [rad], with right angles exact for an
+    /// The raw key of an angle \[rad\], with right angles exact for an
     /// azimuth (`sin pi` is not quite 0, nor `cos pi/2`).
     fn raw_of(self, a: f64) -> f64 {
         match self {
@@ -140,7 +140,7 @@ impl AngleKind {
         }
     }
 
-    /// The range of angles [rad] the kind covers.
+    /// The range of angles \[rad\] the kind covers.
     fn range(self) -> f64 {
         match self {
             AngleKind::Polar => PI,
@@ -197,11 +197,11 @@ fn asin_small(x: f64) -> f64 {
 /// one).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Bucket {
-    /// `cos g`, `sin g` of the reference angle `g` [rad].
+    /// `cos g`, `sin g` of the reference angle `g` \[rad\].
     cos: f64,
     sin: f64,
     /// `[base, inv]` of the cell holding `g` and of the next: `base` the
-    /// cell's lower node less `g` [rad], `inv` its inverse width [1/rad].
+    /// cell's lower node less `g` \[rad\], `inv` its inverse width [1/rad].
     /// The next cell's `base` is also its threshold less `g` (+inf past
     /// the last cell): `g + d` lies in it for `d` at or above it.
     frac: [[f64; 2]; 2],
@@ -213,7 +213,7 @@ struct Bucket {
 /// caller's offset of its values.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Cell {
-    /// Lower node [rad].
+    /// Lower node \[rad\].
     a: f64,
     /// `1 / width` [1/rad].
     inv: f64,
@@ -221,7 +221,7 @@ struct Cell {
     off: usize,
 }
 
-/// An ascending grid of angles `a_0 < ... < a_n` [rad], padded to the
+/// An ascending grid of angles `a_0 < ... < a_n` \[rad\], padded to the
 /// kind's whole range: a *virtual* cell `[0, a_0)` where `a_0 > 0` and
 /// `(a_n, range]` where `a_n` is short of the range. The buckets cover
 /// every key, so no range check comes before the lookup: the caller gives
@@ -245,7 +245,7 @@ pub struct AngleGrid {
     /// Buckets of equal width over the kind's whole key range, plus one
     /// (a key at the very top of the range rounds to it).
     bucket: Vec<Bucket>,
-    /// The buckets' reference angles `g` [rad] and the (padded) cells
+    /// The buckets' reference angles `g` \[rad\] and the (padded) cells
     /// holding them (for the scan and [`Self::locate`]).
     refs: Vec<(f64, u32)>,
     /// Buckets per unit of the raw key.
@@ -255,7 +255,7 @@ pub struct AngleGrid {
 }
 
 impl AngleGrid {
-    /// The grid of ascending angles `a` [rad] (at least two, within
+    /// The grid of ascending angles `a` \[rad\] (at least two, within
     /// `[0, pi]` for a polar angle and `[0, 2 pi]` for an azimuth); `None`
     /// otherwise. Offsets of real cells are their index, and of virtual
     /// cells the number of real cells plus one.

@@ -11,7 +11,7 @@
 //! luminance is `L(y) = L0 g(s)` [cd/m^2] with `g` the profile's shape
 //! (peak 1) and `L0` the luminance at the peak; the same in every direction
 //! of the emitting half-space (Lambertian). The flux of one side is
-//! `Phi = pi L0 int g dA` [lm], twice that with `sides = both`.
+//! `Phi = pi L0 int g dA` \[lm\], twice that with `sides = both`.
 //!
 //! **Sampling.** Chains start at `y` drawn with density
 //! `p_A(y) = g(s) / int g dA` [1/m^2] (uniform on a rectangle; the radius by
@@ -31,21 +31,21 @@ pub enum AreaShape {
     /// Parallelogram `corner + a e1 + b e2`, `a, b` in `[0, 1]`; the front
     /// side faces `e1 x e2`.
     Rect {
-        /// Corner [m].
+        /// Corner \[m\].
         corner: DVec3,
-        /// First edge [m].
+        /// First edge \[m\].
         e1: DVec3,
-        /// Second edge [m].
+        /// Second edge \[m\].
         e2: DVec3,
     },
-    /// Disc of `radius` [m] about `center` [m]; the front side faces the
+    /// Disc of `radius` \[m\] about `center` \[m\]; the front side faces the
     /// unit `normal`; with a radial luminance profile.
     Disc {
-        /// Centre [m].
+        /// Centre \[m\].
         center: DVec3,
         /// Unit front normal.
         normal: DVec3,
-        /// Radius [m].
+        /// Radius \[m\].
         radius: f64,
         /// Radial luminance profile.
         profile: RadialProfile,
@@ -76,7 +76,7 @@ pub const MIS_UNIFORM_SHARE: f64 = 0.1;
 /// A point drawn on an area source for next-event estimation.
 #[derive(Clone, Copy, Debug)]
 pub struct AreaPoint {
-    /// The point [m].
+    /// The point \[m\].
     pub y: DVec3,
     /// Luminance there [cd/m^2] (on an emitting side).
     pub l: f64,
@@ -93,7 +93,7 @@ impl AreaLight {
         }
     }
 
-    /// Centre [m] (of the parallelogram or the disc).
+    /// Centre \[m\] (of the parallelogram or the disc).
     pub fn center(&self) -> DVec3 {
         match &self.shape {
             AreaShape::Rect { corner, e1, e2 } => *corner + (*e1 + *e2) * 0.5,
@@ -101,7 +101,7 @@ impl AreaLight {
         }
     }
 
-    /// Radius [m] of a ball about [`Self::center`] that holds the emitter.
+    /// Radius \[m\] of a ball about [`Self::center`] that holds the emitter.
     pub fn bounding_radius(&self) -> f64 {
         match &self.shape {
             AreaShape::Rect { e1, e2, .. } => 0.5 * (*e1 + *e2).length().max((*e1 - *e2).length()),
@@ -133,7 +133,7 @@ impl AreaLight {
         }
     }
 
-    /// Emitted flux [lm]: `pi L0 int g dA`, twice that when both sides emit.
+    /// Emitted flux \[lm\]: `pi L0 int g dA`, twice that when both sides emit.
     pub fn power(&self) -> f64 {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
         sides * PI * self.l0 * self.shape_integral()
@@ -248,7 +248,7 @@ impl AreaLight {
         }
     }
 
-    /// Unoccluded direct illuminance [lx] at `x` on a receiver with unit
+    /// Unoccluded direct illuminance \[lx\] at `x` on a receiver with unit
     /// normal `n`, in closed form (Lambert's contour integral) for a uniform
     /// emitter; `None` for a non-uniform one.
     pub fn direct_exact(&self, x: DVec3, n: DVec3) -> Option<f64> {

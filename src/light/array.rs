@@ -55,7 +55,8 @@ use std::f64::consts::PI;
 /// backward-path vertices.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DirectLights {
-    /// Exact summation up to [`RIS_AUTO_MIN_LIGHTS`] sources, the light
+    /// Exact summation below [`RIS_AUTO_RECEIVERS`] sources at the
+    /// receivers and [`RIS_AUTO_VERTICES`] at path vertices, the light
     /// array with RIS from there on.
     #[default]
     Auto,
@@ -186,7 +187,7 @@ impl LightArray {
         self.lights.is_empty()
     }
 
-    /// Keep one source for the receiver at `x` [m] with unit normal `n` by
+    /// Keep one source for the receiver at `x` \[m\] with unit normal `n` by
     /// RIS over `M` power-drawn candidates, drawing `M + 1` uniforms from
     /// `rng` (always, so streams stay aligned); `None` when no candidate
     /// has a positive target (the estimate is then 0).
@@ -245,7 +246,7 @@ impl LightArray {
     }
 }
 
-/// The RIS target `p^` [lx] of `light` at a receiver at `x` [m] with unit
+/// The RIS target `p^` \[lx\] of `light` at a receiver at `x` \[m\] with unit
 /// normal `n`: an unoccluded estimate of its direct illuminance, positive
 /// wherever the source can light the receiver.
 ///

@@ -1,5 +1,5 @@
 //! A distant (directional) light: the sun, parallel light of illuminance
-//! `E_n` [lx] on a plane normal to its direction, from a point at infinity
+//! `E_n` \[lx\] on a plane normal to its direction, from a point at infinity
 //! (zero angular diameter) or from a disc of angular diameter `2 alpha` and
 //! uniform luminance `L = E_n / (pi sin^2 alpha)` [cd/m^2] (the sun: 0.53
 //! degrees).
@@ -10,7 +10,7 @@
 //! **Where chains start.** The light crosses every plane normal to `d`
 //! with the same flux density, so chains start on the plane `P` normal to
 //! `d` through a centre `c`, with a density `p_s` per area over `P`, and
-//! carry `E_n / p_s` [lm] each (then divided by the light's pick
+//! carry `E_n / p_s` \[lm\] each (then divided by the light's pick
 //! probability); every chain's line is followed from upstream of
 //! everything it can meet, so the first surface is met exactly where the
 //! light lands. The estimate is unbiased if `p_s > 0` wherever a line can
@@ -63,26 +63,26 @@ use std::f64::consts::PI;
 /// module docs).
 #[derive(Clone, Debug, PartialEq)]
 pub struct StartRegion {
-    /// Centre [m] of the start plane's density.
+    /// Centre \[m\] of the start plane's density.
     pub c: DVec3,
-    /// Radius [m] of a ball holding every finite shape (bounded scenes),
+    /// Radius \[m\] of a ball holding every finite shape (bounded scenes),
     /// or of the region the density is fitted to (unbounded scenes).
     pub r0: f64,
-    /// Scale `a` [m] of the unbounded density (`r0`, or 1 m when `r0 = 0`).
+    /// Scale `a` \[m\] of the unbounded density (`r0`, or 1 m when `r0 = 0`).
     pub a: f64,
     /// Whether the scene has infinite planes.
     pub unbounded: bool,
     /// Whether the scene has finite shapes.
     pub has_finite: bool,
-    /// Truncation radius [m] of the unbounded density, `TRUNCATION a`
+    /// Truncation radius \[m\] of the unbounded density, `TRUNCATION a`
     /// (infinite: none).
     pub rho_max: f64,
-    /// The infinite planes, as unit normal `n` and offset `n . p` [m].
+    /// The infinite planes, as unit normal `n` and offset `n . p` \[m\].
     pub planes: Vec<(DVec3, f64)>,
     /// The scene's portals: chains start on them instead
     /// ([`super::portal`]); `None`: no portals.
     pub portals: Option<std::sync::Arc<super::portal::Portals>>,
-    /// The light's flux [lm] through the portals, unobstructed (its pick
+    /// The light's flux \[lm\] through the portals, unobstructed (its pick
     /// weight with portals; set with them by [`super::Light::set_region`]).
     pub portal_flux: f64,
 }
@@ -90,7 +90,7 @@ pub struct StartRegion {
 impl StartRegion {
     /// The region of a scene whose finite shapes lie in the box `finite`
     /// (`None`: no finite shape), with infinite `planes` (unit normal, a
-    /// point), fitted also to `points` [m] (the receivers; used only when
+    /// point), fitted also to `points` \[m\] (the receivers; used only when
     /// there are planes).
     pub fn fit(
         finite: Option<(DVec3, DVec3)>,
@@ -177,7 +177,7 @@ impl StartRegion {
         }
     }
 
-    /// Radius [m] of the start disc of a bounded scene for a cone of
+    /// Radius \[m\] of the start disc of a bounded scene for a cone of
     /// half-angle `alpha` (`cos_a = cos alpha`).
     #[inline]
     pub fn disc_radius(&self, cos_a: f64) -> f64 {
@@ -270,7 +270,7 @@ impl StartRegion {
 pub struct Distant {
     /// Unit direction the light travels [-].
     pub d: DVec3,
-    /// Illuminance on a plane normal to `d` [lx].
+    /// Illuminance on a plane normal to `d` \[lx\].
     pub e_n: f64,
     /// `sin alpha`, `alpha` the half of the angular diameter (0: a point at infinity).
     pub sin_a: f64,
@@ -282,7 +282,7 @@ pub struct Distant {
 
 impl Distant {
     /// A distant light travelling along unit `d` with normal illuminance
-    /// `e_n` [lx] and angular diameter `diameter` [rad] (0: a point).
+    /// `e_n` \[lx\] and angular diameter `diameter` \[rad\] (0: a point).
     pub fn new(d: DVec3, e_n: f64, diameter: f64, region: StartRegion) -> Self {
         let (sin_a, cos_a) = (0.5 * diameter).sin_cos();
         Self {
@@ -294,7 +294,7 @@ impl Distant {
         }
     }
 
-    /// Largest angular diameter [deg] accepted (a half-angle of 45 degrees).
+    /// Largest angular diameter \[deg\] accepted (a half-angle of 45 degrees).
     pub const MAX_DIAMETER_DEG: f64 = 90.0;
 
     /// Check what the light relies on: a unit, finite direction, a finite
@@ -335,7 +335,7 @@ impl Distant {
         }
     }
 
-    /// Solid angle of the disc [sr] (0 for a point).
+    /// Solid angle of the disc \[sr\] (0 for a point).
     pub fn solid_angle(&self) -> f64 {
         cone_solid_angle(self.sin_a, self.cos_a)
     }
@@ -346,7 +346,7 @@ impl Distant {
         !self.collimated() && -wi.dot(self.d) >= self.cos_a
     }
 
-    /// The chains' pick weight [lm] (see the module docs).
+    /// The chains' pick weight \[lm\] (see the module docs).
     pub fn power(&self) -> f64 {
         if self.region.portals.is_some() {
             return self.region.portal_flux;
@@ -354,13 +354,13 @@ impl Distant {
         self.e_n * self.region.nominal_area(self.cos_a)
     }
 
-    /// The flux [lm] the light sends through `portals`, unobstructed (the
+    /// The flux \[lm\] the light sends through `portals`, unobstructed (the
     /// disc counted as collimated along its axis).
     pub fn flux_through(&self, portals: &super::portal::Portals) -> f64 {
         portals.flux(std::iter::once((-self.d, self.e_n, 1.0)))
     }
 
-    /// Unoccluded illuminance [lx] on a receiver with unit normal `n`:
+    /// Unoccluded illuminance \[lx\] on a receiver with unit normal `n`:
     /// `E_n max(0, n . -d)` for a point; for a disc `L int_cone max(0, n .
     /// w) dw`, which is `E_n n . -d` above the horizon and integrated
     /// exactly where the horizon cuts the disc.

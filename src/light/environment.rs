@@ -35,7 +35,7 @@
 //! **Chains** start like a distant light's ([`super::StartRegion`]): a
 //! direction `wi` drawn from the table (density `L(wi) / F`, `F = int L
 //! dw`), the light travelling along `-wi`, a start point on the plane
-//! across it with density `p_s`; each carries `F / p_s` [lm].
+//! across it with density `p_s`; each carries `F / p_s` \[lm\].
 
 use super::StartRegion;
 use super::sky::Sky;
@@ -58,7 +58,7 @@ pub enum Mapping {
 pub struct Environment {
     /// Luminance [cd/m^2] per cell of the map's frame (scale applied).
     table: SphereTable,
-    /// `(sin, cos)` of the turn about `+z` [rad].
+    /// `(sin, cos)` of the turn about `+z` \[rad\].
     turn: (f64, f64),
     /// Where chains start.
     pub region: StartRegion,
@@ -71,7 +71,7 @@ pub struct Environment {
 
 impl Environment {
     /// The light of a map of `width x height` pixel values `y` (row 0 at
-    /// the top) with `mapping`, times `scale`, turned by `rotate` [rad].
+    /// the top) with `mapping`, times `scale`, turned by `rotate` \[rad\].
     pub fn new(
         y: &[f64],
         width: usize,
@@ -167,7 +167,7 @@ impl Environment {
         self.table.value(i, j)
     }
 
-    /// Solid angle [sr] of a cell of row `i`.
+    /// Solid angle \[sr\] of a cell of row `i`.
     pub fn cell_solid_angle(&self, i: usize) -> f64 {
         self.table.cell_solid_angle(i)
     }
@@ -240,7 +240,7 @@ impl Environment {
         }
     }
 
-    /// Illuminance [lx] on an unobstructed horizontal plane facing up:
+    /// Illuminance \[lx\] on an unobstructed horizontal plane facing up:
     /// `int_{upper} L cos dw`, exact for the table (each cell `L (cos^2
     /// theta_i - cos^2 theta_i+1) / 2 dphi`, clipped at the horizon).
     pub fn horizontal_illuminance(&self) -> f64 {
@@ -263,7 +263,7 @@ impl Environment {
             .sum()
     }
 
-    /// The chains' pick weight [lm]: `F` times the start region's nominal area.
+    /// The chains' pick weight \[lm\]: `F` times the start region's nominal area.
     pub fn power(&self) -> f64 {
         if self.region.portals.is_some() {
             return self.region.portal_flux;
@@ -271,7 +271,7 @@ impl Environment {
         self.integral() * self.region.nominal_area(1.0)
     }
 
-    /// The flux [lm] the light sends through `portals`, unobstructed (over
+    /// The flux \[lm\] the light sends through `portals`, unobstructed (over
     /// the cells of its table: exact for a map, the cell means for a sky).
     pub fn flux_through(&self, portals: &super::portal::Portals) -> f64 {
         let (rows, cols) = self.table.size();

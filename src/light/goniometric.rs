@@ -31,7 +31,7 @@
 //!
 //! # Power and sampling
 //!
-//! `power = int I dOmega` [lm] is integrated exactly for the bilinear
+//! `power = int I dOmega` \[lm\] is integrated exactly for the bilinear
 //! interpolant, cell by cell (`dOmega = cos V dV dH` for types A and B,
 //! `sin gamma dgamma dC` for type C). Emission directions are drawn from a
 //! piecewise-constant density: a cell is picked in proportion to its
@@ -51,21 +51,21 @@ use std::f64::consts::PI;
 /// frame's nadir (~1e-16), so that the pole's value does not depend on it.
 const POLE_SIN: f64 = 1e-12;
 
-/// A goniometric intensity distribution [cd] over the luminaire's frame.
+/// A goniometric intensity distribution \[cd\] over the luminaire's frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Goniometric {
     kind: PhotometricType,
-    /// Horizontal angles [rad], ascending, covering the full range.
+    /// Horizontal angles \[rad\], ascending, covering the full range.
     h: Vec<f64>,
-    /// Vertical angles [rad], ascending (the measured range only).
+    /// Vertical angles \[rad\], ascending (the measured range only).
     v: Vec<f64>,
-    /// Intensity [cd] at `(h[i], v[k])`: `i[i * v.len() + k]`.
+    /// Intensity \[cd\] at `(h[i], v[k])`: `i[i * v.len() + k]`.
     i: Vec<f64>,
     /// Cumulative sampling weights of the cells `(i, k)`, last entry 1.
     cdf: Vec<f64>,
     /// Total of the sampling weights [cd sr].
     weight_total: f64,
-    /// Emitted flux [lm].
+    /// Emitted flux \[lm\].
     power: f64,
     /// Every horizontal plane holds the same intensities (rotational
     /// symmetry of a type C table): the intensity depends on gamma alone,
@@ -74,7 +74,7 @@ pub struct Goniometric {
     /// Type C: the vertical and horizontal angles located from a
     /// direction's components without `acos`/`atan2` ([`AngleGrid`]).
     grids: Option<(AngleGrid, Option<AngleGrid>)>,
-    /// Type C with `grids`: the bilinear coefficients `[A, C, B, D]` [cd]
+    /// Type C with `grids`: the bilinear coefficients `[A, C, B, D]` \[cd\]
     /// of the cell `h_a..h_{a+1}`, `v_k..v_{k+1}` at `coef[a * stride +
     /// k]`, `I = (A + B tv) + th (C + D tv)` with `A = I00`, `B = I01 -
     /// I00`, `C = I10 - I00`, `D = (I11 - I10) - (I01 - I00)` (first index
@@ -85,11 +85,11 @@ pub struct Goniometric {
     coef: Vec<[f64; 4]>,
     /// Entries per row of `coef` (`v.len()`: the cells and the zero one).
     stride: usize,
-    /// Type C: the intensity [cd] at the poles gamma 0 and gamma 180, the
+    /// Type C: the intensity \[cd\] at the poles gamma 0 and gamma 180, the
     /// mean over C of the interpolant there (module docs); 0 where the
     /// pole lies outside the measured range.
     poles: [f64; 2],
-    /// The file's luminous opening [m] (all zero: the file gives none), for
+    /// The file's luminous opening \[m\] (all zero: the file gives none), for
     /// glare ([`crate::glare`]): luminance and solid angle need its area.
     opening: crate::io::photometry::Opening,
 }
@@ -101,7 +101,7 @@ pub struct GonioSample {
     pub d: DVec3,
     /// Density per solid angle [1/sr].
     pub pdf: f64,
-    /// Intensity towards `d` [cd].
+    /// Intensity towards `d` \[cd\].
     pub i: f64,
 }
 
@@ -241,17 +241,17 @@ impl Goniometric {
         self.kind
     }
 
-    /// Emitted flux [lm], exact for the bilinear interpolant.
+    /// Emitted flux \[lm\], exact for the bilinear interpolant.
     pub fn power(&self) -> f64 {
         self.power
     }
 
-    /// Largest intensity of the table [cd].
+    /// Largest intensity of the table \[cd\].
     pub fn max_intensity(&self) -> f64 {
         self.i.iter().copied().fold(0.0, f64::max)
     }
 
-    /// (horizontal, vertical) angles [rad] of a unit direction in the
+    /// (horizontal, vertical) angles \[rad\] of a unit direction in the
     /// luminaire's frame (module docs).
     pub fn angles(&self, d: DVec3) -> (f64, f64) {
         match self.kind {
@@ -268,7 +268,7 @@ impl Goniometric {
         }
     }
 
-    /// The unit direction of (horizontal, vertical) angles [rad].
+    /// The unit direction of (horizontal, vertical) angles \[rad\].
     pub fn direction(&self, h: f64, v: f64) -> DVec3 {
         match self.kind {
             PhotometricType::C => {
@@ -289,9 +289,9 @@ impl Goniometric {
         }
     }
 
-    /// The direct term `I(w) c / |w|^3` [lx] of a luminaire whose axes are
-    /// `frame`, towards a receiver at offset `w` [m] from it (not
-    /// normalised), where `c = n . (-w)` [m] is the receiver normal's
+    /// The direct term `I(w) c / |w|^3` \[lx\] of a luminaire whose axes are
+    /// `frame`, towards a receiver at offset `w` \[m\] from it (not
+    /// normalised), where `c = n . (-w)` \[m\] is the receiver normal's
     /// projection (0 for a receiver on the luminaire). A rotationally
     /// symmetric table needs only `|w|` and the distance from the nadir axis.
     #[inline(always)]
@@ -331,13 +331,13 @@ impl Goniometric {
         self.intensity(frame.to_local(w * inv)) * c * (inv * inv * inv)
     }
 
-    /// The file's luminous opening [m] (width, length, height of the
+    /// The file's luminous opening \[m\] (width, length, height of the
     /// luminous sides; all zero when the file gives none).
     pub fn file_opening(&self) -> crate::io::photometry::Opening {
         self.opening
     }
 
-    /// Intensity [cd] towards unit world direction `w` of a luminaire whose
+    /// Intensity \[cd\] towards unit world direction `w` of a luminaire whose
     /// axes are `frame`: [`Self::intensity`] of the local direction. A
     /// rotationally symmetric table needs only the nadir axis: `cos gamma =
     /// -w . z` and `sin gamma = |w - (w . z) z|`.
@@ -351,7 +351,7 @@ impl Goniometric {
         self.intensity(frame.to_local(w))
     }
 
-    /// Intensity [cd] towards unit direction `d` (luminaire frame): the
+    /// Intensity \[cd\] towards unit direction `d` (luminaire frame): the
     /// bilinear rule of [`Self::intensity_at`], with type C cells found
     /// without inverse trigonometry ([`AngleGrid`]).
     #[inline(always)]
@@ -417,7 +417,7 @@ impl Goniometric {
         (lo + th * slope).max(0.0)
     }
 
-    /// Intensity [cd] at angles `(h, v)` [rad]: bilinear, zero outside the
+    /// Intensity \[cd\] at angles `(h, v)` \[rad\]: bilinear, zero outside the
     /// measured vertical range and outside the horizontal range of types A/B.
     /// At a pole this is plane `h`'s own value, not the planes' mean that
     /// [`Self::intensity`] gives a direction there.
@@ -525,7 +525,7 @@ fn locate(xs: &[f64], x: f64) -> (usize, f64) {
     (k, t)
 }
 
-/// The table over the full horizontal range [deg] with one row per
+/// The table over the full horizontal range \[deg\] with one row per
 /// horizontal angle: type C to `[0, 360]` (periodic), types A and B to
 /// `[-90, 90]`.
 fn expand(p: &Photometry) -> (Vec<f64>, Vec<Vec<f64>>) {

@@ -39,11 +39,11 @@ fn edge(a: DVec3, b: DVec3, n: DVec3) -> f64 {
     gamma * c.dot(n) / s
 }
 
-/// `int cos_x cos_y / d^2 dA` [sr] over a planar convex polygon (`verts`
+/// `int cos_x cos_y / d^2 dA` \[sr\] over a planar convex polygon (`verts`
 /// in order, either orientation) seen from `x` with unit normal `n`,
 /// counting only what lies above `x`'s horizon; the polygon is taken as
 /// emitting towards `x` whichever side `x` is on. Multiply by a luminance
-/// [cd/m^2] for an illuminance [lx].
+/// [cd/m^2] for an illuminance \[lx\].
 pub fn polygon_irradiance(verts: &[DVec3], x: DVec3, n: DVec3) -> f64 {
     // Sutherland-Hodgman against the half-space n . (y - x) > 0.
     let h = |y: DVec3| n.dot(y - x);

@@ -7,7 +7,7 @@
 //! luminaire (`opening = true`, [`crate::light::LuminousShape`]) both take
 //! their areas and points from here, so the two cannot disagree.
 //!
-//! Coordinates are the luminaire's local ones [m] (`x` along C0, `y` along
+//! Coordinates are the luminaire's local ones \[m\] (`x` along C0, `y` along
 //! C90, `z` up, the nadir `-z`), centred on its photometric centre; `half`
 //! holds half the shape's extents along them.
 //!
@@ -79,12 +79,12 @@ pub enum Part {
 }
 
 impl Part {
-    /// The point of the part at `u` (local coordinates [m]).
+    /// The point of the part at `u` (local coordinates \[m\]).
     pub fn point(&self, u: [f64; 2]) -> DVec3 {
         self.point_normal(u).0
     }
 
-    /// The point of the part at `u` (local coordinates [m]) and the unit
+    /// The point of the part at `u` (local coordinates \[m\]) and the unit
     /// normal of the surface there, on the side facing the eye (outward on
     /// a solid).
     pub fn point_normal(&self, u: [f64; 2]) -> (DVec3, DVec3) {
@@ -126,7 +126,7 @@ impl Part {
     }
 }
 
-/// The luminous parts of `shape` with half-extents `half` [m] seen along
+/// The luminous parts of `shape` with half-extents `half` \[m\] seen along
 /// unit local direction `d` (from the luminaire towards the eye): up to
 /// three, each with its projected area [m^2] (0 with [`Part::None`]).
 /// With `closed`, a rectangle or an ellipse (flat, or with luminous sides)
@@ -271,7 +271,7 @@ fn cylinder(d: DVec3, a: f64, b: f64, c: f64, [ex, ey, ez]: [DVec3; 3]) -> [(f64
 mod tests {
     use super::*;
 
-    /// The shapes under test: shape, half-extents [m].
+    /// The shapes under test: shape, half-extents \[m\].
     fn shapes() -> Vec<(OpeningShape, DVec3)> {
         use OpeningShape as S;
         vec![

@@ -21,12 +21,12 @@ use glam::DVec3;
 use std::f64::consts::PI;
 
 /// One light of the cut: the direction towards it (unit) and its normal
-/// illuminance [lx].
+/// illuminance \[lx\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CutLight {
     /// Unit world direction towards the light.
     pub wi: DVec3,
-    /// Illuminance on a plane normal to `wi` [lx].
+    /// Illuminance on a plane normal to `wi` \[lx\].
     pub e_n: f64,
 }
 

@@ -1,12 +1,12 @@
-//! Light sources: emission sampling, direct illuminance and power [lm].
+//! Light sources: emission sampling, direct illuminance and power \[lm\].
 //!
 //! The sources:
-//! - an isotropic **point** of intensity `I` [cd];
+//! - an isotropic **point** of intensity `I` \[cd\];
 //! - a **goniometric** point luminaire from a photometric file ([`Goniometric`]);
 //! - a **spot**: a point with a smooth falloff between two cones ([`Spot`]);
 //! - a Lambertian **area** source, rectangle or disc, opaque, with a uniform
 //!   or radial luminance profile ([`AreaLight`]);
-//! - a **sphere** of radius `R` [m] whose surface emits as a Lambertian
+//! - a **sphere** of radius `R` \[m\] whose surface emits as a Lambertian
 //!   emitter of uniform luminance `L = I / (pi R^2)` [cd/m^2], so its
 //!   intensity is `I` in every direction and its flux `4 pi I`. The sphere
 //!   emits only: it neither blocks nor absorbs reflected light (a glowing
@@ -41,12 +41,12 @@ use std::f64::consts::PI;
 /// A light source (closed set).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
-    /// Isotropic point source at `p` [m] with intensity `i` [cd].
+    /// Isotropic point source at `p` \[m\] with intensity `i` \[cd\].
     Point { p: DVec3, i: f64 },
-    /// Lambertian emitting sphere: centre `c` [m], radius `r` [m], intensity `i` [cd].
+    /// Lambertian emitting sphere: centre `c` \[m\], radius `r` \[m\], intensity `i` \[cd\].
     Sphere { c: DVec3, r: f64, i: f64 },
-    /// Goniometric point luminaire at `p` [m] (an IES or EULUMDAT file):
-    /// intensity `dist.intensity(frame.to_local(w))` [cd] towards world
+    /// Goniometric point luminaire at `p` \[m\] (an IES or EULUMDAT file):
+    /// intensity `dist.intensity(frame.to_local(w))` \[cd\] towards world
     /// direction `w`.
     Gonio {
         p: DVec3,
@@ -68,7 +68,7 @@ pub enum Light {
 
 /// The luminous shape of a goniometric luminaire, for near-field emission
 /// (`opening = true`): its file's LM-63 shape (EULUMDAT: a rectangle or a
-/// disc, with luminous sides of its height) with half its extents [m]
+/// disc, with luminous sides of its height) with half its extents \[m\]
 /// along the local `x` (C0, the length), `y` (C90, the width) and `z` (the
 /// height) axes, centred on the luminaire's position (the photometric
 /// centre), taken as a closed solid ([`luminous_parts`]). Towards every
@@ -84,7 +84,7 @@ pub enum Light {
 pub struct LuminousShape {
     /// The shape.
     pub shape: crate::io::photometry::OpeningShape,
-    /// Half the extents [m] along local `x`, `y`, `z` (for a rectangle or
+    /// Half the extents \[m\] along local `x`, `y`, `z` (for a rectangle or
     /// an ellipse, `z` is half the height of its luminous sides; 0: flat).
     pub half: DVec3,
 }
@@ -92,7 +92,7 @@ pub struct LuminousShape {
 /// A point of a luminous shape drawn for a receiver ([`Light::shape_point`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShapePoint {
-    /// The point [m] (world).
+    /// The point \[m\] (world).
     pub y: DVec3,
     /// Its density [1/m^2] over the shape's surface.
     pub pdf: f64,
@@ -169,7 +169,7 @@ impl LuminousShape {
         }
     }
 
-    /// Radius [m] of the smallest sphere about the centre holding the shape.
+    /// Radius \[m\] of the smallest sphere about the centre holding the shape.
     pub fn bounding_radius(&self) -> f64 {
         self.half.length()
     }
@@ -215,7 +215,7 @@ impl LuminousShape {
     }
 
     /// A short description for the scene summary: the shape's name and its
-    /// dimensions [m].
+    /// dimensions \[m\].
     pub fn describe(&self) -> String {
         let [l, w, h] = (self.half * 2.0).to_array();
         let name = self.shape.name(w, l, h);
@@ -244,7 +244,7 @@ impl LuminaireFrame {
     };
 
     /// The frame whose nadir points along unit `aim`, turned by `rotate`
-    /// [rad] about it (right-handed about the nadir... about `-aim`): C0 is
+    /// \[rad\] about it (right-handed about the nadir... about `-aim`): C0 is
     /// the world `+x` axis projected onto the plane normal to `aim` (the
     /// world `+y` axis when `aim` is along `x`), then rotated.
     pub fn aimed(aim: DVec3, rotate: f64) -> Self {
@@ -282,18 +282,18 @@ impl LuminaireFrame {
 /// record, as pbrt's `LightLeSample`, so that multiple importance sampling
 /// and the double local estimate can be written against the pdfs).
 ///
-/// The flux the ray carries is `phi = le cos / (pdf_pos pdf_dir)` [lm]. A
+/// The flux the ray carries is `phi = le cos / (pdf_pos pdf_dir)` \[lm\]. A
 /// delta position (a point source) has no area density: `pdf_pos` is then
-/// 1 and `le` is the intensity [cd] towards `d` rather than a luminance; a
+/// 1 and `le` is the intensity \[cd\] towards `d` rather than a luminance; a
 /// delta direction would likewise carry an illuminance in `le` with
 /// `pdf_dir = 1`. (No current light has one.)
 #[derive(Clone, Copy, Debug)]
 pub struct EmissionSample {
-    /// Origin [m].
+    /// Origin \[m\].
     pub o: DVec3,
     /// Unit direction.
     pub d: DVec3,
-    /// Emitted luminance [cd/m^2] at `o` towards `d`; the intensity [cd]
+    /// Emitted luminance [cd/m^2] at `o` towards `d`; the intensity \[cd\]
     /// towards `d` when `delta_pos`.
     pub le: f64,
     /// Cosine between `d` and the emitting surface's normal at `o` (1 for a point).
@@ -306,14 +306,14 @@ pub struct EmissionSample {
     pub delta_pos: bool,
     /// The direction is a delta (a collimated source).
     pub delta_dir: bool,
-    /// Flux carried by the sampled ray [lm], `le cos / (pdf_pos pdf_dir)`
+    /// Flux carried by the sampled ray \[lm\], `le cos / (pdf_pos pdf_dir)`
     /// evaluated in closed form: the source's power for both kinds (the
     /// samplers follow the emission exactly).
     pub phi: f64,
 }
 
 impl Light {
-    /// Total emitted luminous flux [lm]: `4 pi I` for points and spheres.
+    /// Total emitted luminous flux \[lm\]: `4 pi I` for points and spheres.
     pub fn power(&self) -> f64 {
         match self {
             Light::Point { i, .. } | Light::Sphere { i, .. } => 4.0 * PI * i,
@@ -386,7 +386,7 @@ impl Light {
     }
 
     /// A point of a goniometric light's luminous shape drawn for the
-    /// receiver at `x` [m] ([`LuminousShape`]): uniform in the area the
+    /// receiver at `x` \[m\] ([`LuminousShape`]): uniform in the area the
     /// shape projects towards `x` from its centre, `d0`, so that its
     /// density over the surface is `(n . d0) / A_p(d0)`. Every point the
     /// receiver can see is drawn (on a convex solid a face seen from `x`
@@ -438,7 +438,7 @@ impl Light {
         })
     }
 
-    /// Intensity [cd] of a point-like light towards unit world direction
+    /// Intensity \[cd\] of a point-like light towards unit world direction
     /// `w` (0 for a sphere, which is not point-like).
     #[inline]
     pub fn intensity(&self, w: DVec3) -> f64 {
@@ -596,7 +596,7 @@ impl Light {
         }
     }
 
-    /// Position of a point light, centre of a sphere or an area source [m];
+    /// Position of a point light, centre of a sphere or an area source \[m\];
     /// for a light at infinity the centre of its start region.
     pub fn position(&self) -> DVec3 {
         match *self {
@@ -624,7 +624,7 @@ impl Light {
         }
     }
 
-    /// Whether `x` [m] is inside (or on) a sphere source, or on a point
+    /// Whether `x` \[m\] is inside (or on) a sphere source, or on a point
     /// source (never for an area source: a point on it has a finite
     /// illuminance).
     pub fn contains(&self, x: DVec3) -> bool {
@@ -661,7 +661,7 @@ impl Light {
         }
     }
 
-    /// Unoccluded direct illuminance [lx] at `x` on a receiver with unit
+    /// Unoccluded direct illuminance \[lx\] at `x` on a receiver with unit
     /// normal `n`: `I cos / d^2` for a point (zero from behind); for a sphere
     /// `L int_cone max(0, n . w) dw` over the cone the sphere subtends, which
     /// is `I cos(beta) / D^2` when the sphere lies wholly above the receiver's
@@ -769,7 +769,7 @@ impl Light {
     }
 }
 
-/// `int_cone max(0, n . w) dw` [sr] over the cone of half-angle `asin(s)`
+/// `int_cone max(0, n . w) dw` \[sr\] over the cone of half-angle `asin(s)`
 /// about an axis with `n . axis = cb`: `pi s^2 cb` when the cone lies wholly
 /// above the horizon (`cb >= s`), zero wholly below (`cb <= -s`), otherwise
 /// the exact ring-by-ring integral: each ring at angle `t` from the axis

@@ -19,11 +19,11 @@ use glam::DVec3;
 /// `[0, 1]`, whose normal `edge1 x edge2` points into the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Portal {
-    /// A corner [m].
+    /// A corner \[m\].
     pub corner: DVec3,
-    /// First edge [m].
+    /// First edge \[m\].
     pub e1: DVec3,
-    /// Second edge [m].
+    /// Second edge \[m\].
     pub e2: DVec3,
     /// Unit normal `edge1 x edge2`, into the scene.
     pub n: DVec3,
@@ -142,11 +142,11 @@ impl Portals {
             .sum()
     }
 
-    /// `sum_k area_k int f(wi) max(0, -wi . n_k) dwi`: the flux [lm] a
+    /// `sum_k area_k int f(wi) max(0, -wi . n_k) dwi`: the flux \[lm\] a
     /// distant source of luminance `f` [cd/m^2] (by direction towards it)
     /// sends into the scene through the portals, unobstructed, given as a
     /// sum over `cells` of (direction towards the source, luminance, solid
-    /// angle [sr]).
+    /// angle \[sr\]).
     pub fn flux(&self, cells: impl Iterator<Item = (DVec3, f64, f64)> + Clone) -> f64 {
         self.list
             .iter()
@@ -163,7 +163,7 @@ impl Portals {
     /// The emitted ray of a light whose direction of travel `d` was drawn
     /// with density `pdf_dir` [1/sr] (1 for a collimated light) carrying
     /// luminance `le` (or illuminance, collimated) across the portals: the
-    /// start point from `u_pos` and the flux [lm] the ray carries (0 when
+    /// start point from `u_pos` and the flux \[lm\] the ray carries (0 when
     /// `d` leaves through the portal).
     pub fn emission(&self, d: DVec3, le: f64, pdf_dir: f64, u_pos: [f64; 2]) -> (DVec3, f64, f64) {
         let (o, n) = self.sample(u_pos);

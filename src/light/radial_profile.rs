@@ -44,25 +44,25 @@ pub enum ProfileKind {
     LinearIncreasing,
     /// `abs(s - T)/max(T, R - T)`.
     V {
-        /// Turning radius `T` [m], in `[0, R]`.
+        /// Turning radius `T` \[m\], in `[0, R]`.
         turning: f64,
     },
     /// `s/T` up to `T`, then `(R - s)/(R - T)`; `0 < T < R`.
     Tent {
-        /// Turning radius `T` [m].
+        /// Turning radius `T` \[m\].
         turning: f64,
     },
     /// `R/s`.
     HyperbolicDecreasing,
     /// `a/(R + a - s)`.
     HyperbolicIncreasing {
-        /// Offset `a > 0` [m].
+        /// Offset `a > 0` \[m\].
         offset: f64,
     },
     /// Piecewise linear through `(s[i], g[i])`, `s` from 0 to `R`,
     /// `max g = 1`, with `cum[i] = G(s[i])`.
     Tabulated {
-        /// Radii [m], from 0 to `R`, increasing.
+        /// Radii \[m\], from 0 to `R`, increasing.
         s: Vec<f64>,
         /// Shape values, peak 1.
         g: Vec<f64>,
@@ -71,7 +71,7 @@ pub enum ProfileKind {
     },
 }
 
-/// A radial luminance profile on a disc of radius `radius` [m].
+/// A radial luminance profile on a disc of radius `radius` \[m\].
 #[derive(Clone, Debug, PartialEq)]
 pub struct RadialProfile {
     radius: f64,
@@ -81,7 +81,7 @@ pub struct RadialProfile {
 }
 
 impl RadialProfile {
-    /// A profile of `kind` on a disc of `radius` [m] (checked by
+    /// A profile of `kind` on a disc of `radius` \[m\] (checked by
     /// [`Self::parse`]; a tent with `T = 0` or `T = R` becomes the linear
     /// profile it equals).
     pub fn new(radius: f64, kind: ProfileKind) -> Self {
@@ -99,7 +99,7 @@ impl RadialProfile {
         p
     }
 
-    /// The uniform profile on a disc of `radius` [m].
+    /// The uniform profile on a disc of `radius` \[m\].
     pub fn uniform(radius: f64) -> Self {
         Self::new(radius, ProfileKind::Uniform)
     }
@@ -114,7 +114,7 @@ impl RadialProfile {
         &self.kind
     }
 
-    /// Relative luminance `g(s)` at distance `s` [m] from the centre (peak
+    /// Relative luminance `g(s)` at distance `s` \[m\] from the centre (peak
     /// 1; see the module docs), 0 beyond the rim.
     pub fn shape(&self, s: f64) -> f64 {
         let r = self.radius;
@@ -188,7 +188,7 @@ impl RadialProfile {
     }
 
     /// `int g dA = 2 pi G(R)` [m^2] over the disc: a one-sided disc of peak
-    /// luminance `L0` emits `pi L0` times this [lm].
+    /// luminance `L0` emits `pi L0` times this \[lm\].
     pub fn flux_integral(&self) -> f64 {
         2.0 * PI * self.total
     }
@@ -203,7 +203,7 @@ impl RadialProfile {
         self.shape(s) * s / self.total
     }
 
-    /// A radius [m] with density [`Self::pdf_radius`], for `u` in `[0, 1)`:
+    /// A radius \[m\] with density [`Self::pdf_radius`], for `u` in `[0, 1)`:
     /// the root of `G(s) = u G(R)` by Newton steps inside a shrinking
     /// bracket (bisection when a step would leave it). Singular profiles
     /// (`R/s`) are kept at least `1e-9 R` from the centre, where their
@@ -226,10 +226,10 @@ impl RadialProfile {
     }
 
     /// Read a profile from the scene's `profile` value for a disc of
-    /// `radius` [m]: a name (`"uniform"`, `"linear-decreasing"`,
+    /// `radius` \[m\]: a name (`"uniform"`, `"linear-decreasing"`,
     /// `"linear-increasing"`, `"hyperbolic-decreasing"`,
     /// `"hyperbolic-increasing"`) or a table `{ type = "v", turning = T }`,
-    /// `{ type = "tent", turning = T }` (`T` [m]),
+    /// `{ type = "tent", turning = T }` (`T` \[m\]),
     /// `{ type = "hyperbolic-increasing", offset = a }` or
     /// `{ type = "tabulated", s = [...], l = [...] }` (radii from 0 to the
     /// radius, increasing; luminances `>= 0`, any scale: the peak becomes

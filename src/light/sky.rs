@@ -27,7 +27,7 @@
 //! # Absolute values and the ground
 //!
 //! A sky is scaled by its zenith luminance [cd/m^2] or by the horizontal
-//! illuminance [lx] it gives on an unobstructed plane (the diffuse sky
+//! illuminance \[lx\] it gives on an unobstructed plane (the diffuse sky
 //! alone, without the sun), found by quadrature ([`Sky::horizontal_illuminance`]).
 //! Below the horizon the sky has a uniform ground luminance [cd/m^2] (0 by
 //! default; a reflecting ground is better modelled as a plane in the scene).
@@ -143,7 +143,7 @@ impl Sky {
         Ok(self)
     }
 
-    /// Scale so that the sky gives horizontal illuminance `e` [lx] on an
+    /// Scale so that the sky gives horizontal illuminance `e` \[lx\] on an
     /// unobstructed plane.
     pub fn with_horizontal_illuminance(mut self, e: f64) -> Result<Self, SkyError> {
         if !(e > 0.0 && e.is_finite()) {
@@ -204,7 +204,7 @@ impl Sky {
         self.hemisphere(false) + 2.0 * PI * self.l_ground
     }
 
-    /// Illuminance [lx] the sky alone gives on an unobstructed horizontal
+    /// Illuminance \[lx\] the sky alone gives on an unobstructed horizontal
     /// plane, `int L cos Z dOmega` over the upper hemisphere: Gauss-Legendre
     /// panels in `cos Z` (16 x 20 nodes) and in the azimuth from the sun
     /// (32 x 20 nodes, the distribution being smooth and periodic).

@@ -8,7 +8,7 @@
 //! and between them `f = t^2 (3 - 2 t)` with `t = (c - c_o) / (c_i - c_o)`
 //! (smoothstep in the cosine: continuous with a continuous slope).
 //!
-//! Its flux is `Phi = 2 pi I0 [(1 - c_i) + (c_i - c_o) / 2]` [lm] (the
+//! Its flux is `Phi = 2 pi I0 [(1 - c_i) + (c_i - c_o) / 2]` \[lm\] (the
 //! smoothstep averages 1/2 over `t`). Directions are drawn exactly in
 //! proportion to the intensity, so every emitted ray carries `Phi`: the
 //! inner cap with probability `(1 - c_i) / [(1 - c_i) + (c_i - c_o)/2]`
@@ -23,7 +23,7 @@ use std::f64::consts::PI;
 /// A spot light (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Spot {
-    /// Position [m].
+    /// Position \[m\].
     pub p: DVec3,
     /// Unit direction of the beam's axis.
     pub axis: DVec3,
@@ -31,13 +31,13 @@ pub struct Spot {
     pub cos_inner: f64,
     /// Cosine of the outer cone's half-angle (`<= cos_inner`).
     pub cos_outer: f64,
-    /// Intensity on the axis [cd].
+    /// Intensity on the axis \[cd\].
     pub i0: f64,
 }
 
 impl Spot {
     /// A spot at `p` along `axis` (normalised) with half-angles `inner <=
-    /// outer` [rad] and axial intensity `i0` [cd].
+    /// outer` \[rad\] and axial intensity `i0` \[cd\].
     pub fn new(p: DVec3, axis: DVec3, inner: f64, outer: f64, i0: f64) -> Self {
         Self {
             p,
@@ -61,18 +61,18 @@ impl Spot {
         }
     }
 
-    /// Intensity [cd] towards unit direction `w`.
+    /// Intensity \[cd\] towards unit direction `w`.
     #[inline]
     pub fn intensity(&self, w: DVec3) -> f64 {
         self.i0 * self.falloff(self.axis.dot(w))
     }
 
-    /// `Phi / I0` [sr]: `2 pi [(1 - c_i) + (c_i - c_o)/2]`.
+    /// `Phi / I0` \[sr\]: `2 pi [(1 - c_i) + (c_i - c_o)/2]`.
     fn solid_angle(&self) -> f64 {
         2.0 * PI * ((1.0 - self.cos_inner) + 0.5 * (self.cos_inner - self.cos_outer))
     }
 
-    /// Flux [lm].
+    /// Flux \[lm\].
     pub fn power(&self) -> f64 {
         self.i0 * self.solid_angle()
     }

@@ -16,16 +16,16 @@
 
 use glam::DVec3;
 
-/// The sun's altitude and azimuth [deg].
+/// The sun's altitude and azimuth \[deg\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SolarPosition {
-    /// Altitude above the horizon [deg] (negative below it), no refraction.
+    /// Altitude above the horizon \[deg\] (negative below it), no refraction.
     pub altitude: f64,
-    /// Azimuth from north towards east [deg], in `[0, 360)`.
+    /// Azimuth from north towards east \[deg\], in `[0, 360)`.
     pub azimuth: f64,
-    /// Declination [deg].
+    /// Declination \[deg\].
     pub declination: f64,
-    /// Equation of time: apparent minus mean solar time [min].
+    /// Equation of time: apparent minus mean solar time \[min\].
     pub equation_of_time: f64,
 }
 
@@ -38,7 +38,7 @@ pub struct UtcTime {
     pub month: u32,
     /// Day of the month, 1-31.
     pub day: u32,
-    /// Hours since midnight UTC [h], fractional.
+    /// Hours since midnight UTC \[h\], fractional.
     pub hour: f64,
 }
 
@@ -106,7 +106,7 @@ pub fn solar_position(t: &UtcTime, latitude: f64, longitude: f64) -> SolarPositi
     }
 }
 
-/// Unit vector towards the sun from its altitude and azimuth [deg] (scene
+/// Unit vector towards the sun from its altitude and azimuth \[deg\] (scene
 /// axes: `+z` up, `+y` north, `+x` east).
 pub fn sun_direction(altitude: f64, azimuth: f64) -> DVec3 {
     let (sa, ca) = altitude.to_radians().sin_cos();

@@ -34,17 +34,17 @@ pub fn perpendicular_corner(a: f64, b: f64, c: f64) -> f64 {
     s * ((a / c).atan() - c / q * (a / q).atan()) / (2.0 * PI)
 }
 
-/// Illuminance [lx] at a point facing a parallel rectangle of luminance
-/// `l` [cd/m^2] at height `c` [m], the rectangle spanning `[x0, x1] x
-/// [y0, y1]` [m] relative to the point's foot: `pi L F` by superposition of
+/// Illuminance \[lx\] at a point facing a parallel rectangle of luminance
+/// `l` [cd/m^2] at height `c` \[m\], the rectangle spanning `[x0, x1] x
+/// [y0, y1]` \[m\] relative to the point's foot: `pi L F` by superposition of
 /// four corner rectangles.
 pub fn parallel_rectangle(l: f64, x0: f64, x1: f64, y0: f64, y1: f64, c: f64) -> f64 {
     let g = |x: f64, y: f64| parallel_corner(x, y, c);
     PI * l * (g(x1, y1) - g(x0, y1) - g(x1, y0) + g(x0, y0))
 }
 
-/// Illuminance [lx] at a point from a rectangle of luminance `l` in a plane
-/// perpendicular to the point's, at distance `c` [m], spanning `[y0, y1]`
+/// Illuminance \[lx\] at a point from a rectangle of luminance `l` in a plane
+/// perpendicular to the point's, at distance `c` \[m\], spanning `[y0, y1]`
 /// along the planes' common direction (relative to the point's foot) and
 /// `[z0, z1]` (`0 <= z0 < z1`) above the point's plane.
 pub fn perpendicular_rectangle(l: f64, y0: f64, y1: f64, z0: f64, z1: f64, c: f64) -> f64 {
@@ -52,9 +52,9 @@ pub fn perpendicular_rectangle(l: f64, y0: f64, y1: f64, z0: f64, z1: f64, c: f6
     PI * l * (g(y1, z1) - g(y0, z1) - g(y1, z0) + g(y0, z0))
 }
 
-/// Illuminance [lx] on a plane a height `h` [m] below a luminaire of
-/// intensity `I0 cos(theta)` [cd] (`theta` from the downward vertical), at
-/// distance `d` [m] from it: `I(theta) cos(theta) / d^2 = I0 h^2 / d^4`.
+/// Illuminance \[lx\] on a plane a height `h` \[m\] below a luminaire of
+/// intensity `I0 cos(theta)` \[cd\] (`theta` from the downward vertical), at
+/// distance `d` \[m\] from it: `I(theta) cos(theta) / d^2 = I0 h^2 / d^4`.
 pub fn cosine_intensity_plane(i0: f64, h: f64, d: f64) -> f64 {
     i0 * h * h / (d * d * d * d)
 }

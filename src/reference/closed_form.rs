@@ -2,7 +2,7 @@
 //! integrating sphere, a point source over a square plate, the direct
 //! illuminance of a point source.
 //!
-//! **Integrating sphere.** A point source of flux `Phi` [lm] anywhere inside
+//! **Integrating sphere.** A point source of flux `Phi` \[lm\] anywhere inside
 //! a sphere of radius `R` with a Lambertian inner wall of reflectance `rho`.
 //! Between two wall points the kernel `cos cos / d^2` equals `1 / (4 R^2)`
 //! (the chord makes equal angles `cos = d / 2R` with both normals), so light
@@ -29,14 +29,14 @@ use glam::DVec3;
 use std::f64::consts::PI;
 use std::sync::OnceLock;
 
-/// Indirect illuminance [lx] on the wall of an integrating sphere of radius
-/// `radius` [m], wall reflectance `rho` < 1, source flux `flux` [lm].
+/// Indirect illuminance \[lx\] on the wall of an integrating sphere of radius
+/// `radius` \[m\], wall reflectance `rho` < 1, source flux `flux` \[lm\].
 pub fn integrating_sphere_indirect(rho: f64, flux: f64, radius: f64) -> f64 {
     rho * flux / (4.0 * PI * radius * radius * (1.0 - rho))
 }
 
-/// Direct illuminance [lx] at `p` (unit normal `n`) from an isotropic point
-/// source of intensity `i` [cd] at `s`, unoccluded: `I cos / d^2`, 0 from behind.
+/// Direct illuminance \[lx\] at `p` (unit normal `n`) from an isotropic point
+/// source of intensity `i` \[cd\] at `s`, unoccluded: `I cos / d^2`, 0 from behind.
 pub fn point_illuminance(i: f64, s: DVec3, p: DVec3, n: DVec3) -> f64 {
     let d = s - p;
     let c = n.dot(d);
@@ -47,7 +47,7 @@ pub fn point_illuminance(i: f64, s: DVec3, p: DVec3, n: DVec3) -> f64 {
     }
 }
 
-/// Form factor from a differential area at height `h` [m] on the normal
+/// Form factor from a differential area at height `h` \[m\] on the normal
 /// through a corner of an `a x b` rectangle, parallel to it and facing it.
 pub fn corner_form_factor(a: f64, b: f64, h: f64) -> f64 {
     let (x, y) = (a / h, b / h);
@@ -127,23 +127,23 @@ pub fn adaptive_2d(
 /// A point source above a square Lambertian plate (see the module docs).
 #[derive(Clone, Copy, Debug)]
 pub struct PlateCase {
-    /// Side of the plate [m]; the plate is `[0, a] x [0, a]` in `z = 0`.
+    /// Side of the plate \[m\]; the plate is `[0, a] x [0, a]` in `z = 0`.
     pub a: f64,
     /// Reflectance of the plate's upper side.
     pub rho: f64,
-    /// Source position [m], `z > 0`.
+    /// Source position \[m\], `z > 0`.
     pub source: DVec3,
-    /// Source intensity [cd].
+    /// Source intensity \[cd\].
     pub intensity: f64,
 }
 
 impl PlateCase {
-    /// Illuminance [lx] on the plate at `(x, y, 0)` (direct only).
+    /// Illuminance \[lx\] on the plate at `(x, y, 0)` (direct only).
     pub fn plate_illuminance(&self, x: f64, y: f64) -> f64 {
         point_illuminance(self.intensity, self.source, DVec3::new(x, y, 0.0), DVec3::Z)
     }
 
-    /// Illuminance [lx] at `p` (`z > 0`, unit normal `n`): direct plus light
+    /// Illuminance \[lx\] at `p` (`z > 0`, unit normal `n`): direct plus light
     /// reflected once by the plate, to about 1e-13 relative.
     pub fn illuminance(&self, p: DVec3, n: DVec3) -> (f64, f64) {
         let direct = point_illuminance(self.intensity, self.source, p, n);
@@ -153,9 +153,9 @@ impl PlateCase {
     }
 }
 
-/// Illuminance [lx] at `p` (`z > 0`, unit normal `n`) from a Lambertian
+/// Illuminance \[lx\] at `p` (`z > 0`, unit normal `n`) from a Lambertian
 /// plate `[0, a]^2` in `z = 0` of reflectance `rho` whose own illuminance is
-/// `e_plate(x, y)` [lx].
+/// `e_plate(x, y)` \[lx\].
 pub fn reflected_from_plate(
     a: f64,
     rho: f64,

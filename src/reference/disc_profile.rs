@@ -31,7 +31,7 @@ pub fn profile_luminance(name: &str, r: f64, t: f64, s: f64) -> Option<f64> {
     })
 }
 
-/// Illuminance [lx] at `x` (unit normal `n`) from a disc (centre `c`, unit
+/// Illuminance \[lx\] at `x` (unit normal `n`) from a disc (centre `c`, unit
 /// emitting normal `m`, radius `r`) of luminance `l(s)` [cd/m^2] at radius
 /// `s`, emitting from its front only:
 /// `E = int_0^r int_0^2pi l(s) max(0, cos_x) max(0, cos_y) / d^2 s dphi ds`,

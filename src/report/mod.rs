@@ -34,7 +34,7 @@ pub struct Report {
     pub scene_notes: Vec<String>,
     /// The luminaires.
     pub luminaires: Vec<Luminaire>,
-    /// Their total flux [lm].
+    /// Their total flux \[lm\].
     pub total_flux: String,
     /// The grids.
     pub grids: Vec<GridSection>,
@@ -55,7 +55,7 @@ pub struct Luminaire {
     pub name: String,
     /// Its type (`ies`, `ldt`, `point`, ...).
     pub kind: String,
-    /// Its luminous flux [lm].
+    /// Its luminous flux \[lm\].
     pub flux: String,
     /// Its photometric file, if any.
     pub file: String,

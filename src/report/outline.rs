@@ -14,7 +14,7 @@ use crate::io::isolux::Outline;
 use crate::scene::desc::SceneDesc;
 use glam::DVec3;
 
-/// The outlines of `desc`'s finite surfaces in `lattice`'s plane coordinates [m].
+/// The outlines of `desc`'s finite surfaces in `lattice`'s plane coordinates \[m\].
 pub fn outlines(desc: &SceneDesc, lattice: &Lattice) -> Vec<Outline> {
     let v3 = |v: &Option<toml::Spanned<crate::scene::desc::Vec3>>| {
         v.as_ref().map(|v| DVec3::from(v.get_ref().0))
@@ -72,7 +72,7 @@ pub fn outlines(desc: &SceneDesc, lattice: &Lattice) -> Vec<Outline> {
 }
 
 /// The luminaires' positions (`position`, `center` or `corner`) in
-/// `lattice`'s plane coordinates [m].
+/// `lattice`'s plane coordinates \[m\].
 pub fn luminaires(desc: &SceneDesc, lattice: &Lattice) -> Vec<(f64, f64)> {
     desc.light
         .iter()

@@ -47,14 +47,14 @@ use std::time::{Duration, Instant};
 pub struct Stop {
     /// Number of chains (rounded up to whole batches).
     pub chains: Option<u64>,
-    /// Wall-clock limit [s]. Soft: a run always completes at least
+    /// Wall-clock limit \[s\]. Soft: a run always completes at least
     /// [`MIN_BATCHES`] batches, so a very short limit may be exceeded.
     pub time: Option<f64>,
     /// Target for the largest relative standard error of `E` over the
     /// points, met by a pilot and a fixed count of fresh batches (see the
     /// [`plan`] docs).
     pub rel_error: Option<f64>,
-    /// Time limit [s] of a `rel_error` run given no `time`; `None`:
+    /// Time limit \[s\] of a `rel_error` run given no `time`; `None`:
     /// [`DEFAULT_REL_ERROR_CAP`].
     pub rel_error_cap: Option<f64>,
     /// The `rel_error` target is on the root mean square of the points'
@@ -94,7 +94,7 @@ pub struct RunConfig {
     pub batch_size: Option<u64>,
     /// How each batch stratifies its chains' leading uniforms (randomised Sobol' nets).
     pub qmc: Qmc,
-    /// Near/far split of the local estimator: radius [m] (0: off) and
+    /// Near/far split of the local estimator: radius \[m\] (0: off) and
     /// backward paths per receiver for every 256 chains of a batch, for the
     /// near part (see [`crate::estimator::Receivers::with_near_field`]).
     pub near: (f64, u32),
@@ -219,7 +219,7 @@ pub enum StopReason {
 pub struct Progress<'a> {
     /// Tallies so far.
     pub tallies: &'a Tallies,
-    /// Exact direct illuminance per point [lx].
+    /// Exact direct illuminance per point \[lx\].
     pub direct: &'a [f64],
     /// Chains folded in.
     pub chains: u64,
@@ -227,14 +227,14 @@ pub struct Progress<'a> {
     pub scores: u64,
     /// Collisions in folded batches.
     pub collisions: u64,
-    /// Wall time since the start [s] (of the first session, when resumed).
+    /// Wall time since the start \[s\] (of the first session, when resumed).
     pub elapsed: f64,
 }
 
 /// The outcome of a run.
 #[derive(Clone, Debug)]
 pub struct RunResult {
-    /// Exact direct illuminance per point [lx].
+    /// Exact direct illuminance per point \[lx\].
     pub direct: Vec<f64>,
     /// Indirect tallies per point.
     pub tallies: Tallies,
@@ -246,7 +246,7 @@ pub struct RunResult {
     pub collisions: u64,
     /// Point scores evaluated in the kept batches.
     pub scores: u64,
-    /// Wall time of the whole run [s], the `--rel-error` pilot included.
+    /// Wall time of the whole run \[s\], the `--rel-error` pilot included.
     pub wall: f64,
     /// Threads used.
     pub threads: usize,
@@ -275,7 +275,7 @@ pub struct TimeSizing {
     pub default_batch_size: u64,
     /// The batch size chosen.
     pub batch_size: u64,
-    /// Estimated time of [`MIN_BATCHES`] batches at the chosen size [s]:
+    /// Estimated time of [`MIN_BATCHES`] batches at the chosen size \[s\]:
     /// above the time limit when even the smallest batches cannot fit.
     pub minimum_time: f64,
 }
@@ -777,7 +777,7 @@ struct Prior {
     chains: u64,
     collisions: u64,
     scores: u64,
-    /// Wall time before `start` [s] (a resumed run's first session).
+    /// Wall time before `start` \[s\] (a resumed run's first session).
     wall: f64,
     tallies: Option<Tallies>,
     batches: Vec<Batch>,

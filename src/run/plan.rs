@@ -143,7 +143,7 @@ pub struct Pilot {
     pub batches: u64,
     /// Chains per pilot batch ([`pilot_batch_size`]).
     pub batch_size: u64,
-    /// Wall time of the pilot [s].
+    /// Wall time of the pilot \[s\].
     pub wall: f64,
     /// Largest (or, for an RMS target, root mean square) relative error
     /// over the receivers after the pilot, rescaled to batches of the run
@@ -164,7 +164,7 @@ pub struct Pilot {
     pub fall: f64,
     /// Batches planned for the run proper.
     pub planned: u64,
-    /// Wall time the planned batches need at the pilot's pace [s]
+    /// Wall time the planned batches need at the pilot's pace \[s\]
     /// (infinite when no plan could be made).
     pub estimated_time: f64,
     /// The time limit the run proper ran under when none was given
@@ -296,7 +296,7 @@ pub(super) fn rms_dof(tallies: &Tallies, direct: &[f64]) -> f64 {
     receivers * (b - 1.0)
 }
 
-/// Time limit [s] of a `--rel-error` run given no `--time`: an unreachable
+/// Time limit \[s\] of a `--rel-error` run given no `--time`: an unreachable
 /// target stops here (with a message) rather than running forever.
 pub const DEFAULT_REL_ERROR_CAP: f64 = 3600.0;
 

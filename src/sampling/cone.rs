@@ -13,7 +13,7 @@ use glam::DVec3;
 /// Largest `f64` strictly below 1.
 const ONE_MINUS_EPSILON: f64 = 1.0 - f64::EPSILON / 2.0;
 
-/// Solid angle [sr] of the cone, `2 pi (1 - cos alpha) = 2 pi sin^2 / (1 + cos)`.
+/// Solid angle \[sr\] of the cone, `2 pi (1 - cos alpha) = 2 pi sin^2 / (1 + cos)`.
 #[inline]
 pub fn cone_solid_angle(sin_a: f64, cos_a: f64) -> f64 {
     2.0 * PI * sin_a * sin_a / (1.0 + cos_a)

@@ -51,7 +51,7 @@ pub enum TableError {
 pub struct SphereTableSample {
     /// `cos theta` (theta from the pole).
     pub cos_theta: f64,
-    /// `phi` in `[0, 2 pi)` [rad].
+    /// `phi` in `[0, 2 pi)` \[rad\].
     pub phi: f64,
     /// Density per solid angle [1/sr].
     pub pdf: f64,
@@ -166,7 +166,7 @@ impl SphereTable {
         self.f[i * self.cols + j]
     }
 
-    /// Solid angle [sr] of a cell of row `i`.
+    /// Solid angle \[sr\] of a cell of row `i`.
     pub fn cell_solid_angle(&self, i: usize) -> f64 {
         (self.cos_edge[i] - self.cos_edge[i + 1]) * 2.0 * PI / self.cols as f64
     }

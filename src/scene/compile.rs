@@ -380,7 +380,7 @@ fn positive(v: &Spanned<f64>, field: &str, ctx: &SourceCtx) -> Result<f64, Scene
     }
 }
 
-/// `translate` [m], `rotate` (degrees about x, then y, then z) and `scale`
+/// `translate` \[m\], `rotate` (degrees about x, then y, then z) and `scale`
 /// of a mesh or SH object: `x -> translate + scale R x`.
 fn placement(d: &SurfaceDesc, ctx: &SourceCtx) -> Result<(DVec3, DMat3, f64), SceneError> {
     let t = match &d.translate {
@@ -916,8 +916,8 @@ fn light(
 }
 
 /// A distant light (`type = "distant"`): `direction` (the direction the
-/// light travels, from the sun towards the scene), `illuminance` [lx] on a
-/// plane normal to it and `angular_diameter` [deg] (default 0). Its start
+/// light travels, from the sun towards the scene), `illuminance` \[lx\] on a
+/// plane normal to it and `angular_diameter` \[deg\] (default 0). Its start
 /// region is fitted when the scene is built.
 fn distant(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String>), SceneError> {
     let d = l.get_ref();
@@ -958,7 +958,7 @@ fn distant(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<Str
 }
 
 /// A distant light travelling along unit `dir` with the `illuminance` and
-/// `angular_diameter` [deg] (default `diam`) of `l`.
+/// `angular_diameter` \[deg\] (default `diam`) of `l`.
 fn distant_along(
     l: &Spanned<LightDesc>,
     ctx: &SourceCtx,
@@ -1057,7 +1057,7 @@ fn days_in_month(y: i32, m: u32) -> u32 {
 }
 
 /// The sun's unit direction (towards it) from `sun_altitude` and
-/// `sun_azimuth` [deg], or from `date`, `time`, `utc_offset`, `latitude`
+/// `sun_azimuth` \[deg\], or from `date`, `time`, `utc_offset`, `latitude`
 /// and `longitude` ([`crate::light::sun_position`]), with a note.
 fn sun_position(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(DVec3, String), SceneError> {
     use crate::light::sun_position::{UtcTime, solar_position, sun_direction};
@@ -1209,10 +1209,10 @@ fn sun_position(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(DVec3, Strin
 }
 
 /// A CIE sky (`type = "sky"`: `sky`, `zenith_luminance` [cd/m^2] or
-/// `horizontal_illuminance` [lx], `ground_luminance`, and the sun's
+/// `horizontal_illuminance` \[lx\], `ground_luminance`, and the sun's
 /// position for the general skies) as an environment light with an exact
 /// luminance ([`crate::light::Environment::from_sky`]); or the sun (`type =
-/// "sun"`: a distant light from the sun's position with `illuminance` [lx]
+/// "sun"`: a distant light from the sun's position with `illuminance` \[lx\]
 /// normal to it and `angular_diameter`, default 0.53 degrees).
 fn daylight(
     l: &Spanned<LightDesc>,
@@ -1362,9 +1362,9 @@ fn daylight(
 
 /// An environment light (`type = "environment"`): `file` (an HDR map,
 /// relative to the scene file), `mapping` (`"equirect"`, default, or
-/// `"angular"`), `rotate` [deg] about the vertical, and `scale` (pixel value
+/// `"angular"`), `rotate` \[deg\] about the vertical, and `scale` (pixel value
 /// times scale is luminance [cd/m^2]; default 1) or `horizontal_illuminance`
-/// [lx] (the map scaled to give it on an unobstructed horizontal plane).
+/// \[lx\] (the map scaled to give it on an unobstructed horizontal plane).
 fn environment(
     l: &Spanned<LightDesc>,
     ctx: &SourceCtx,
@@ -1536,7 +1536,7 @@ fn median_cut_request(
 /// A Lambertian area source (`type = "rectangle"` or `"disc"`): its shape
 /// (`corner`, `edge1`, `edge2`, emitting towards `edge1 x edge2`; or
 /// `center`, `normal` = the emitting side, `radius`), `luminance` [cd/m^2]
-/// at the profile's peak or `flux` [lm], `sides` (`"front"` or `"both"`),
+/// at the profile's peak or `flux` \[lm\], `sides` (`"front"` or `"both"`),
 /// a disc's radial `profile` and the surface's `material` (default black).
 fn area(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(Light, Option<String>), SceneError> {
     use crate::light::radial_profile::RadialProfile;
@@ -1686,7 +1686,7 @@ fn f_span(d: &LightDesc, l: &Spanned<LightDesc>) -> Range<usize> {
 }
 
 /// A goniometric luminaire (`type = "ies"` or `"ldt"`): the photometric
-/// file, its placement and orientation, and an optional `flux` [lm] or
+/// file, its placement and orientation, and an optional `flux` \[lm\] or
 /// `multiplier` on its candela values, times an IES tilt table's factor
 /// at the installed tilt ([`crate::io::photometry::Tilt`]); with a note
 /// for the run summary (the table's flux against the file's lamp lumens).

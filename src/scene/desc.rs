@@ -13,7 +13,7 @@ use toml::Spanned;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Numbers<const N: usize>(pub [f64; N]);
 
-/// Three numbers: a point [m] or a direction.
+/// Three numbers: a point \[m\] or a direction.
 pub type Vec3 = Numbers<3>;
 
 impl<'de, const N: usize> Deserialize<'de> for Numbers<N> {
@@ -57,24 +57,24 @@ pub struct SceneDesc {
 pub struct ObserverDesc {
     /// A name, written to the `name` column; default `observer N`.
     pub name: Option<Spanned<String>>,
-    /// Eye position [m].
+    /// Eye position \[m\].
     pub eye: Spanned<[f64; 3]>,
     /// Line of sight (any length > 0, not vertical).
     pub view: Spanned<[f64; 3]>,
 }
 
 /// One `[[portal]]` table: a parallelogram whose normal `edge1 x edge2`
-/// points into the scene [m].
+/// points into the scene \[m\].
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PortalDesc {
     /// Optional name.
     pub name: Option<Spanned<String>>,
-    /// A corner [m].
+    /// A corner \[m\].
     pub corner: Spanned<Vec3>,
-    /// First edge [m].
+    /// First edge \[m\].
     pub edge1: Spanned<Vec3>,
-    /// Second edge [m].
+    /// Second edge \[m\].
     pub edge2: Spanned<Vec3>,
 }
 
@@ -89,26 +89,26 @@ pub struct SurfaceDesc {
     pub kind: Spanned<String>,
     /// Optional name used in messages and summaries.
     pub name: Option<Spanned<String>>,
-    /// A point of a plane [m].
+    /// A point of a plane \[m\].
     pub point: Option<Spanned<Vec3>>,
     /// Normal of a plane or disc (any length > 0; normalised on compile).
     pub normal: Option<Spanned<Vec3>>,
-    /// Corner of a rectangle [m].
+    /// Corner of a rectangle \[m\].
     pub corner: Option<Spanned<Vec3>>,
-    /// First edge of a rectangle [m]; the front normal is `edge1 x edge2`.
+    /// First edge of a rectangle \[m\]; the front normal is `edge1 x edge2`.
     pub edge1: Option<Spanned<Vec3>>,
-    /// Second edge of a rectangle [m].
+    /// Second edge of a rectangle \[m\].
     pub edge2: Option<Spanned<Vec3>>,
-    /// Centre of a disc, sphere or SH object [m].
+    /// Centre of a disc, sphere or SH object \[m\].
     pub center: Option<Spanned<Vec3>>,
-    /// Radius of a disc or sphere [m].
+    /// Radius of a disc or sphere \[m\].
     pub radius: Option<Spanned<f64>>,
     /// Reflecting side(s): `"front"`, `"back"`, `"both"` (rectangle, disc,
     /// mesh) or `"outside"`, `"inside"`, `"both"` (sphere, SH object).
     pub sides: Option<Spanned<String>>,
-    /// Lower corner of a box [m].
+    /// Lower corner of a box \[m\].
     pub min: Option<Spanned<Vec3>>,
-    /// Upper corner of a box [m].
+    /// Upper corner of a box \[m\].
     pub max: Option<Spanned<Vec3>>,
     /// Normals of a box: `"inward"` (a room, default) or `"outward"` (a solid block).
     pub normals: Option<Spanned<String>>,
@@ -119,7 +119,7 @@ pub struct SurfaceDesc {
     pub file: Option<Spanned<String>>,
     /// Inline SH coefficients `[[k, m, a, b], ...]` (instead of `file`).
     pub coefficients: Option<Spanned<Vec<Numbers<4>>>>,
-    /// Translation of a mesh [m] (applied last).
+    /// Translation of a mesh \[m\] (applied last).
     pub translate: Option<Spanned<Vec3>>,
     /// Rotation of a mesh or SH object: angles in degrees about x, then y, then z.
     pub rotate: Option<Spanned<Vec3>>,
@@ -184,15 +184,15 @@ pub struct LightDesc {
     pub kind: Spanned<String>,
     /// Optional name used in messages and summaries.
     pub name: Option<Spanned<String>>,
-    /// Position of a point light [m].
+    /// Position of a point light \[m\].
     pub position: Option<Spanned<Vec3>>,
-    /// Centre of a sphere light [m].
+    /// Centre of a sphere light \[m\].
     pub center: Option<Spanned<Vec3>>,
-    /// Radius of a sphere light [m].
+    /// Radius of a sphere light \[m\].
     pub radius: Option<Spanned<f64>>,
-    /// Luminous intensity [cd] (isotropic point source). Exclusive with `flux`.
+    /// Luminous intensity \[cd\] (isotropic point source). Exclusive with `flux`.
     pub intensity: Option<Spanned<f64>>,
-    /// Luminous flux [lm]. Exclusive with `intensity`; for a goniometric
+    /// Luminous flux \[lm\]. Exclusive with `intensity`; for a goniometric
     /// luminaire, the flux its table is scaled to (exclusive with `multiplier`).
     pub flux: Option<Spanned<f64>>,
     /// Photometric file of a goniometric luminaire (`type = "ies"` or
@@ -202,7 +202,7 @@ pub struct LightDesc {
     /// Direction of a goniometric luminaire's photometric nadir (gamma = 0);
     /// default `[0, 0, -1]`.
     pub aim: Option<Spanned<Vec3>>,
-    /// Turn of a goniometric luminaire about its nadir [deg], from C0 along
+    /// Turn of a goniometric luminaire about its nadir \[deg\], from C0 along
     /// the world `+x` axis (projected), or of an environment map about the
     /// vertical `+z` (counter-clockwise seen from above); default 0.
     pub rotate: Option<Spanned<f64>>,
@@ -215,15 +215,15 @@ pub struct LightDesc {
     /// Beam direction of a spot light, or the direction a distant light
     /// travels (from the sun towards the scene); normalised, non-zero.
     pub direction: Option<Spanned<Vec3>>,
-    /// Inner cone half-angle of a spot light [deg]: full intensity inside.
+    /// Inner cone half-angle of a spot light \[deg\]: full intensity inside.
     pub inner: Option<Spanned<f64>>,
-    /// Outer cone half-angle of a spot light [deg]: nothing outside.
+    /// Outer cone half-angle of a spot light \[deg\]: nothing outside.
     pub outer: Option<Spanned<f64>>,
-    /// Corner of a rectangle source [m].
+    /// Corner of a rectangle source \[m\].
     pub corner: Option<Spanned<Vec3>>,
-    /// First edge of a rectangle source [m].
+    /// First edge of a rectangle source \[m\].
     pub edge1: Option<Spanned<Vec3>>,
-    /// Second edge of a rectangle source [m]; it emits towards `edge1 x edge2`.
+    /// Second edge of a rectangle source \[m\]; it emits towards `edge1 x edge2`.
     pub edge2: Option<Spanned<Vec3>>,
     /// Emitting side's normal of a disc source.
     pub normal: Option<Spanned<Vec3>>,
@@ -237,15 +237,15 @@ pub struct LightDesc {
     pub profile: Option<Spanned<toml::Value>>,
     /// How an area source's surface reflects; default black.
     pub material: Option<Spanned<MaterialDesc>>,
-    /// Illuminance of a distant light on a plane normal to its direction [lx].
+    /// Illuminance of a distant light on a plane normal to its direction \[lx\].
     pub illuminance: Option<Spanned<f64>>,
-    /// Angular diameter of a distant light's disc [deg]; default 0 (a point
+    /// Angular diameter of a distant light's disc \[deg\]; default 0 (a point
     /// at infinity); the sun: 0.53.
     pub angular_diameter: Option<Spanned<f64>>,
     /// Factor from an environment map's pixel value to luminance [cd/m^2
     /// per unit of pixel value]. Exclusive with `horizontal_illuminance`.
     pub scale: Option<Spanned<f64>>,
-    /// Scale an environment map so that it gives this illuminance [lx] on
+    /// Scale an environment map so that it gives this illuminance \[lx\] on
     /// an unobstructed horizontal plane facing up. Exclusive with `scale`.
     pub horizontal_illuminance: Option<Spanned<f64>>,
     /// An environment map's layout: `"equirect"` (default) or `"angular"`.
@@ -264,20 +264,20 @@ pub struct LightDesc {
     pub zenith_luminance: Option<Spanned<f64>>,
     /// A sky's uniform luminance below the horizon [cd/m^2]; default 0.
     pub ground_luminance: Option<Spanned<f64>>,
-    /// The sun's altitude above the horizon [deg] (with `sun_azimuth`).
+    /// The sun's altitude above the horizon \[deg\] (with `sun_azimuth`).
     pub sun_altitude: Option<Spanned<f64>>,
-    /// The sun's azimuth from north (`+y`) towards east (`+x`) [deg].
+    /// The sun's azimuth from north (`+y`) towards east (`+x`) \[deg\].
     pub sun_azimuth: Option<Spanned<f64>>,
     /// Local date `YYYY-MM-DD` for the sun's position (with `time`,
     /// `latitude`, `longitude`, optional `utc_offset`).
     pub date: Option<Spanned<String>>,
     /// Local clock time `HH:MM` or `HH:MM:SS`.
     pub time: Option<Spanned<String>>,
-    /// Local time minus UTC [h]; default 0.
+    /// Local time minus UTC \[h\]; default 0.
     pub utc_offset: Option<Spanned<f64>>,
-    /// Latitude [deg], north positive.
+    /// Latitude \[deg\], north positive.
     pub latitude: Option<Spanned<f64>>,
-    /// Longitude [deg], east positive.
+    /// Longitude \[deg\], east positive.
     pub longitude: Option<Spanned<f64>>,
 }
 
@@ -295,17 +295,17 @@ pub struct GridDesc {
     /// Name of a rectangle or disc of the scene, or `"BOX.FACE"` for a box
     /// face (`x_min` .. `z_max`); exclusive with `corner`.
     pub surface: Option<Spanned<String>>,
-    /// Corner of the grid's rectangle [m].
+    /// Corner of the grid's rectangle \[m\].
     pub corner: Option<Spanned<[f64; 3]>>,
-    /// First edge [m] (a road field: along the road, between two luminaires).
+    /// First edge \[m\] (a road field: along the road, between two luminaires).
     pub edge1: Option<Spanned<[f64; 3]>>,
-    /// Second edge [m], perpendicular to `edge1`; the points face `edge1 x edge2`.
+    /// Second edge \[m\], perpendicular to `edge1`; the points face `edge1 x edge2`.
     pub edge2: Option<Spanned<[f64; 3]>>,
-    /// Shift of the points along the grid's normal [m]; default 0.
+    /// Shift of the points along the grid's normal \[m\]; default 0.
     pub offset: Option<Spanned<f64>>,
-    /// Largest cell side [m]; default: the EN 12464-1 rule.
+    /// Largest cell side \[m\]; default: the EN 12464-1 rule.
     pub spacing: Option<Spanned<f64>>,
-    /// Band left out along every edge [m]; default 0.
+    /// Band left out along every edge \[m\]; default 0.
     pub border: Option<Spanned<f64>>,
     /// Lanes of a road field (3 points across each); default 1.
     pub lanes: Option<Spanned<i64>>,
@@ -314,7 +314,7 @@ pub struct GridDesc {
     /// Horizontal facing direction of `semicylindrical` points (required
     /// for them, refused otherwise); written to the normal columns.
     pub facing: Option<Spanned<[f64; 3]>>,
-    /// Required maintained average illuminance [lx].
+    /// Required maintained average illuminance \[lx\].
     pub em: Option<Spanned<f64>>,
     /// Required uniformity `U0 = E_min / E_avg` (dimensionless).
     pub u0: Option<Spanned<f64>>,

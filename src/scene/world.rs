@@ -40,16 +40,16 @@ use glam::DVec3;
 use nearest::{Cand, Nearest};
 use shape_tree::ShapeTree;
 
-/// Largest accepted coordinate magnitude [m]: squares of lengths and of
+/// Largest accepted coordinate magnitude \[m\]: squares of lengths and of
 /// scores (the variance of the variance takes fourth powers) stay finite.
 pub const MAX_COORD: f64 = 1e12;
 
-/// Largest accepted intensity [cd] (or luminance [cd/m^2]): results scale
+/// Largest accepted intensity \[cd\] (or luminance [cd/m^2]): results scale
 /// exactly with it, and beyond it the fourth powers of scores in the
 /// variance of the variance would overflow.
 pub const MAX_INTENSITY: f64 = 1e60;
 
-/// Smallest accepted non-zero intensity [cd] (or luminance [cd/m^2]):
+/// Smallest accepted non-zero intensity \[cd\] (or luminance [cd/m^2]):
 /// below it scores would underflow.
 pub const MIN_INTENSITY: f64 = 1e-60;
 
@@ -296,7 +296,7 @@ pub struct Scene {
     /// Alias table of the lights' powers, for picking the emitting light
     /// in O(1); `None` when nothing emits.
     light_pick: Option<crate::sampling::alias::AliasTable>,
-    /// Total emitted flux [lm].
+    /// Total emitted flux \[lm\].
     total_power: f64,
     /// Per light: the surface a point-like light lies on, if any, and the
     /// unit normal of the side it belongs to (see [`Scene::light_surface`]).
@@ -353,7 +353,7 @@ impl Scene {
 
     /// Build a scene from surfaces and lights, checking what the compiled
     /// scene relies on: at most [`MAX_PLANES`] infinite planes; lights with a
-    /// finite position, a finite intensity `>= 0` [cd] (a power that does not
+    /// finite position, a finite intensity `>= 0` \[cd\] (a power that does not
     /// overflow) and a finite radius `> 0`; sphere lights wholly on one side
     /// of each infinite plane; area sources with a finite luminance `>= 0`.
     /// An area source adds its emitting surface. A scene file passes
@@ -592,7 +592,7 @@ impl Scene {
         scene.with_accel(Accel::Auto)
     }
 
-    /// Bounding box [m] of the finite shapes (`None`: there are none).
+    /// Bounding box \[m\] of the finite shapes (`None`: there are none).
     pub fn finite_bounds(&self) -> Option<(DVec3, DVec3)> {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -631,7 +631,7 @@ impl Scene {
 
     /// Fit the start regions of the lights at infinity
     /// ([`crate::light::StartRegion`]) to the finite shapes, the planes and
-    /// `points` [m] (the receivers, when known: with infinite planes the
+    /// `points` \[m\] (the receivers, when known: with infinite planes the
     /// answer is exact whatever the fit, which only steers efficiency), and
     /// renew the lights' pick table. Nothing changes without such lights.
     pub fn fit_directional(&mut self, points: &[DVec3]) {
@@ -1023,7 +1023,7 @@ impl Scene {
         self.light_pick.as_ref().map_or(0, |t| t.sample(u))
     }
 
-    /// Total emitted flux [lm].
+    /// Total emitted flux \[lm\].
     pub fn total_power(&self) -> f64 {
         self.total_power
     }
@@ -1436,7 +1436,7 @@ impl Scene {
             .collect()
     }
 
-    /// Whether `p` [m] lies clearly inside the closed mesh `meshes[k]`
+    /// Whether `p` \[m\] lies clearly inside the closed mesh `meshes[k]`
     /// ([`crate::geometry::mesh_parity`]; not on its surface).
     pub fn inside_mesh(&self, k: u32, p: DVec3) -> bool {
         use crate::geometry::mesh_parity::{Side, side};

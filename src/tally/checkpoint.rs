@@ -37,7 +37,7 @@ pub struct Checkpoint {
     pub collisions: u64,
     /// Receiver scores evaluated in them.
     pub scores: u64,
-    /// Wall time so far [s].
+    /// Wall time so far \[s\].
     pub wall: f64,
     /// The tallies.
     pub tallies: Tallies,

@@ -9,7 +9,7 @@
 //! - standard error of the mean `se = s / sqrt(B)`
 //! - 95 % confidence interval `m +- t_{0.975, B-1} se` (Student t)
 //! - relative error `R = se / |m|`
-//! - figure of merit `FOM = 1 / (R^2 T)` with `T` the wall-clock time [s].
+//! - figure of merit `FOM = 1 / (R^2 T)` with `T` the wall-clock time \[s\].
 //!
 //! Diagnostics of a tally (in the spirit of MCNP's statistical checks, but on
 //! batch means), see [`Diagnostics`]:

@@ -52,9 +52,9 @@ pub struct ShardState {
     pub run: RunIdentity,
     /// This shard's index `i` and the number of shards `m`.
     pub shard: (u64, u64),
-    /// Wall time of the shard [s].
+    /// Wall time of the shard \[s\].
     pub wall: f64,
-    /// Exact direct part per receiver [lx].
+    /// Exact direct part per receiver \[lx\].
     pub direct: Vec<f64>,
     /// The per-receiver checks: watched, near_plain, near_reach, enclosed.
     pub checks: [Vec<bool>; 4],

@@ -92,7 +92,7 @@ pub struct Figure {
     pub method: Method,
 }
 
-/// The figures of one surface (illuminances in the input's unit, [lx]).
+/// The figures of one surface (illuminances in the input's unit, \[lx\]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceFigures {
     /// Batches used.

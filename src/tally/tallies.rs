@@ -4,7 +4,7 @@
 use super::{BatchMeans, Diagnostics, Welford, relative_error};
 
 /// Per-receiver tallies over batch means of the estimated quantity (the
-/// indirect illuminance [lx], or luminance [cd/m^2], per receiver).
+/// indirect illuminance \[lx\], or luminance [cd/m^2], per receiver).
 #[derive(Clone, Debug)]
 pub struct Tallies {
     /// The estimated part per receiver: all reflection orders >= 1, plus

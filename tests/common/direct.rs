@@ -13,8 +13,8 @@
 //!   for boxes, plane hit plus containment for discs and parallelograms,
 //!   barycentric coordinates for triangles, and a dense march against the
 //!   radius function for star-shaped (spherical-harmonic) objects.
-//! - **Point light** of intensity `I` [cd] at `q`: `E = I cos(theta) / d^2`
-//!   [lx] when `q` lies above the receiver's horizon and nothing blocks.
+//! - **Point light** of intensity `I` \[cd\] at `q`: `E = I cos(theta) / d^2`
+//!   \[lx\] when `q` lies above the receiver's horizon and nothing blocks.
 //! - **Sphere light** (centre `c`, radius `r`, uniform luminance
 //!   `L = I / (pi r^2)` [cd/m^2]): `E = L int_cone max(0, n . w) dw`. Wholly
 //!   above the horizon this is `I cos(beta) / D^2`. The reference integrates
@@ -191,16 +191,16 @@ pub fn blocked(occ: &[Occluder], a: DVec3, b: DVec3) -> bool {
 /// A light source as the reference sees it.
 #[derive(Clone, Copy, Debug)]
 pub enum RefLight {
-    /// Isotropic point: position [m], intensity [cd].
+    /// Isotropic point: position \[m\], intensity \[cd\].
     Point { q: DVec3, i: f64 },
-    /// Lambertian sphere: centre [m], radius [m], intensity [cd].
+    /// Lambertian sphere: centre \[m\], radius \[m\], intensity \[cd\].
     Sphere { c: DVec3, r: f64, i: f64 },
 }
 
 /// What a reference receiver measures.
 #[derive(Clone, Copy, Debug)]
 pub enum RefResponse {
-    /// Illuminance [lx].
+    /// Illuminance \[lx\].
     Illuminance,
     /// Luminance [cd/m^2] of a Phong (or, with `ks = 0`, Lambertian) surface
     /// towards the unit world direction `wo`.
@@ -234,7 +234,7 @@ impl RefResponse {
     }
 }
 
-/// Illuminance [lx] from a sphere light (centre `c`, radius `r`, intensity
+/// Illuminance \[lx\] from a sphere light (centre `c`, radius `r`, intensity
 /// `i`) at `x` with unit normal `n`, horizon included, unoccluded: the
 /// closed-form configuration factor of a tilted element to a sphere.
 pub fn sphere_illuminance(c: DVec3, r: f64, i: f64, x: DVec3, n: DVec3) -> f64 {
@@ -257,7 +257,7 @@ pub fn sphere_illuminance(c: DVec3, r: f64, i: f64, x: DVec3, n: DVec3) -> f64 {
     i / (r * r) * f
 }
 
-/// `int_cone w(dir) max(0, n . dir) d(dir)` [sr] over the cone a sphere of
+/// `int_cone w(dir) max(0, n . dir) d(dir)` \[sr\] over the cone a sphere of
 /// radius `r` centred at `c` subtends from `x`, clipped at the horizon of
 /// the unit normal `n`, by quadrature in polar coordinates `(theta, phi)`
 /// about `n`: the cone cuts each ring of polar angle `theta` in an interval

@@ -38,7 +38,7 @@ pub fn chains_cfg(chains: u64, seed: u64, threads: usize) -> RunConfig {
     }
 }
 
-/// z score of point `j` against an exact total `exact` [lx], by the rules
+/// z score of point `j` against an exact total `exact` \[lx\], by the rules
 /// of [`zcheck`]: NaN for a non-finite number, and with zero standard error
 /// 0 only when the estimate is exact (otherwise infinite), so that it fails
 /// any bound.
@@ -47,7 +47,7 @@ pub fn z(r: &RunResult, j: usize, exact: f64) -> f64 {
     zcheck::z_score(r.direct[j] + w.mean(), w.std_error(), exact)
 }
 
-/// Two runs' estimates at point `j` [lx] (exact direct plus tallied, each)
+/// Two runs' estimates at point `j` \[lx\] (exact direct plus tallied, each)
 /// and the standard error of their difference, for a z test of agreement.
 pub fn apart(a: &RunResult, b: &RunResult, j: usize) -> (f64, f64, f64) {
     let e = |r: &RunResult| r.direct[j] + r.tallies.estimated[j].mean();

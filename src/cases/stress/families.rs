@@ -19,7 +19,7 @@ use std::f64::consts::PI;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::Instant;
 
-/// A point of a case: its label, its receiver and its exact value [lx], if
+/// A point of a case: its label, its receiver and its exact value \[lx\], if
 /// known, optionally split into the direct part and the rest.
 struct Point {
     label: String,
@@ -491,7 +491,7 @@ pub(super) fn family_scaled(ctx: &mut Ctx) {
     }
 }
 
-/// Radius of the near/far split for the near-wall rows [m].
+/// Radius of the near/far split for the near-wall rows \[m\].
 const WALL_RADIUS: f64 = 0.2;
 
 /// Backward paths per point and batch of the near part.

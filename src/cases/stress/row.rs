@@ -17,28 +17,28 @@ pub struct StressRow {
     pub case: String,
     /// The point, e.g. `plane 1 r=100`.
     pub point: String,
-    /// Estimated illuminance `E` [lx] (exact first order plus the estimate of the rest).
+    /// Estimated illuminance `E` \[lx\] (exact first order plus the estimate of the rest).
     pub estimate: f64,
-    /// Standard error of `estimate` [lx].
+    /// Standard error of `estimate` \[lx\].
     pub std_error: f64,
-    /// Exact first order (direct illuminance) included in `estimate` [lx].
+    /// Exact first order (direct illuminance) included in `estimate` \[lx\].
     pub direct: f64,
-    /// Exact value [lx], when known.
+    /// Exact value \[lx\], when known.
     pub exact: Option<f64>,
     /// What the estimate is compared with: `exact`, `backward` or
     /// `unscaled run / s^2`; empty (like the other reference fields) for a
     /// case that failed before its run gave a number.
     pub reference_kind: String,
-    /// The value compared with [lx] (the exact value, or the other estimate).
+    /// The value compared with \[lx\] (the exact value, or the other estimate).
     pub reference: Option<f64>,
-    /// Standard error of a Monte Carlo reference [lx] (0 for an exact one).
+    /// Standard error of a Monte Carlo reference \[lx\] (0 for an exact one).
     pub reference_std_error: f64,
-    /// `(estimate - reference) / |reference|` [1].
+    /// `(estimate - reference) / |reference|` \[1\].
     pub rel_err: Option<f64>,
     /// `(estimate - reference) / sqrt(std_error^2 + reference_std_error^2 + allowance^2)`
-    /// with the rounding allowance of the module doc [1].
+    /// with the rounding allowance of the module doc \[1\].
     pub z: Option<f64>,
-    /// Wall time of the run that produced the estimate [s].
+    /// Wall time of the run that produced the estimate \[s\].
     pub time: f64,
     /// Chains of that run.
     pub chains: u64,
@@ -70,7 +70,7 @@ pub struct StressReport {
     pub rows: Vec<StressRow>,
     /// `(file stem, title, checkpoints)` of each run against exact values.
     pub convergence: Vec<(String, String, Vec<Checkpoint>)>,
-    /// Wall time of the whole matrix [s].
+    /// Wall time of the whole matrix \[s\].
     pub wall: f64,
 }
 
@@ -79,7 +79,7 @@ pub struct StressReport {
 pub(super) struct Reference {
     pub(super) kind: &'static str,
     pub(super) value: f64,
-    /// The exact value as (direct, reflected) [lx]: the difference is then
+    /// The exact value as (direct, reflected) \[lx\]: the difference is then
     /// taken part by part, so that a huge direct term (a point next to the
     /// source) does not swamp the reflected one in rounding.
     pub(super) parts: Option<(f64, f64)>,
@@ -258,7 +258,7 @@ pub fn stress_csv(rows: &[StressRow]) -> Vec<u8> {
 /// Per family: rows, the count of each verdict ([`Verdict::ALL`]: `pass`,
 /// `expected-flag`, `flagged`, `explained`, `FAIL`, which add up to the
 /// rows), RMS and largest `|rel_err|` against
-/// exact values, RMS relative standard error `R`, run time [s] (each run once)
+/// exact values, RMS relative standard error `R`, run time \[s\] (each run once)
 /// and `FOM = 1 / (R_rms^2 T)` [1/s].
 pub fn summary_csv(rows: &[StressRow]) -> Vec<u8> {
     let mut headers: Vec<String> = vec!["family".into(), "rows".into()];

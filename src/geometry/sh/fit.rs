@@ -10,18 +10,18 @@ pub struct ShFit {
     /// All pairs `0 <= m <= k <= degree`, k-major, in metres: use with
     /// `ShSurface::new(&coeffs, center, DMat3::IDENTITY, 1.0)`.
     pub coeffs: Vec<ShCoeff>,
-    /// Root-mean-square radial residual `|p - c| - U(dir)` [m].
+    /// Root-mean-square radial residual `|p - c| - U(dir)` \[m\].
     pub rms_residual: f64,
-    /// Largest absolute radial residual [m].
+    /// Largest absolute radial residual \[m\].
     pub max_residual: f64,
-    /// Mean of `|p - c|` over the points [m].
+    /// Mean of `|p - c|` over the points \[m\].
     pub mean_radius: f64,
 }
 
 /// Largest condition number accepted by [`fit`].
 const FIT_MAX_CONDITION: f64 = 1e12;
 
-/// Least-squares fit of the radii `|p - center|` of `points` (world, [m])
+/// Least-squares fit of the radii `|p - center|` of `points` (world, \[m\])
 /// as a function of direction by an SH expansion up to `degree` (world
 /// frame, identity rotation, scale 1), by SVD (nalgebra).
 ///

@@ -113,15 +113,15 @@ const MAX_REFINE: usize = 200;
 /// Level, its derivative along the ray and the world gradient at one point.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Probe {
-    /// `|x - c|` [m].
+    /// `|x - c|` \[m\].
     pub(super) rho: f64,
-    /// `f = rho - scale U` [m].
+    /// `f = rho - scale U` \[m\].
     pub(super) f: f64,
-    /// `df/dt = grad f . d` [1].
+    /// `df/dt = grad f . d` \[1\].
     pub(super) fp: f64,
-    /// `scale U` [m].
+    /// `scale U` \[m\].
     pub(super) su: f64,
-    /// `grad f` (world) [1].
+    /// `grad f` (world) \[1\].
     pub(super) grad: DVec3,
 }
 
@@ -166,7 +166,7 @@ impl ShSurface {
         }
     }
 
-    /// Half-width of the "on the surface" band of the level [m].
+    /// Half-width of the "on the surface" band of the level \[m\].
     fn band(&self) -> f64 {
         ON_SURFACE_REL * self.scale * self.r_max
             + 64.0 * f64::EPSILON * self.center.abs().max_element()

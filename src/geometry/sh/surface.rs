@@ -27,25 +27,25 @@ pub struct ShSurface {
     pub(super) terms: Vec<Term>,
     /// `T_m^m`, the start of each order's recurrence.
     pub(super) diag: Vec<f64>,
-    /// Centre [m].
+    /// Centre \[m\].
     pub(super) center: DVec3,
     /// Local-to-world rotation `R`.
     pub(super) rot: DMat3,
     /// `R^T`.
     pub(super) rot_t: DMat3,
-    /// World length per local length [m].
+    /// World length per local length \[m\].
     pub(super) scale: f64,
-    /// `a_00` [local].
+    /// `a_00` \[local\].
     pub(super) a00: f64,
-    /// `S = sum_{k>=1} S_k` [local].
+    /// `S = sum_{k>=1} S_k` \[local\].
     pub(super) s_sum: f64,
-    /// `G = sum_k k S_k`, bound of `|grad_S U|` [local].
+    /// `G = sum_k k S_k`, bound of `|grad_S U|` \[local\].
     pub(super) g_bound: f64,
-    /// `H = sum_k k^2 S_k`, bound of the second arc derivative [local].
+    /// `H = sum_k k^2 S_k`, bound of the second arc derivative \[local\].
     pub(super) h_bound: f64,
-    /// Lower bound of `U` [local], `> 0`.
+    /// Lower bound of `U` \[local\], `> 0`.
     pub(super) r_min: f64,
-    /// Upper bound of `U` [local].
+    /// Upper bound of `U` \[local\].
     pub(super) r_max: f64,
 }
 
@@ -122,7 +122,7 @@ impl Chain {
 impl ShSurface {
     /// Build and validate a surface.
     ///
-    /// `coeffs` in local units (missing pairs are zero); `center` [m];
+    /// `coeffs` in local units (missing pairs are zero); `center` \[m\];
     /// `rotation` a proper rotation (local to world); `scale` > 0 world
     /// metres per local unit. Rejects: an empty list, `m > k`,
     /// `k > MAX_DEGREE`, non-finite values, `b != 0` at `m = 0`, repeated
@@ -257,7 +257,7 @@ impl ShSurface {
         self.degree
     }
 
-    /// Centre [m].
+    /// Centre \[m\].
     pub fn center(&self) -> DVec3 {
         self.center
     }
@@ -272,7 +272,7 @@ impl ShSurface {
         self.scale
     }
 
-    /// World radius bounds [m]: the surface lies between the spheres of
+    /// World radius bounds \[m\]: the surface lies between the spheres of
     /// these radii around the centre (`a_00 -/+ S`, tightened by the
     /// verification grid; see the module docs). Both are `> 0`.
     pub fn bounds(&self) -> (f64, f64) {
@@ -393,7 +393,7 @@ impl ShSurface {
         (u, g)
     }
 
-    /// "Level" `f(x) = |x - c| - scale U(dir)` [m]: `< 0` inside, `> 0`
+    /// "Level" `f(x) = |x - c| - scale U(dir)` \[m\]: `< 0` inside, `> 0`
     /// outside (at the centre, `-scale U(+z)`).
     pub fn level(&self, x: DVec3) -> f64 {
         self.probe(x - self.center, DVec3::Z).f

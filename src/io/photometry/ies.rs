@@ -370,8 +370,8 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
     })
 }
 
-/// The luminous opening [m] of a file of `version` from its width `w`,
-/// length `l` and height `h` (signed, in the file's units; `unit` [m] per
+/// The luminous opening \[m\] of a file of `version` from its width `w`,
+/// length `l` and height `h` (signed, in the file's units; `unit` \[m\] per
 /// unit).
 ///
 /// LM-63-2002 and 2019 (Table 1 of LM-63-2002), by the signs of `(w, l, h)`:

@@ -5,16 +5,16 @@
 //! | 1 | company / format identification |
 //! | 2 | `Ityp`: type indicator (0-3) |
 //! | 3 | `Isym`: symmetry (0 none, 1 about the vertical axis, 2 about C0-C180, 3 about C90-C270, 4 about both) |
-//! | 4, 5 | `Mc` C-planes in 0-360, their spacing `Dc` [deg] |
-//! | 6, 7 | `Ng` intensities per C-plane, their spacing `Dg` [deg] |
+//! | 4, 5 | `Mc` C-planes in 0-360, their spacing `Dc` \[deg\] |
+//! | 6, 7 | `Ng` intensities per C-plane, their spacing `Dg` \[deg\] |
 //! | 8-12 | report number, luminaire name and number, file name, date/user |
-//! | 13-15 | luminaire length (diameter), width (0: round), height [mm] |
-//! | 16-21 | luminous area length (diameter), width (0: round), heights at C0, C90, C180, C270 [mm] |
-//! | 22-25 | downward flux fraction [%], light output ratio [%], conversion factor `CFLI`, tilt [deg] |
-//! | 26 | `n` lamp sets, then per set (6 blocks of `n` lines): number of lamps (negative: absolute photometry), lamp type, total lamp flux [lm], colour, colour rendering, wattage [W] |
+//! | 13-15 | luminaire length (diameter), width (0: round), height \[mm\] |
+//! | 16-21 | luminous area length (diameter), width (0: round), heights at C0, C90, C180, C270 \[mm\] |
+//! | 22-25 | downward flux fraction [%], light output ratio [%], conversion factor `CFLI`, tilt \[deg\] |
+//! | 26 | `n` lamp sets, then per set (6 blocks of `n` lines): number of lamps (negative: absolute photometry), lamp type, total lamp flux \[lm\], colour, colour rendering, wattage \[W\] |
 //! | +10 | direct ratios for room indices 0.6-5 |
-//! | +`Mc` | C angles [deg] |
-//! | +`Ng` | gamma angles [deg] |
+//! | +`Mc` | C angles \[deg\] |
+//! | +`Ng` | gamma angles \[deg\] |
 //! | rest | intensities [cd/klm], `Ng` per stored C-plane |
 //!
 //! The C-planes stored depend on `Isym` (1-based indices into the `Mc`

@@ -68,7 +68,7 @@ pub enum OpeningShape {
 }
 
 impl OpeningShape {
-    /// The LM-63-2002 name of the shape with these dimensions [m] (circle,
+    /// The LM-63-2002 name of the shape with these dimensions \[m\] (circle,
     /// cylinder, sphere where the diameters agree to 1e-9 relative).
     pub fn name(self, width: f64, length: f64, height: f64) -> &'static str {
         let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
@@ -117,17 +117,17 @@ impl OpeningShape {
 }
 
 /// Luminous opening of the luminaire: its [`OpeningShape`] and the three
-/// dimensions [m] (all >= 0) that the shape gives meaning to. The
+/// dimensions \[m\] (all >= 0) that the shape gives meaning to. The
 /// rectangle and the disc (`round`) keep their older reading: a rectangle
 /// `width x length` or a disc of diameter `width` (its `length` 0), each
 /// with luminous sides `height` tall. All zero: a point source.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Opening {
-    /// Width [m], along C90-C270 (the diameter of a disc).
+    /// Width \[m\], along C90-C270 (the diameter of a disc).
     pub width: f64,
-    /// Length [m], along C0-C180 (0 for a disc: as long as it is wide).
+    /// Length \[m\], along C0-C180 (0 for a disc: as long as it is wide).
     pub length: f64,
-    /// Height [m]: of the luminous sides of a rectangle or an ellipse (0:
+    /// Height \[m\]: of the luminous sides of a rectangle or an ellipse (0:
     /// none); a diameter of the other shapes.
     pub height: f64,
     /// A circular or elliptical opening facing down (`shape` is
@@ -163,14 +163,14 @@ pub enum TiltGeometry {
 pub struct Tilt {
     /// What the angles measure.
     pub geometry: TiltGeometry,
-    /// Tilt angles [deg], ascending, within [-180, 180].
+    /// Tilt angles \[deg\], ascending, within [-180, 180].
     pub angles: Vec<f64>,
     /// Multiplying factors (>= 0) at `angles`.
     pub factors: Vec<f64>,
 }
 
 impl Tilt {
-    /// The tilt [deg] of a luminaire whose local axes `x` (C0), `y` (C90)
+    /// The tilt \[deg\] of a luminaire whose local axes `x` (C0), `y` (C90)
     /// and `z` (opposite the nadir) are the given world unit vectors (world
     /// `z` up), by [`Self::geometry`]: 0-180 for
     /// [`TiltGeometry::Vertical`], 0-90 for the horizontal lamps.
@@ -186,7 +186,7 @@ impl Tilt {
         }
     }
 
-    /// The factor at tilt `angle` [deg]: linear in the angle between the
+    /// The factor at tilt `angle` \[deg\]: linear in the angle between the
     /// table's angles, the end factors beyond them (clamped, never
     /// extrapolated).
     pub fn factor(&self, angle: f64) -> f64 {
@@ -205,7 +205,7 @@ impl Tilt {
 
 /// A luminaire's measured intensity distribution, as read from the file.
 ///
-/// `candela[i][k]` is the intensity [cd] in horizontal plane `h_angles[i]`
+/// `candela[i][k]` is the intensity \[cd\] in horizontal plane `h_angles[i]`
 /// at vertical angle `v_angles[k]` (degrees, both ascending), with every
 /// multiplier of the file already applied except the tilt factor, which
 /// depends on how the luminaire is installed ([`Photometry::tilt_factor`]).
@@ -216,18 +216,18 @@ impl Tilt {
 pub struct Photometry {
     /// Layout of the angles.
     pub kind: PhotometricType,
-    /// Vertical angles [deg], ascending.
+    /// Vertical angles \[deg\], ascending.
     pub v_angles: Vec<f64>,
-    /// Horizontal angles [deg], ascending.
+    /// Horizontal angles \[deg\], ascending.
     pub h_angles: Vec<f64>,
-    /// Intensity [cd] per horizontal plane, per vertical angle.
+    /// Intensity \[cd\] per horizontal plane, per vertical angle.
     pub candela: Vec<Vec<f64>>,
-    /// Rated lamp flux [lm] of the lamps the table refers to; `None` for
+    /// Rated lamp flux \[lm\] of the lamps the table refers to; `None` for
     /// absolute photometry (the table is the luminaire's own).
     pub lamp_lumens: Option<f64>,
-    /// Luminous opening [m].
+    /// Luminous opening \[m\].
     pub opening: Opening,
-    /// Input power [W], where the file gives one.
+    /// Input power \[W\], where the file gives one.
     pub watts: Option<f64>,
     /// Format and version, e.g. `IES LM-63-1995`, `EULUMDAT`.
     pub format: String,
@@ -273,7 +273,7 @@ impl Photometry {
 
     /// The tilt factor of the luminaire whose local axes `x` (C0), `y`
     /// (C90), `z` (opposite the nadir) are these world unit vectors ([`Tilt`];
-    /// 1 without a tilt table), with the tilt [deg] it was read at (`None`
+    /// 1 without a tilt table), with the tilt \[deg\] it was read at (`None`
     /// without a table). The upright luminaire (`X`, `Y`, `Z`) has tilt 0.
     pub fn tilt_factor(
         &self,
@@ -297,7 +297,7 @@ impl Photometry {
             .0
     }
 
-    /// Largest intensity in the table [cd].
+    /// Largest intensity in the table \[cd\].
     pub fn max_candela(&self) -> f64 {
         self.candela
             .iter()

@@ -33,7 +33,7 @@ use super::EMITTER_TIE;
 /// loses to the nearest one whatever its class).
 const PRUNE: f64 = 1e-8;
 
-/// One hit: ray parameter [m], the shape's key in the fixed order, its
+/// One hit: ray parameter \[m\], the shape's key in the fixed order, its
 /// surface and primitive.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Cand {
@@ -64,7 +64,7 @@ pub(super) struct Nearest {
     flat: Cand,
     emitter: Cand,
     solid: Cand,
-    /// Hits at or beyond this `t` [m] cannot change the answer.
+    /// Hits at or beyond this `t` \[m\] cannot change the answer.
     pub(super) bound: f64,
 }
 

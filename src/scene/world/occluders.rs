@@ -77,7 +77,7 @@ impl Scene {
         !self.planes_only() && self.tree.is_none()
     }
 
-    /// The box [m] holding surface `s` (a box face: that face alone);
+    /// The box \[m\] holding surface `s` (a box face: that face alone);
     /// `None` for an infinite plane (unbounded) and a glass pane (never a
     /// collision site).
     pub fn surface_bounds(&self, s: u32) -> Option<(DVec3, DVec3)> {

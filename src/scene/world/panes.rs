@@ -88,7 +88,7 @@ impl Pane {
         self.glass.reflect_transmit(d.dot(self.plane().n)).1
     }
 
-    /// Bounding box [m].
+    /// Bounding box \[m\].
     pub fn bounds(&self) -> (DVec3, DVec3) {
         match &self.shape {
             PaneShape::Rect(r) => {
@@ -107,9 +107,9 @@ impl Pane {
 /// A pane met by a ray: where, and what it does there.
 #[derive(Clone, Copy, Debug)]
 pub struct PaneHit {
-    /// Ray parameter [m].
+    /// Ray parameter \[m\].
     pub t: f64,
-    /// The point [m] (on the pane's plane).
+    /// The point \[m\] (on the pane's plane).
     pub p: DVec3,
     /// Index into the scene's panes.
     pub pane: u32,

@@ -91,7 +91,7 @@ pub(super) fn padded((lo, hi): (DVec3, DVec3)) -> (DVec3, DVec3) {
     (lo - pad, hi + pad)
 }
 
-/// Bounds of everything the shape's tests can report [m].
+/// Bounds of everything the shape's tests can report \[m\].
 pub(super) fn prim_bounds(scene: &Scene, p: Prim) -> (DVec3, DVec3) {
     match p {
         Prim::Rect(i) => {
