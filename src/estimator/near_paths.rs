@@ -149,6 +149,12 @@ pub fn allocate(scene: &crate::scene::Scene, receivers: &Receivers, cfg: &RunCon
     let far_var: Vec<f64> = (0..n)
         .map(|j| ((sum2[j] - sum[j] * sum[j] / chains) / (chains - 1.0)).max(0.0))
         .collect();
+    // The direct light sampled per batch (area sources), per chain.
+    let mut sampled = vec![0.0; n];
+    if receivers.has_sampled_direct() {
+        receivers.sampled_direct(scene, PILOT_KEY, 0, PILOT_CHAINS, &mut sampled);
+        sampled.iter_mut().for_each(|s| *s /= chains);
+    }
     // The near part: each receiver's paths on streams of its own, as sums
     // of the values, their squares and the rays, over paths `s0..s1`.
     let paths = |j: usize, s0: u64, s1: u64| -> [f64; 3] {
@@ -200,7 +206,7 @@ pub fn allocate(scene: &crate::scene::Scene, receivers: &Receivers, cfg: &RunCon
         // Relative to each receiver's E (the pilot's, direct included).
         let direct = receivers.direct();
         let e: Vec<f64> = (0..n)
-            .map(|j| (direct[j] + far_mean[j] + stats[j].0).abs())
+            .map(|j| (direct[j] + sampled[j] + far_mean[j] + stats[j].0).abs())
             .collect();
         let e_floor = 1e-9 * e.iter().cloned().fold(0.0, f64::max);
         let rel = |v: f64, j: usize| {
