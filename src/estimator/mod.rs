@@ -1174,14 +1174,15 @@ impl Receivers {
 
     /// Each receiver with a near part gets its own number of paths, chosen
     /// by a fixed pilot for the least RMS relative error per unit of work
-    /// ([`near_paths`]); without a near part, unchanged. Returns the pilot's
-    /// measures too.
+    /// ([`near_paths`]); without a near part, or where the pilot would
+    /// cost too much ([`near_paths::affordable`]), unchanged. Returns the
+    /// pilot's measures too (empty when none ran).
     pub fn with_allocated_near_paths(
         mut self,
         scene: &Scene,
         cfg: &crate::run::RunConfig,
     ) -> (Self, near_paths::Allocation) {
-        if self.near_paths == 0 {
+        if self.near_paths == 0 || !near_paths::affordable(self.total_len) {
             return (self, near_paths::Allocation::default());
         }
         let alloc = near_paths::allocate(scene, &self, cfg);

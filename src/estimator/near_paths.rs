@@ -88,6 +88,20 @@ const PILOT_KEY: u64 = 0x4e45_4152_5041_5448;
 const POOL_KEY: u64 = PILOT_KEY ^ 0x706f_6f6c;
 const PATH_KEY: u64 = PILOT_KEY ^ 0x7061_7468;
 
+/// Most receiver scores the pilot's chains may take (their count times the
+/// receivers' list entries, [`Receivers::accumulator_len`]), about a
+/// second of one thread; above it the counts stay fixed. The pilot's far
+/// part scores every entry (all of them are needed for `A`), so its cost
+/// grows with the points: in the office, 100,000 work-plane points (1.5
+/// million entries) took 5.4 s more set-up with the pilot (17.4 against
+/// 12.0 s for a minimal run), 1,000,000 would take minutes.
+pub const PILOT_SCORES: usize = 1 << 27;
+
+/// Whether the pilot fits [`PILOT_SCORES`] for `entries` list entries.
+pub fn affordable(entries: usize) -> bool {
+    (PILOT_CHAINS as usize).saturating_mul(entries) <= PILOT_SCORES
+}
+
 /// What the pilot measured and the counts it chose.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Allocation {
@@ -383,6 +397,13 @@ mod tests {
                 "{c} {a:?} {b:?} {cost:?}: {p:?} {best} vs {least}"
             );
         }
+    }
+
+    /// The pilot's budget: up to `PILOT_SCORES / PILOT_CHAINS` entries.
+    #[test]
+    fn the_pilot_runs_within_its_budget_only() {
+        let most = PILOT_SCORES / PILOT_CHAINS as usize;
+        assert!(affordable(most) && !affordable(most + 1) && !affordable(usize::MAX));
     }
 
     /// Receivers without a near part get 0, empty near parts the floor
