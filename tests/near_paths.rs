@@ -206,3 +206,38 @@ fn the_command_line_takes_auto_or_a_count() {
         "{err}"
     );
 }
+
+/// A command that owns its receivers sets the split on them in place
+/// (`local::prepare`, one set of receivers in memory rather than two): the
+/// run gives the same bits as the estimator setting it on its own copy.
+#[test]
+fn receivers_prepared_in_place_give_the_same_bits() {
+    let heights = [1e-3, 0.03, 0.25];
+    let (_, case, _) = setup(&heights);
+    let pts: Vec<_> = heights
+        .iter()
+        .map(|&z| (DVec3::new(0.0, 0.0, z), -DVec3::Z))
+        .collect();
+    let rec = Receivers::new(&case.scene, &pts).unwrap();
+    let cfg = RunConfig {
+        near: (0.05, 16),
+        near_auto: false,
+        ..chains_cfg(65_536, 4, 0)
+    };
+    let copy = run(&case.scene, &rec, &cfg, &mut |_| true);
+    let mut own = rec.clone();
+    lumest::estimator::local::prepare(&case.scene, &mut own, &cfg);
+    assert!(own.near_prepared() && own.near_field().0 > 0);
+    assert!(own.near_paths_at(1) > 16, "the counts are allocated too");
+    let prepared = run(&case.scene, &own, &cfg, &mut |_| true);
+    for j in 0..pts.len() {
+        assert_eq!(
+            copy.tallies.estimated[j].mean().to_bits(),
+            prepared.tallies.estimated[j].mean().to_bits()
+        );
+        assert_eq!(
+            copy.tallies.estimated[j].std_error().to_bits(),
+            prepared.tallies.estimated[j].std_error().to_bits()
+        );
+    }
+}

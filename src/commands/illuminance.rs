@@ -1092,6 +1092,11 @@ pub(crate) fn measure_full(
         Some(path) => super::run_state::resume(path, &scene, &job, &cfg, estimator)?,
         None => cfg,
     };
+    // The near/far split set on the job's own receivers (the estimator
+    // would set it on a copy, holding two sets).
+    if estimator == EstimatorKind::Local {
+        crate::estimator::local::prepare(&scene, &mut job.receivers, &cfg);
+    }
     // Checkpoints: every --checkpoint-every seconds to --checkpoint, and at
     // an interrupt (there, or next to the first output) when the run has a
     // fixed number of chains.

@@ -95,7 +95,7 @@ pub fn shard_state(
     );
     let chains = cfg.stop.chains.unwrap_or(0);
     let scene = crate::scene::load(&a.scene)?;
-    let job = super::illuminance::Job::new(&scene, Some(&a.points), None)?;
+    let mut job = super::illuminance::Job::new(&scene, Some(&a.points), None)?;
     let table = job.points.as_ref().context("no points")?;
     super::illuminance::reserved_point_columns(table, cfg.orders, &a.points)?;
     cfg.shard = Some((i, m));
@@ -106,6 +106,9 @@ pub fn shard_state(
         a.scene.display(),
         scene.summary()
     ));
+    if a.estimator == EstimatorKind::Local {
+        crate::estimator::local::prepare(&scene, &mut job.receivers, &cfg);
+    }
     let r = run_job(&scene, &job, &cfg, a.estimator, a.run.quiet, None);
     anyhow::ensure!(
         !crate::io::interrupt::interrupted(),

@@ -24,32 +24,50 @@ pub const MIN_DEFAULT_BATCH: u64 = 4096;
 /// Run the local estimator on `receivers` and tally. `observe` is called
 /// after every folded batch and may return `false` to stop early (the
 /// batches folded so far are kept). The near/far split of `cfg.near` /
-/// `cfg.near_auto` is applied unless `receivers` already carry one.
+/// `cfg.near_auto` / `cfg.near_paths_auto` is applied to a copy ([`prepare`])
+/// unless `receivers` already carry one or were prepared.
 pub fn run(
     scene: &Scene,
     receivers: &Receivers,
     cfg: &RunConfig,
     observe: &mut dyn FnMut(&Progress) -> bool,
 ) -> RunResult {
-    // The near part's backward paths cannot reach a light at infinity: such
-    // scenes run the plain local estimate (the `near` check flags receivers
-    // that would need the split; the command line refuses `--near-radius`).
-    let wanted = cfg.near.1 > 0
-        && (cfg.near.0 > 0.0 || cfg.near_auto)
-        && !scene.has_directional()
-        && !scene.has_panes();
-    if wanted && receivers.near_field().0 == 0 {
-        let mut near = if cfg.near.0 > 0.0 {
-            receivers.clone().with_near_field(cfg.near.0, cfg.near.1)
-        } else {
-            receivers.clone().with_auto_near_field(scene, cfg.near.1)
-        };
-        if cfg.near_paths_auto {
-            near = near.with_allocated_near_paths(scene, cfg).0;
-        }
+    if wants_split(scene, cfg) && receivers.near_field().0 == 0 && !receivers.near_prepared() {
+        let mut near = receivers.clone();
+        prepare(scene, &mut near, cfg);
         return drive(&LocalWork::new(scene, &near), cfg, observe);
     }
     drive(&LocalWork::new(scene, receivers), cfg, observe)
+}
+
+/// Whether `cfg` asks for the near/far split in `scene`. The near part's
+/// backward paths cannot reach a light at infinity: such scenes run the
+/// plain local estimate (the `near` check flags receivers that would need
+/// the split; the command line refuses `--near-radius`).
+fn wants_split(scene: &Scene, cfg: &RunConfig) -> bool {
+    cfg.near.1 > 0
+        && (cfg.near.0 > 0.0 || cfg.near_auto)
+        && !scene.has_directional()
+        && !scene.has_panes()
+}
+
+/// Set the near/far split `cfg` asks for on `receivers` in place, as
+/// [`run`] would on a copy: a command that owns its receivers calls this
+/// first and so holds one set of them, not two (the office at 100,000
+/// points: 1.14 GB against 0.65 GB without the split). Receivers that
+/// already carry a split are left as they are.
+pub fn prepare(scene: &Scene, receivers: &mut Receivers, cfg: &RunConfig) {
+    if wants_split(scene, cfg) && receivers.near_field().0 == 0 {
+        if cfg.near.0 > 0.0 {
+            receivers.set_near_field(cfg.near.0, cfg.near.1);
+        } else {
+            receivers.set_auto_near_field(scene, cfg.near.1);
+        }
+        if cfg.near_paths_auto {
+            receivers.set_allocated_near_paths(scene, cfg);
+        }
+    }
+    receivers.near_prepared = true;
 }
 
 /// The local estimator as batch work.

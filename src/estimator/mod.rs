@@ -437,6 +437,8 @@ pub struct Receivers {
     /// Per receiver: its own paths for every 256 chains
     /// ([`Self::with_allocated_near_paths`]); empty: `near_paths` each.
     near_per: Vec<u32>,
+    /// Set by [`local::prepare`].
+    near_prepared: bool,
     /// Radius \[m\] of each receiver's neighbourhood that holds almost all of
     /// its view (0: none, or not an illuminance point).
     view_r: Vec<f64>,
@@ -914,6 +916,7 @@ impl Receivers {
         let mut r = Self {
             near_paths: 0,
             near_per: Vec::new(),
+            near_prepared: false,
             near_r: vec![0.0; receivers.len()],
             slots: Vec::new(),
             view_r,
@@ -1064,13 +1067,19 @@ impl Receivers {
     /// neither the chains (they never come near the point) nor the paths
     /// (they never come near the sources) reach alone.
     pub fn with_near_field(mut self, radius: f64, paths: u32) -> Self {
+        self.set_near_field(radius, paths);
+        self
+    }
+
+    /// [`Self::with_near_field`] in place.
+    pub fn set_near_field(&mut self, radius: f64, paths: u32) {
         self.slots.clear();
         let r = vec![radius; self.all.len()];
-        self.with_near_radii(r, paths)
+        self.set_near_radii(r, paths);
     }
 
     /// The split with radius `radii[j]` \[m\] at receiver `j` (0: plain).
-    fn with_near_radii(mut self, radii: Vec<f64>, paths: u32) -> Self {
+    fn set_near_radii(&mut self, radii: Vec<f64>, paths: u32) {
         let on = paths > 0 && radii.iter().any(|&r| r > 0.0);
         self.near_paths = if on { paths } else { 0 };
         self.near_per.clear();
@@ -1081,7 +1090,6 @@ impl Receivers {
             }
         }
         self.refresh_watch();
-        self
     }
 
     /// The split where it is needed, with a radius per receiver
@@ -1104,6 +1112,12 @@ impl Receivers {
     /// their near paths now give R 0.3-0.5 % at 1,048,576 chains in 3 s,
     /// where the local estimate needed 16,777,216 chains and 20 s.
     pub fn with_auto_near_field(mut self, scene: &Scene, paths: u32) -> Self {
+        self.set_auto_near_field(scene, paths);
+        self
+    }
+
+    /// [`Self::with_auto_near_field`] in place.
+    pub fn set_auto_near_field(&mut self, scene: &Scene, paths: u32) {
         use rayon::prelude::*;
         let mut radii = self.need_r.clone();
         // The candidates' probes in parallel (each up to 32 x 26 rays); the
@@ -1129,7 +1143,7 @@ impl Receivers {
                 (j, table)
             })
             .collect();
-        self.with_near_radii(radii, paths)
+        self.set_near_radii(radii, paths);
     }
 
     /// How receiver `j`'s near paths are traced: the table of grazing
@@ -1182,12 +1196,28 @@ impl Receivers {
         scene: &Scene,
         cfg: &crate::run::RunConfig,
     ) -> (Self, near_paths::Allocation) {
-        if self.near_paths == 0 || !near_paths::affordable(self.total_len) {
-            return (self, near_paths::Allocation::default());
-        }
-        let alloc = near_paths::allocate(scene, &self, cfg);
-        self.near_per = alloc.paths.clone();
+        let alloc = self.set_allocated_near_paths(scene, cfg);
         (self, alloc)
+    }
+
+    /// [`Self::with_allocated_near_paths`] in place.
+    pub fn set_allocated_near_paths(
+        &mut self,
+        scene: &Scene,
+        cfg: &crate::run::RunConfig,
+    ) -> near_paths::Allocation {
+        if self.near_paths == 0 || !near_paths::affordable(self.total_len) {
+            return near_paths::Allocation::default();
+        }
+        let alloc = near_paths::allocate(scene, self, cfg);
+        self.near_per = alloc.paths.clone();
+        alloc
+    }
+
+    /// Whether the run's near/far split was set on these receivers by
+    /// [`local::prepare`] (so that [`local::run`] takes them as they are).
+    pub fn near_prepared(&self) -> bool {
+        self.near_prepared
     }
 
     /// Number of receivers a collision on surface `s` scores into.
