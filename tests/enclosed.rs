@@ -171,3 +171,71 @@ fn a_point_inside_a_closed_two_sided_mesh_is_enclosed_unless_a_light_is_inside()
     assert!(!rec.enclosed(0));
     assert!(rec.direct()[0] > 0.0);
 }
+
+/// A room that is itself a closed mesh (a 4 x 3 x 3 m box, both sides
+/// reflecting) lit by a sphere light whose centre lies 2 cm above the
+/// ceiling and whose ball reaches 3 cm below it (a reviewer's case): the
+/// light is partly inside, so the room holds light and its points are not
+/// enclosed (a rule that looked at the centre alone flagged a point lit at
+/// 48.7 lx). With a point light above the ceiling instead, no light gets
+/// in: the point is enclosed, and indeed unlit.
+#[test]
+fn a_light_partly_inside_a_closed_mesh_lights_it() {
+    let go = |light: &str, tag: &str| {
+        let dir =
+            std::env::temp_dir().join(format!("lumest-enclosed-{}-{tag}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut obj = String::new();
+        for k in 0..8 {
+            let (x, y, z) = ((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64);
+            obj += &format!("v {} {} {}\n", 4.0 * x, 3.0 * y, 3.0 * z);
+        }
+        for f in [
+            [1, 3, 2],
+            [2, 3, 4],
+            [5, 6, 7],
+            [6, 8, 7],
+            [1, 2, 5],
+            [2, 6, 5],
+            [3, 7, 4],
+            [4, 7, 8],
+            [1, 5, 3],
+            [3, 5, 7],
+            [2, 4, 6],
+            [4, 8, 6],
+        ] {
+            obj += &format!("f {} {} {}\n", f[0], f[1], f[2]);
+        }
+        std::fs::write(dir.join("room.obj"), obj).unwrap();
+        let toml = format!(
+            "[[surface]]\nname = \"room\"\ntype = \"mesh\"\nfile = \"room.obj\"\n\
+             material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\n[[light]]\n{light}"
+        );
+        let path = dir.join("room.toml");
+        std::fs::write(&path, &toml).unwrap();
+        let scene = lumest::scene::load(&path).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        let pts = [(DVec3::new(2.0, 1.5, 0.8), DVec3::Z)];
+        let rec = Receivers::new(&scene, &pts).unwrap();
+        let r = run(&scene, &rec, &common::chains_cfg(8_192, 1, 2), &mut |_| {
+            true
+        });
+        (rec.enclosed(0), r.direct[0] + r.tallies.estimated[0].mean())
+    };
+    let (enclosed, e) = go(
+        "type = \"sphere\"\ncenter = [2.0, 1.5, 3.02]\nradius = 0.05\nintensity = 100.0\n",
+        "sphere",
+    );
+    assert!(
+        !enclosed && e > 1.0,
+        "sphere light poking in: enclosed {enclosed}, E {e}"
+    );
+    let (enclosed, e) = go(
+        "type = \"point\"\nposition = [2.0, 1.5, 3.5]\nintensity = 100.0\n",
+        "point",
+    );
+    assert!(
+        enclosed && e == 0.0,
+        "point light above: enclosed {enclosed}, E {e}"
+    );
+}

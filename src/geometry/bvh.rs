@@ -505,6 +505,27 @@ impl TriangleBvh {
         best.map(|pos| (best_t, ids[pos], self.tris[pos]))
     }
 
+    /// Call `f(t, corners)` for every triangle the ray meets with `t` in
+    /// `(t_min, t_max)`, each once (including triangles met at the same
+    /// distance), in no particular order.
+    pub fn for_each_hit(
+        &self,
+        q: &RayQuery,
+        t_min: f64,
+        t_max: f64,
+        mut f: impl FnMut(f64, &[DVec3; 3]),
+    ) {
+        self.tree.any(q, t_min, t_max, |pos| {
+            if let Some(t) = q.triangle(&self.tris[pos])
+                && t > t_min
+                && t < t_max
+            {
+                f(t, &self.tris[pos]);
+            }
+            false
+        });
+    }
+
     /// Whether any triangle but `skip` is hit with `t` in `(t_min, t_max)`.
     pub fn any_hit(&self, q: &RayQuery, t_min: f64, t_max: f64, skip: Option<u32>) -> bool {
         let skip = skip.unwrap_or(u32::MAX);

@@ -526,6 +526,25 @@ impl Mesh {
         Some((t, (p[1] - p[0]).cross(p[2] - p[0]).normalize(), tri))
     }
 
+    /// The signed crossings of the ray `o + t d` (unit `d`), `t > t_min`,
+    /// with the mesh: +1 for each triangle it leaves through the front of
+    /// (the side the counter-clockwise winding faces), -1 for each it
+    /// enters through the front; every triangle met counts, also two met
+    /// at the same distance.
+    pub fn signed_crossings(&self, o: DVec3, d: DVec3, t_min: f64) -> i64 {
+        let q = RayQuery::new(o, d);
+        let mut n = 0i64;
+        self.bvh.for_each_hit(&q, t_min, f64::INFINITY, |_, p| {
+            let facing = (p[1] - p[0]).cross(p[2] - p[0]).dot(d);
+            n += match facing.partial_cmp(&0.0) {
+                Some(std::cmp::Ordering::Greater) => 1,
+                Some(std::cmp::Ordering::Less) => -1,
+                _ => 0,
+            };
+        });
+        n
+    }
+
     /// Whether the ray `o + t d` (unit `d`) hits any triangle but `skip`
     /// with `t` \[m\] in `(t_min, t_max)` (shadow ray; stops at the first hit
     /// found).

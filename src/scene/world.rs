@@ -1417,21 +1417,29 @@ impl Scene {
     }
 
     /// The meshes that are closed and hold no light: every light with a
-    /// position lies clearly outside ([`crate::geometry::mesh_parity`]; one
-    /// on the surface, or where the parity is unclear, counts as held).
-    /// Lights at infinity lie outside every mesh. No light reaches a point
-    /// inside such a mesh, whichever sides reflect (the mesh is opaque).
+    /// position lies clearly outside ([`crate::geometry::mesh_parity`]).
+    /// A point-like light counts by its position; a sphere light by its
+    /// centre, and only when the ball keeps clear of the mesh's bounds; a
+    /// light with any other extent (an area source, a luminaire emitting
+    /// from its luminous shape) counts as held, as may be part of it (a
+    /// light on the surface, or where the parity is unclear, counts as held
+    /// too). Lights at infinity lie outside every mesh. No light reaches a
+    /// point inside such a mesh, whichever sides reflect (it is opaque).
     pub fn lightless_closed_meshes(&self) -> Vec<u32> {
         use crate::geometry::mesh_parity::{Side, side};
+        let outside = |m: &crate::geometry::mesh::Mesh, l: &Light| match l {
+            _ if l.is_directional() => true,
+            Light::Sphere { c, r, .. } => {
+                let (lo, hi) = m.bounds();
+                (lo - *c).max(*c - hi).max_element() > *r && side(m, *c) == Side::Outside
+            }
+            _ if l.is_point_like() => side(m, l.position()) == Side::Outside,
+            _ => false,
+        };
         (0..self.meshes.len() as u32)
             .filter(|&k| {
                 let m = &self.meshes[k as usize].0;
-                m.is_closed()
-                    && self
-                        .lights
-                        .iter()
-                        .filter(|l| !l.is_directional())
-                        .all(|l| side(m, l.position()) == Side::Outside)
+                m.is_closed() && self.lights.iter().all(|l| outside(m, l))
             })
             .collect()
     }
