@@ -306,14 +306,17 @@ fn least_counts(c: f64, a: &[f64], b: &[f64], cost: &[f64], on: &[bool]) -> Vec<
         })
         .collect();
     let q_at = |k: f64, rj: f64| (k * rj).clamp(lo, hi);
-    let phi = |k: f64| {
+    // The sign of phi(k) = k^2 V - T at k = exp(ln_k), compared in logs
+    // (k^2 overflows where every r_j is below 1e-154).
+    let below = |ln_k: f64| {
+        let k = ln_k.exp();
         let (mut v, mut t) = (a_sum, c);
         for &(j, rj) in &r {
             let q = q_at(k, rj);
             v += clean(b[j]) / q;
             t += q * clean(cost[j]);
         }
-        k * k * v - t
+        2.0 * ln_k + v.ln() < t.ln()
     };
     // Every count is at `lo` below k = lo / max r and at `hi` above
     // k = hi / min r (over r > 0): the root lies between (or beyond, where
@@ -324,7 +327,7 @@ fn least_counts(c: f64, a: &[f64], b: &[f64], cost: &[f64], on: &[bool]) -> Vec<
         let (mut l, mut h) = ((0.5 * lo / r_max).ln(), (2.0 * hi / r_min).ln());
         for _ in 0..200 {
             let mid = 0.5 * (l + h);
-            if phi(mid.exp()) < 0.0 {
+            if below(mid) {
                 l = mid;
             } else {
                 h = mid;
@@ -404,6 +407,15 @@ mod tests {
     fn the_pilot_runs_within_its_budget_only() {
         let most = PILOT_SCORES / PILOT_CHAINS as usize;
         assert!(affordable(most) && !affordable(most + 1) && !affordable(usize::MAX));
+    }
+
+    /// Near parts of subnormal variance (a reviewer's case: k^2 overflowed
+    /// and gave 34 paths each where the least objective takes 256).
+    #[test]
+    fn tiny_variances_do_not_overflow() {
+        let (c, a, b, cost) = (1.0, [0.0, 0.0], [1e-310, 1e-310], [1.0, 1.0]);
+        let p = least_counts(c, &a, &b, &cost, &[true, true]);
+        assert_eq!(p, [MAX_PATHS, MAX_PATHS]);
     }
 
     /// Receivers without a near part get 0, empty near parts the floor
