@@ -895,8 +895,11 @@ impl Receivers {
         // even where both of the mesh's sides reflect (its probes then meet
         // no black side): it can get no light at all.
         let lightless = scene.lightless_closed_meshes();
+        // Per receiver, in parallel (collected in order: the same whatever
+        // the thread count).
+        use rayon::prelude::*;
         let (view_r, enclosed): (Vec<f64>, Vec<bool>) = receivers
-            .iter()
+            .par_iter()
             .zip(&frames)
             .map(|(rec, frame)| {
                 let (r, enclosed) = match rec.response {
@@ -909,7 +912,7 @@ impl Receivers {
             })
             .unzip();
         let need_r = receivers
-            .iter()
+            .par_iter()
             .zip(&frames)
             .map(|(rec, frame)| near_need(scene, rec.p, frame, rec.solid_kind().is_some()))
             .collect();
