@@ -96,18 +96,16 @@ fn a_light_sealed_inside_a_solid_is_warned_about() {
     assert!(!free.sealed(0));
 }
 
-/// A desk as a closed mesh (the unit cube scaled to 1 x 1 x 0.75 m, both
-/// sides reflecting, the mesh default), in the room with `light`; the
-/// scene file and its OBJ in a fresh folder.
-fn mesh_desk_room(light: [f64; 3], tag: &str) -> lumest::scene::Scene {
-    let dir = std::env::temp_dir().join(format!("lumest-enclosed-{}-{tag}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+/// The box `[lo, hi]` \[m\] as OBJ text: a closed mesh with outward,
+/// counter-clockwise faces.
+fn box_obj(lo: DVec3, hi: DVec3) -> String {
     let mut obj = String::new();
     for k in 0..8 {
-        let (x, y, z) = ((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64);
-        obj += &format!("v {} {} {}\n", 1.0 + x, 1.0 + y, 0.75 * z);
+        let c = DVec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64);
+        let v = lo + c * (hi - lo);
+        obj += &format!("v {} {} {}\n", v.x, v.y, v.z);
     }
-    // Outward, counter-clockwise faces (1-based).
+    // (1-based.)
     for f in [
         [1, 3, 2],
         [2, 3, 4],
@@ -124,6 +122,16 @@ fn mesh_desk_room(light: [f64; 3], tag: &str) -> lumest::scene::Scene {
     ] {
         obj += &format!("f {} {} {}\n", f[0], f[1], f[2]);
     }
+    obj
+}
+
+/// A desk as a closed mesh (the unit cube scaled to 1 x 1 x 0.75 m, both
+/// sides reflecting, the mesh default), in the room with `light`; the
+/// scene file and its OBJ in a fresh folder.
+fn mesh_desk_room(light: [f64; 3], tag: &str) -> lumest::scene::Scene {
+    let dir = std::env::temp_dir().join(format!("lumest-enclosed-{}-{tag}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = box_obj(DVec3::new(1.0, 1.0, 0.0), DVec3::new(2.0, 2.0, 0.75));
     std::fs::write(dir.join("desk.obj"), obj).unwrap();
     let room = ROOM.split("[[surface]]\nname = \"desk\"").next().unwrap();
     let toml = format!(
@@ -185,27 +193,7 @@ fn a_light_partly_inside_a_closed_mesh_lights_it() {
         let dir =
             std::env::temp_dir().join(format!("lumest-enclosed-{}-{tag}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let mut obj = String::new();
-        for k in 0..8 {
-            let (x, y, z) = ((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64);
-            obj += &format!("v {} {} {}\n", 4.0 * x, 3.0 * y, 3.0 * z);
-        }
-        for f in [
-            [1, 3, 2],
-            [2, 3, 4],
-            [5, 6, 7],
-            [6, 8, 7],
-            [1, 2, 5],
-            [2, 6, 5],
-            [3, 7, 4],
-            [4, 7, 8],
-            [1, 5, 3],
-            [3, 5, 7],
-            [2, 4, 6],
-            [4, 8, 6],
-        ] {
-            obj += &format!("f {} {} {}\n", f[0], f[1], f[2]);
-        }
+        let obj = box_obj(DVec3::ZERO, DVec3::new(4.0, 3.0, 3.0));
         std::fs::write(dir.join("room.obj"), obj).unwrap();
         let toml = format!(
             "[[surface]]\nname = \"room\"\ntype = \"mesh\"\nfile = \"room.obj\"\n\

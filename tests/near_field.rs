@@ -6,8 +6,7 @@
 //! backward paths; it agrees with the exact value and passes the checks.
 
 mod common;
-use common::chains_cfg;
-use gauss_quad::legendre::GaussLegendre;
+use common::{chains_cfg, from_floor};
 use glam::DVec3;
 use lumest::cases::sobolev::sobolev_case;
 use lumest::estimator::Receivers;
@@ -15,24 +14,6 @@ use lumest::estimator::local::run;
 use lumest::reference::Sobolev;
 use lumest::run::RunConfig;
 use lumest::tally::sidak_bound;
-
-/// Reflected illuminance \[lx\] at height `dz` above the source's foot on the
-/// floor (reflectance `rho`, illuminance `e(s)`), facing it: a 1-D integral
-/// over the distance `s` with panels graded at the scale `dz`.
-fn from_floor(rho: f64, dz: f64, e: impl Fn(f64) -> f64) -> f64 {
-    let rule = GaussLegendre::new(std::num::NonZeroUsize::new(30).unwrap());
-    let f = |s: f64| rho * e(s) * dz * dz / (s * s + dz * dz).powi(2) * 2.0 * s;
-    let mut edges = vec![0.0];
-    let mut x = dz / 64.0;
-    while x < 64.0 {
-        edges.push(x);
-        x *= 2.0;
-    }
-    edges
-        .windows(2)
-        .map(|w| rule.integrate(w[0], w[1], f))
-        .sum()
-}
 
 #[test]
 fn near_field_split_tames_the_singular_kernel_next_to_a_lit_floor() {

@@ -5,8 +5,7 @@
 //! them (the paths' weights follow each receiver's own count).
 
 mod common;
-use common::chains_cfg;
-use gauss_quad::legendre::GaussLegendre;
+use common::{chains_cfg, from_floor};
 use glam::DVec3;
 use lumest::cases::sobolev::sobolev_case;
 use lumest::estimator::Receivers;
@@ -15,25 +14,6 @@ use lumest::estimator::near_paths::{Allocation, MAX_PATHS, MIN_PATHS};
 use lumest::reference::Sobolev;
 use lumest::run::RunConfig;
 use lumest::tally::sidak_bound;
-
-/// Reflected illuminance \[lx\] at height `dz` above the source's foot on the
-/// floor (reflectance `rho`, illuminance `e(s)`), facing it: a 1-D integral
-/// over the distance `s` with panels graded at the scale `dz` (as in
-/// `tests/near_field.rs`).
-fn from_floor(rho: f64, dz: f64, e: impl Fn(f64) -> f64) -> f64 {
-    let rule = GaussLegendre::new(std::num::NonZeroUsize::new(30).unwrap());
-    let f = |s: f64| rho * e(s) * dz * dz / (s * s + dz * dz).powi(2) * 2.0 * s;
-    let mut edges = vec![0.0];
-    let mut x = dz / 64.0;
-    while x < 64.0 {
-        edges.push(x);
-        x *= 2.0;
-    }
-    edges
-        .windows(2)
-        .map(|w| rule.integrate(w[0], w[1], f))
-        .sum()
-}
 
 /// Two planes (h = 0.5, rho = 0.5); points facing the floor at these
 /// heights above the source's foot, every one with a 5 cm split.

@@ -196,7 +196,7 @@ fn ray_hits(q: DVec3, d: DVec3, t: &[DVec3; 3]) -> bool {
 /// The cube `at + s [0, 1]^3` as a closed mesh: outward, counter-clockwise
 /// faces (the tests' simplest closed solid).
 #[cfg(test)]
-fn test_cube(s: f64, at: DVec3) -> crate::geometry::mesh::Mesh {
+pub(crate) fn test_cube(s: f64, at: DVec3) -> crate::geometry::mesh::Mesh {
     let v: Vec<DVec3> = (0..8)
         .map(|k| at + s * DVec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64))
         .collect();
@@ -205,7 +205,7 @@ fn test_cube(s: f64, at: DVec3) -> crate::geometry::mesh::Mesh {
 
 /// The faces of [`test_cube`].
 #[cfg(test)]
-const TEST_CUBE_FACES: [[u32; 3]; 12] = [
+pub(crate) const TEST_CUBE_FACES: [[u32; 3]; 12] = [
     [0, 2, 1],
     [1, 2, 3],
     [4, 5, 6],

@@ -103,25 +103,17 @@ mod tests {
     /// The unit cube `[0, 1]^3` (outward, counter-clockwise faces), and an
     /// open box (its top left out).
     fn cube(open: bool) -> Mesh {
-        let v: Vec<DVec3> = (0..8)
-            .map(|k| DVec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64))
-            .collect();
-        let mut f = vec![
-            [0, 2, 1],
-            [1, 2, 3],
-            [0, 1, 4],
-            [1, 5, 4],
-            [2, 6, 3],
-            [3, 6, 7],
-            [0, 4, 2],
-            [2, 4, 6],
-            [1, 3, 5],
-            [3, 7, 5],
-        ];
+        use crate::geometry::mesh_core::{TEST_CUBE_FACES, test_cube};
         if !open {
-            f.extend([[4, 5, 6], [5, 7, 6]]);
+            return test_cube(1.0, DVec3::ZERO);
         }
-        Mesh::from_triangles(v, f).unwrap()
+        let top = [[4, 5, 6], [5, 7, 6]];
+        let faces = TEST_CUBE_FACES
+            .iter()
+            .filter(|f| !top.contains(f))
+            .copied()
+            .collect();
+        Mesh::from_triangles(test_cube(1.0, DVec3::ZERO).vertices().to_vec(), faces).unwrap()
     }
 
     #[test]

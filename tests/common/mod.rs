@@ -100,3 +100,21 @@ pub fn chi2_pvalue(observed: &[f64], expected: &[f64]) -> (f64, f64, usize) {
     let p = ChiSquared::new(dof as f64).unwrap().sf(stat);
     (p, stat, dof)
 }
+
+/// Reflected illuminance \[lx\] at height `dz` above the source's foot on the
+/// floor (reflectance `rho`, illuminance `e(s)`), facing it: a 1-D integral
+/// over the distance `s` with panels graded at the scale `dz`.
+pub fn from_floor(rho: f64, dz: f64, e: impl Fn(f64) -> f64) -> f64 {
+    let rule = gauss_quad::legendre::GaussLegendre::new(std::num::NonZeroUsize::new(30).unwrap());
+    let f = |s: f64| rho * e(s) * dz * dz / (s * s + dz * dz).powi(2) * 2.0 * s;
+    let mut edges = vec![0.0];
+    let mut x = dz / 64.0;
+    while x < 64.0 {
+        edges.push(x);
+        x *= 2.0;
+    }
+    edges
+        .windows(2)
+        .map(|w| rule.integrate(w[0], w[1], f))
+        .sum()
+}
