@@ -83,9 +83,11 @@ fn a_short_time_limit_still_gives_enough_batches() {
     assert_eq!(r.reason, lumest::run::StopReason::Time);
 }
 
-/// A `--rel-error` run that sizes its own batches (two pilot stages here)
-/// plans alike on any thread count, and its result is that of a
-/// `--chains` run of the planned batches at the planned size.
+/// A `--rel-error` shard run apart (here the whole run as shard 0 of 1),
+/// which cannot grow its batches with the others and so plans them from a
+/// pilot that sizes them (two pilot stages here), plans alike on any
+/// thread count, and its batches fold to a `--chains` run of the planned
+/// batches at the planned size.
 #[test]
 fn planned_batch_size_is_reproducible() {
     let p = (0.5, 0.5, 0.5, 0.5);
@@ -94,24 +96,35 @@ fn planned_batch_size_is_reproducible() {
         threads: t,
         stop: Stop {
             rel_error: Some(5e-4),
-            time: Some(120.0),
             ..Stop::default()
         },
+        shard: Some((0, 1)),
         ..RunConfig::default()
     };
     let (_, one) = sobolev_run(p, 4, 1.0, &cfg(1));
     let (_, three) = sobolev_run(p, 4, 1.0, &cfg(3));
     assert_eq!(one.reason, lumest::run::StopReason::RelError);
     let pilot = one.pilot.expect("a pilot");
-    assert_eq!(pilot.stages, 2, "{pilot:?}");
-    assert!(one.batch_size > 256 && one.tallies.batches() >= 32);
-    assert_eq!(bits(&one), bits(&three));
+    assert_eq!((pilot.stages, pilot.grown), (2, 0), "{pilot:?}");
+    assert!(one.batch_size > 256 && one.batches.len() >= 32);
     let fixed = RunConfig {
         batch_size: Some(one.batch_size),
         ..chains_cfg(one.chains, 11, 2)
     };
     let (_, again) = sobolev_run(p, 4, 1.0, &fixed);
-    assert_eq!(bits(&one), bits(&again));
+    let fold = |r: &lumest::run::RunResult| {
+        let mut t = lumest::run::Tallies::new(4, 0);
+        t.watched = again.tallies.watched.clone();
+        let folded = lumest::run::fold_batches(t, &r.direct, r.batch_size, &r.batches);
+        lumest::run::RunResult {
+            tallies: folded,
+            batches: Vec::new(),
+            ..r.clone()
+        }
+    };
+    assert_eq!(bits(&fold(&one)), bits(&fold(&three)));
+    assert_eq!(bits(&fold(&one)), bits(&again));
+    assert!(again.tallies.max_rel_error(&again.direct) <= 5e-4);
 }
 
 /// An `--rms-error` run over many points plans from its own first 32

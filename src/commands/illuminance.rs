@@ -404,7 +404,20 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
         } else {
             ("--rel-error", "max", max)
         };
-        let measured = if p.calibration > 0 {
+        let measured = if p.grown > 0 {
+            format!(
+                "\n{flag} {target:.3e}: no pilot; the run's {} batches grew in {} stage(s) to {} \
+                 chains each, each stage's own {what} R sizing the next{}",
+                p.batches,
+                p.grown,
+                p.batch_size,
+                if p.fall.is_finite() {
+                    format!(" (variance per chain fell like batch size^-{:.2})", p.fall)
+                } else {
+                    String::new()
+                },
+            )
+        } else if p.calibration > 0 {
             format!(
                 "\n{flag} {target:.3e}: the run's first {} batches of {} chains (sized by a pilot of \
                  {} chains on their own streams, {:.3} s) gave {what} R {:.3e} (margin {:.3} for {:.0} \
@@ -451,21 +464,30 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
             } else if max.is_nan() {
                 " (target MISSED: the error is not a number; see the flagged rows)".to_string()
             } else if r.reason == crate::run::StopReason::Time {
-                format!(
-                    " (target MISSED: stopped by {}; the {} planned batches need about {:.3e} s at \
-                     the pace of {}; the estimate and its error bar hold)",
-                    p.default_cap.map_or_else(
-                        || "--time".to_string(),
-                        |c| format!("the default time limit of {c:.0} s (no --time was given)")
-                    ),
-                    format_number(p.planned as f64),
-                    p.estimated_time,
-                    if p.calibration > 0 {
-                        "the run's first batches"
-                    } else {
-                        "the pilot"
-                    }
-                )
+                let by = p.default_cap.map_or_else(
+                    || "--time".to_string(),
+                    |c| format!("the default time limit of {c:.0} s (no --time was given)"),
+                );
+                if p.grown > 0 {
+                    // (As a power of ten: a tiny target's factor overflows.)
+                    format!(
+                        " (target MISSED: stopped by {by}; it needs about 10^{:.1} times the chains \
+                         traced; the estimate and its error bar hold)",
+                        2.0 * (max.log10() - target.log10())
+                    )
+                } else {
+                    format!(
+                        " (target MISSED: stopped by {by}; the {} planned batches need about {:.3e} \
+                         s at the pace of {}; the estimate and its error bar hold)",
+                        format_number(p.planned as f64),
+                        p.estimated_time,
+                        if p.calibration > 0 {
+                            "the run's first batches"
+                        } else {
+                            "the pilot"
+                        }
+                    )
+                }
             } else {
                 format!(
                     " (target MISSED by {:.1} %; the estimate and its error bar are still unbiased: \

@@ -1,9 +1,11 @@
 //! `mpirun -np R lumest illuminance ... --mpi`: the batches of a run over R
 //! MPI ranks. Rank r runs shard r/R ([`super::merge::shard_state`]: batches
-//! r, r + R, ...; with `--rel-error` every rank runs the same deterministic
-//! pilot and plans alike, and with an `--rms-error` planned on the run's
-//! own first 32 batches the ranks trace their shares of those and exchange
-//! them, [`crate::run::RunConfig::share`]), sends its state to rank 0, which folds all the
+//! r, r + R, ...; with `--rel-error` the ranks grow their own batches and
+//! exchange the parts at every stage, so that all measure all 32 and plan
+//! alike ([`crate::run::grow`]), and with an `--rms-error` planned on the
+//! run's own first 32 batches they trace their shares of those and
+//! exchange them, [`crate::run::RunConfig::share`]; where neither applies
+//! every rank runs the same deterministic pilot), sends its state to rank 0, which folds all the
 //! batches in index order ([`super::merge::merge_states`]) and writes
 //! `--out`: byte for byte what one process writes. Built only with the
 //! cargo feature `mpi` (the `mpi` crate over the system's MPI library).

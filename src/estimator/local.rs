@@ -5,7 +5,9 @@
 use super::Receivers;
 use crate::backward::{self, PathSetup, Pool};
 use crate::chain;
-use crate::run::{Batch, BatchWork, Checks, Progress, RunConfig, RunResult, cap_batch_size, drive};
+use crate::run::{
+    Batch, BatchWork, Checks, Part, Progress, RunConfig, RunResult, cap_batch_size, drive,
+};
 use crate::sampling::Philox4x32;
 use crate::sampling::owen::{MAX_POINTS, OwenSobol};
 use crate::sampling::qmc::{DigitalShift, Qmc, shifted_sobol_2d, shifted_sobol_34};
@@ -109,7 +111,158 @@ impl<'a> LocalWork<'a> {
     fn near_reach(&self, j: usize) -> bool {
         !self.reach.is_empty() && self.receivers.near_field().1[j] > 0.0
     }
+
+    /// Trace the `bs` chains `keys.lo .. keys.lo + bs` of batch `b`'s net
+    /// (all of a batch, [`BatchWork::run_batch`], or a part of one,
+    /// [`BatchWork::run_part`]) and their near paths and sampled direct
+    /// light; the sums over them.
+    fn trace_chains(
+        &self,
+        cfg: &RunConfig,
+        b: u64,
+        bs: u64,
+        keys: Keys,
+        buckets: usize,
+        acc: &mut [f64],
+    ) -> Batch {
+        let (scene, receivers) = (self.scene, self.receivers);
+        acc.fill(0.0);
+        let len = receivers.accumulator_len();
+        let mut collisions = 0u64;
+        let mut scores = 0u64;
+        // The net's shift comes from a stream no chain uses (chain indices < 2^63).
+        let mut srng = Philox4x32::new(cfg.seed, (1 << 63) | b);
+        let shift12 = DigitalShift([srng.next_u32(), srng.next_u32()]);
+        let shift34 = DigitalShift([srng.next_u32(), srng.next_u32()]);
+        // An Owen scramble from the same stream, afresh for every
+        // `MAX_POINTS` chains of the batch.
+        let mut owen = OwenSobol::<{ chain::LEADING_DIMS }>::random(&mut srng);
+        // A part that starts past the first net takes its net's scramble.
+        for _ in 0..keys.lo / u64::from(MAX_POINTS) {
+            owen = OwenSobol::random(&mut srng);
+        }
+        // The recursive near/far split joins the near part's path vertices to
+        // the batch's collisions (its own stream for the reservoir choices).
+        const POOL_KEY: u64 = 0x706f_6f6c; // "pool"
+        let (paths, radii) = receivers.near_field();
+        let mut pool =
+            (paths > 0).then(|| Pool::new(bs, Philox4x32::new(keys.part_seed ^ POOL_KEY, b)));
+        let mut held = receivers.new_hold();
+        for i in keys.lo..keys.lo + bs {
+            let c = keys.chain_base + i;
+            let mut rng = Philox4x32::new(keys.chain_seed, c);
+            let i = i as u32;
+            let u_first: chain::LeadingUniforms = match cfg.qmc {
+                Qmc::Off => [rng.next_2d(), rng.next_2d()].into(),
+                Qmc::Shift => [
+                    shifted_sobol_2d(i, shift12, rng.next_2d()),
+                    shifted_sobol_34(i, shift34, rng.next_2d()),
+                ]
+                .into(),
+                Qmc::Owen => {
+                    if u64::from(i) > keys.lo && i.is_multiple_of(MAX_POINTS) {
+                        owen = OwenSobol::random(&mut srng);
+                    }
+                    let i = i % MAX_POINTS;
+                    chain::LeadingUniforms::from_point(|d| owen.unit(i, d, rng.next_u32()))
+                }
+            };
+            collisions += u64::from(chain::trace(scene, &mut rng, &cfg.chain, u_first, |col| {
+                let k = bucket(col.order, cfg.orders);
+                if let Some(p) = pool.as_mut() {
+                    p.offer(col);
+                }
+                // Every `SPARSE_STRIDE`-th chain also counts where it scores from.
+                let counting = c.is_multiple_of(SPARSE_STRIDE);
+                scores += receivers.score_held(scene, col, k, acc, counting, &mut held) as u64;
+            }));
+        }
+        receivers.flush_held(&mut held, acc);
+        let n = receivers.len();
+        let mut sums = vec![0.0; buckets * n];
+        for k in 0..buckets {
+            receivers.reduce(&acc[k * len..(k + 1) * len], &mut sums[k * n..(k + 1) * n]);
+        }
+        let mut near_hits = vec![0.0; n];
+        receivers.reduce(&acc[buckets * len..], &mut near_hits);
+        let mut near_hits: Vec<u64> = near_hits.into_iter().map(|c| c as u64).collect();
+        // With a near part: its paths' exposed and reached vertices after
+        // the collision counts (see `Batch::near_hits`).
+        let reach_counts = !self.reach.is_empty();
+        if reach_counts {
+            near_hits.resize(3 * n, 0);
+        }
+        // Near part of the near/far split: backward paths whose first surface
+        // lies within the radius, weighted to a per-chain sum over the batch.
+        if paths > 0 {
+            const NEAR_KEY: u64 = 0x6e65_6172_6669_656c; // "nearfiel"
+            for (j, rec) in receivers.receivers().iter().enumerate() {
+                let radius = radii[j];
+                if radius <= 0.0 {
+                    continue;
+                }
+                // The point's paths for every 256 chains of the batch, so
+                // that both parts shrink their error as the run grows (a
+                // `--chains` run has 32 batches of whatever size).
+                let paths = receivers.near_paths_in_batch(j, bs);
+                let w = bs as f64 / paths as f64;
+                let frame = &receivers.frames()[j];
+                let (grazing, vertex_r) = receivers.near_path_setup(j);
+                for s in 0..paths {
+                    let stream = (b * paths + s) * n as u64 + j as u64;
+                    let mut rng = Philox4x32::new(keys.part_seed ^ NEAR_KEY, stream);
+                    let path = PathSetup {
+                        first_max: radius,
+                        vertex_r,
+                        grazing,
+                        pool: pool.as_ref(),
+                        reach: &self.reach,
+                    };
+                    let walk =
+                        backward::trace(scene, rec, frame, cfg, &mut rng, &path, |order, v| {
+                            sums[bucket(order, cfg.orders) * n + j] += v * w;
+                        });
+                    if reach_counts {
+                        near_hits[n + j] += walk.exposed;
+                        near_hits[2 * n + j] += walk.reached;
+                    }
+                }
+            }
+        }
+        let mut direct_sums = Vec::new();
+        if receivers.has_sampled_direct() {
+            direct_sums = vec![0.0; n];
+            receivers.sampled_direct(scene, keys.part_seed, b, bs, &mut direct_sums);
+        }
+        Batch {
+            index: b,
+            chains: bs,
+            sums,
+            collisions,
+            scores,
+            near_hits,
+            direct_sums,
+        }
+    }
 }
+
+/// Where a run of chains of a batch draws from (see
+/// [`LocalWork::trace_chains`]).
+#[derive(Clone, Copy)]
+struct Keys {
+    /// Seed of the chains' streams.
+    chain_seed: u64,
+    /// Chain `i` of the batch's net draws from stream `chain_base + i`.
+    chain_base: u64,
+    /// First point of the batch's net traced.
+    lo: u64,
+    /// Seed of the streams of the near paths, the pool and the sampled
+    /// direct light of the chains traced.
+    part_seed: u64,
+}
+
+/// Spreads part numbers over the seed's bits.
+const PART_MIX: u64 = 0x9e37_79b9_7f4a_7c15;
 
 impl BatchWork for LocalWork<'_> {
     fn len(&self) -> usize {
@@ -185,117 +338,39 @@ impl BatchWork for LocalWork<'_> {
         buckets: usize,
         acc: &mut [f64],
     ) -> Batch {
-        let (scene, receivers) = (self.scene, self.receivers);
-        acc.fill(0.0);
-        let len = receivers.accumulator_len();
-        let mut collisions = 0u64;
-        let mut scores = 0u64;
-        // The net's shift comes from a stream no chain uses (chain indices < 2^63).
-        let mut srng = Philox4x32::new(cfg.seed, (1 << 63) | b);
-        let shift12 = DigitalShift([srng.next_u32(), srng.next_u32()]);
-        let shift34 = DigitalShift([srng.next_u32(), srng.next_u32()]);
-        // An Owen scramble from the same stream, afresh for every
-        // `MAX_POINTS` chains of the batch.
-        let mut owen = OwenSobol::<{ chain::LEADING_DIMS }>::random(&mut srng);
-        // The recursive near/far split joins the near part's path vertices to
-        // the batch's collisions (its own stream for the reservoir choices).
-        const POOL_KEY: u64 = 0x706f_6f6c; // "pool"
-        let (paths, radii) = receivers.near_field();
-        let mut pool = (paths > 0).then(|| Pool::new(bs, Philox4x32::new(cfg.seed ^ POOL_KEY, b)));
-        let mut held = receivers.new_hold();
-        for c in b * bs..(b + 1) * bs {
-            let mut rng = Philox4x32::new(cfg.seed, c);
-            let i = (c - b * bs) as u32;
-            let u_first: chain::LeadingUniforms = match cfg.qmc {
-                Qmc::Off => [rng.next_2d(), rng.next_2d()].into(),
-                Qmc::Shift => [
-                    shifted_sobol_2d(i, shift12, rng.next_2d()),
-                    shifted_sobol_34(i, shift34, rng.next_2d()),
-                ]
-                .into(),
-                Qmc::Owen => {
-                    if i > 0 && i.is_multiple_of(MAX_POINTS) {
-                        owen = OwenSobol::random(&mut srng);
-                    }
-                    let i = i % MAX_POINTS;
-                    chain::LeadingUniforms::from_point(|d| owen.unit(i, d, rng.next_u32()))
-                }
-            };
-            collisions += u64::from(chain::trace(scene, &mut rng, &cfg.chain, u_first, |col| {
-                let k = bucket(col.order, cfg.orders);
-                if let Some(p) = pool.as_mut() {
-                    p.offer(col);
-                }
-                // Every `SPARSE_STRIDE`-th chain also counts where it scores from.
-                let counting = c % SPARSE_STRIDE == 0;
-                scores += receivers.score_held(scene, col, k, acc, counting, &mut held) as u64;
-            }));
-        }
-        receivers.flush_held(&mut held, acc);
-        let n = receivers.len();
-        let mut sums = vec![0.0; buckets * n];
-        for k in 0..buckets {
-            receivers.reduce(&acc[k * len..(k + 1) * len], &mut sums[k * n..(k + 1) * n]);
-        }
-        let mut near_hits = vec![0.0; n];
-        receivers.reduce(&acc[buckets * len..], &mut near_hits);
-        let mut near_hits: Vec<u64> = near_hits.into_iter().map(|c| c as u64).collect();
-        // With a near part: its paths' exposed and reached vertices after
-        // the collision counts (see `Batch::near_hits`).
-        let reach_counts = !self.reach.is_empty();
-        if reach_counts {
-            near_hits.resize(3 * n, 0);
-        }
-        // Near part of the near/far split: backward paths whose first surface
-        // lies within the radius, weighted to a per-chain sum over the batch.
-        if paths > 0 {
-            const NEAR_KEY: u64 = 0x6e65_6172_6669_656c; // "nearfiel"
-            for (j, rec) in receivers.receivers().iter().enumerate() {
-                let radius = radii[j];
-                if radius <= 0.0 {
-                    continue;
-                }
-                // The point's paths for every 256 chains of the batch, so
-                // that both parts shrink their error as the run grows (a
-                // `--chains` run has 32 batches of whatever size).
-                let paths = receivers.near_paths_in_batch(j, bs);
-                let w = bs as f64 / paths as f64;
-                let frame = &receivers.frames()[j];
-                let (grazing, vertex_r) = receivers.near_path_setup(j);
-                for s in 0..paths {
-                    let stream = (b * paths + s) * n as u64 + j as u64;
-                    let mut rng = Philox4x32::new(cfg.seed ^ NEAR_KEY, stream);
-                    let path = PathSetup {
-                        first_max: radius,
-                        vertex_r,
-                        grazing,
-                        pool: pool.as_ref(),
-                        reach: &self.reach,
-                    };
-                    let walk =
-                        backward::trace(scene, rec, frame, cfg, &mut rng, &path, |order, v| {
-                            sums[bucket(order, cfg.orders) * n + j] += v * w;
-                        });
-                    if reach_counts {
-                        near_hits[n + j] += walk.exposed;
-                        near_hits[2 * n + j] += walk.reached;
-                    }
-                }
-            }
-        }
-        let mut direct_sums = Vec::new();
-        if receivers.has_sampled_direct() {
-            direct_sums = vec![0.0; n];
-            receivers.sampled_direct(scene, cfg.seed, b, bs, &mut direct_sums);
-        }
-        Batch {
-            index: b,
-            chains: bs,
-            sums,
-            collisions,
-            scores,
-            near_hits,
-            direct_sums,
-        }
+        let keys = Keys {
+            chain_seed: cfg.seed,
+            chain_base: b * bs,
+            lo: 0,
+            part_seed: cfg.seed,
+        };
+        self.trace_chains(cfg, b, bs, keys, buckets, acc)
+    }
+    fn grows(&self) -> bool {
+        true
+    }
+    fn run_part(
+        &self,
+        cfg: &RunConfig,
+        b: u64,
+        part: Part,
+        buckets: usize,
+        acc: &mut [f64],
+    ) -> Batch {
+        // Chain `i` of batch `b` on a stream of its own whatever the parts;
+        // the streams a part's near paths, pool and sampled direct light
+        // draw from are the part's.
+        const GROW_KEY: u64 = 0x6772_6f77_6e00; // "grown"
+        assert!(
+            b < 1 << 31 && part.hi <= 1 << 32,
+            "a grown batch has fewer than 2^32 chains"
+        );
+        let keys = Keys {
+            chain_seed: cfg.seed ^ GROW_KEY,
+            chain_base: b << 32,
+            lo: part.lo,
+            part_seed: cfg.seed ^ GROW_KEY ^ (u64::from(part.index) + 1).wrapping_mul(PART_MIX),
+        };
+        self.trace_chains(cfg, b, part.hi - part.lo, keys, buckets, acc)
     }
 }

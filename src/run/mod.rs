@@ -23,6 +23,7 @@
 //! themselves; batch means are independent realisations and give the standard
 //! error with `B - 1` degrees of freedom.
 
+pub mod grow;
 pub mod plan;
 
 use crate::chain::ChainParams;
@@ -76,8 +77,9 @@ pub const MIN_BATCHES: u64 = 32;
 /// [`crate::chain::LeadingUniforms::from_point`]). Either way each batch
 /// mean stays unbiased and batches stay independent, while the first
 /// collisions cover the surfaces evenly. Chain `c` then depends on `(seed, c)`
-/// and on its batch's scramble, i.e. on `(seed, c, batch_size)`; still never
-/// on the thread count.
+/// and on its batch's scramble, i.e. on `(seed, c, batch_size)`; in a batch
+/// that grows ([`grow`]), chain `i` of batch `b` on `(seed, b, i)` and the
+/// streams of its part; still never on the thread count.
 #[derive(Clone, Debug)]
 pub struct RunConfig {
     /// Seed of every random stream.
@@ -122,15 +124,18 @@ pub struct RunConfig {
     /// (or RMS) relative error; `None`: that error.
     pub pilot_measure: Option<PilotMeasure>,
     /// With `shard`: how the shards share the batches an RMS plan is
-    /// measured on ([`plan`] docs), each tracing its own among them; `None`:
-    /// every shard traces them all.
+    /// measured on ([`plan`] docs), each tracing its own among them, and
+    /// the parts of a run that grows its batches ([`grow`]); `None`: every
+    /// shard traces the RMS plan's batches, and plans a target from a pilot.
     pub share: Option<Share>,
 }
 
-/// How shards that run at once (MPI ranks) share the batches an RMS plan
-/// is measured on: given this shard's own batches among them, the
-/// function returns every shard's (in any order). It is called once, on
-/// the thread that called [`drive`], by every shard alike.
+/// How shards that run at once (MPI ranks) share the batches a plan is
+/// measured on: given this shard's own batches among them, the function
+/// returns every shard's (in any order). It is called on the thread that
+/// called [`drive`], by every shard alike: once for an RMS plan measured
+/// on the run's first batches ([`plan`]), and once per stage, with the
+/// stage's parts, for a run that grows its batches ([`grow`]).
 #[derive(Clone)]
 pub struct Share(pub std::sync::Arc<dyn Fn(Vec<Batch>) -> Vec<Batch> + Send + Sync>);
 
@@ -395,6 +400,39 @@ pub trait BatchWork: Sync {
         buckets: usize,
         scratch: &mut [f64],
     ) -> Batch;
+
+    /// Whether the work can grow a batch part by part ([`Self::run_part`]),
+    /// for a `--rel-error` run that grows its batches ([`grow`]); false
+    /// by default (the run then plans from a pilot, [`plan`]).
+    fn grows(&self) -> bool {
+        false
+    }
+    /// The sums over chains `part.lo .. part.hi` of batch `b`, for a
+    /// batch that grows ([`grow`]): added part by part in order, they are a
+    /// batch of `hi` chains whose net (the stratified leading uniforms) is
+    /// one net of that size. Called only where [`Self::grows`].
+    fn run_part(
+        &self,
+        _cfg: &RunConfig,
+        _b: u64,
+        _part: Part,
+        _buckets: usize,
+        _scratch: &mut [f64],
+    ) -> Batch {
+        unreachable!("run_part on work that does not grow its batches")
+    }
+}
+
+/// Chains `lo .. hi` of a batch that grows, its `index`-th part
+/// ([`BatchWork::run_part`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Part {
+    /// First chain of the part in its batch.
+    pub lo: u64,
+    /// One past its last.
+    pub hi: u64,
+    /// Parts before it in its batch.
+    pub index: u32,
 }
 
 /// A default batch size `bs` capped so that a run of `chains` chains (if
@@ -454,6 +492,42 @@ pub fn drive(
         cfg.shard.is_none() || stop.time.is_none(),
         "a shard needs a run of a fixed number of chains, or a --rel-error plan"
     );
+    // Without a time limit the run proper stops at a default cap. (A shard
+    // has no time cap: its batches must all be there to merge.)
+    let default_cap = (stop.time.is_none() && cfg.shard.is_none())
+        .then_some(stop.rel_error_cap.unwrap_or(DEFAULT_REL_ERROR_CAP));
+    let capped = RunConfig {
+        stop: Stop {
+            time: stop.time.or(default_cap),
+            ..stop
+        },
+        ..cfg.clone()
+    };
+    if let Some(target) = stop.rel_error.filter(|_| grow::applies(work, cfg)) {
+        let plan = Pilot {
+            target,
+            batches: 0,
+            batch_size: 0,
+            wall: 0.0,
+            rel_error: f64::NAN,
+            rms: stop.rms,
+            custom: false,
+            dof: 0.0,
+            fall: 0.0,
+            planned: 0,
+            estimated_time: f64::INFINITY,
+            default_cap,
+            stages: 0,
+            pilot_chains: 0,
+            calibration: 0,
+            calibration_traced: 0,
+            grown: 0,
+        };
+        let cap = stop
+            .chains
+            .map_or(u64::MAX, |c| c.div_ceil(grow::GROWN_BATCHES));
+        return grow::grown_run(work, &capped, cap, start, observe, plan);
+    }
     let mut bs = cfg
         .batch_size
         .unwrap_or_else(|| work.default_batch_size(stop.chains))
@@ -581,17 +655,6 @@ pub fn drive(
     }
     let pilot_bs = stage.batch_size;
     let by_chains = stop.chains.map_or(u64::MAX, |c| c.div_ceil(bs).max(2));
-    // Without a time limit the run proper stops at a default cap. (A shard
-    // has no time cap: its batches must all be there to merge.)
-    let default_cap = (stop.time.is_none() && cfg.shard.is_none())
-        .then_some(stop.rel_error_cap.unwrap_or(DEFAULT_REL_ERROR_CAP));
-    let capped = RunConfig {
-        stop: Stop {
-            time: stop.time.or(default_cap),
-            ..stop
-        },
-        ..cfg.clone()
-    };
     let mut plan = Pilot {
         target,
         batches: pilot.tallies.batches(),
@@ -609,6 +672,7 @@ pub fn drive(
         pilot_chains,
         calibration: 0,
         calibration_traced: 0,
+        grown: 0,
     };
     if calibrate {
         return calibrated_run(work, &capped, bs, by_chains, start, observe, plan);
@@ -803,13 +867,7 @@ fn drive_batches(
     } else {
         cfg.threads
     };
-    let mut tallies = Tallies::new(n, cfg.orders);
-    let checks = work.checks();
-    tallies.watched = checks.watched;
-    tallies.near_plain = checks.near_plain;
-    tallies.near_reach = checks.near_reach;
-    tallies.enclosed = checks.enclosed;
-    tallies.batch_means = crate::tally::BatchMeans::new(cfg.keep_batch_means.min(n));
+    let mut tallies = empty_tallies(work, cfg);
     let direct = work.direct().to_vec();
     let mut result = RunResult {
         direct: Vec::new(),
@@ -952,6 +1010,20 @@ fn drive_batches(
     result.tallies = tallies;
     result.wall = prior_wall + start.elapsed().as_secs_f64();
     result
+}
+
+/// Tallies of `work` with nothing folded: its per-receiver checks, and
+/// room for the batch means `cfg` keeps.
+fn empty_tallies(work: &dyn BatchWork, cfg: &RunConfig) -> Tallies {
+    let n = work.len();
+    let mut tallies = Tallies::new(n, cfg.orders);
+    let checks = work.checks();
+    tallies.watched = checks.watched;
+    tallies.near_plain = checks.near_plain;
+    tallies.near_reach = checks.near_reach;
+    tallies.enclosed = checks.enclosed;
+    tallies.batch_means = crate::tally::BatchMeans::new(cfg.keep_batch_means.min(n));
+    tallies
 }
 
 /// Fold one batch of `bs` chains into the tallies, with the snapshots of

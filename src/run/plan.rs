@@ -2,6 +2,13 @@
 //! `--figure-target`): the pilot stages, the margin, the batch size and
 //! the number of batches. [`super::drive`] runs what is planned here.
 //!
+//! A run that can grow its batches does that instead ([`super::grow`]: no
+//! pilot; the one Sobolev point at 0.1 % in about the least fixed run's
+//! chains). The plan here applies where it cannot: with `--batch-size`,
+//! to shards run apart (`--shard`, which cannot exchange the batches a
+//! grown run measures at every stage), to `--figure-target`, to an RMS
+//! target over several receivers, and to work that does not grow.
+//!
 //! # The `--rel-error` rule: a pilot, then a fixed count
 //!
 //! Stopping at the first batch count whose *estimated* error meets the target
@@ -165,7 +172,8 @@ pub struct Pilot {
     /// Batches planned for the run proper.
     pub planned: u64,
     /// Wall time the planned batches need at the pilot's pace \[s\]
-    /// (infinite when no plan could be made).
+    /// (infinite when no plan could be made); for a grown run, the wall
+    /// time its stages took.
     pub estimated_time: f64,
     /// The time limit the run proper ran under when none was given
     /// ([`DEFAULT_REL_ERROR_CAP`]); `None` with `--time`.
@@ -186,6 +194,11 @@ pub struct Pilot {
     /// Of those, the batches this process traced: all of them, or a
     /// shard's own where the shards share them ([`super::RunConfig::share`]).
     pub calibration_traced: u64,
+    /// Stages of a run that grew its batches ([`super::grow`]): no pilot
+    /// ran, `batches`, `batch_size` and `rel_error` are the run's own at
+    /// its last stage, and `fall` the fall of its variance per chain
+    /// measured between its first stage and its last. 0: a planned run.
+    pub grown: u32,
 }
 
 /// Batches of the run proper that an RMS target's plan is measured on

@@ -26,3 +26,23 @@ pub struct Batch {
     /// ([`crate::tally::Diagnostics::near_reach`]).
     pub near_hits: Vec<u64>,
 }
+
+impl Batch {
+    /// Add `part`, the sums of further chains of the same batch (a batch
+    /// that grows part by part, [`crate::run::BatchWork::run_part`]).
+    pub fn extend(&mut self, part: &Batch) {
+        debug_assert_eq!(self.index, part.index);
+        self.chains += part.chains;
+        self.collisions += part.collisions;
+        self.scores += part.scores;
+        for (s, p) in self.sums.iter_mut().zip(&part.sums) {
+            *s += p;
+        }
+        for (s, p) in self.direct_sums.iter_mut().zip(&part.direct_sums) {
+            *s += p;
+        }
+        for (s, p) in self.near_hits.iter_mut().zip(&part.near_hits) {
+            *s += p;
+        }
+    }
+}

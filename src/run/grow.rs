@@ -1,0 +1,372 @@
+//! A `--rel-error` run that grows its batches instead of planning them
+//! from a pilot ([`super::plan`]): [`GROWN_BATCHES`] batches, each one
+//! Owen-scrambled Sobol' net, all extended part by part until their own
+//! error meets the target.
+//!
+//! # Why
+//!
+//! A pilot on streams of its own costs chains the estimate never uses, and
+//! on one Sobolev point at 0.1 % it costs as much as the run it plans: the
+//! least fixed run there is 32 batches of about 512 chains, and the pilot
+//! is 32 batches of 256. Batches that are nets also gain with their size:
+//! on that point the variance per chain of a batch of 512 is half that of
+//! one of 256, so a pilot of small batches misjudges the run's, and a
+//! stopping rule that adds batches of a fixed size never reaches the
+//! variance of larger nets. A net can grow: its first `m` points are a
+//! good set for every `m`, best at powers of two. So the run keeps its 32
+//! batches and extends each (chains `n_k .. n_{k+1}` of the same
+//! scrambled net, [`super::BatchWork::run_part`]):
+//!
+//! 1. the first part gives each batch [`super::MIN_TIMED_BATCH`] chains;
+//! 2. after each stage the 32 batches measure the largest (or RMS)
+//!    relative error `R_k` at size `n_k`; the run stops where `R_k <=
+//!    target`;
+//! 3. otherwise the next size is `n_k (R_k / target)^(2 / (1 + alpha))`
+//!    times [`STAGE_MARGIN`], at least [`MIN_GROWTH`] times `n_k`, rounded
+//!    up to [`GRAIN`] chains, where `alpha` is the fall of the variance per
+//!    chain with the size, `v(n) ~ n^-alpha`, measured between the first
+//!    stage and the last (assumed [`FIRST_FALL`] after the first), clamped
+//!    to `0 ..= 1`: an error that falls faster than planned only costs a
+//!    further stage, never chains already traced.
+//!
+//! Every chain traced is in the estimate, so the run costs its final size
+//! and the rounding: on the Sobolev point at 0.1 % about the least fixed
+//! run's chains (module tests and `tests/grown_batches.rs`).
+//!
+//! # What it costs in bias
+//!
+//! The stopping rule looks at the batches the estimate keeps. Where batch
+//! means are normal, their mean is independent of their spread at every
+//! stage (the sample mean vector of i.i.d. normal vectors is independent of
+//! the sample covariance), so the stage at which the run stops, which
+//! depends only on the spreads, leaves the mean unbiased. What it does
+//! touch is the interval: a run stops at the first stage whose measured
+//! spread is under the target, so the spread it reports is a little low
+//! when the true error sits near the target. Skewed batch means add a bias
+//! (a low batch mean tends to come with a small spread). Both are measured
+//! on the Sobolev point against its exact value (`tests/grown_batches.rs`:
+//! coverage of the 95 % interval and mean `z^2` over independent runs),
+//! and on skewed synthetic work. Where the pilot rule's unbiased two
+//! stages matter more than the chains, `--batch-size` keeps it.
+//!
+//! # Where it applies
+//!
+//! Runs with a `--rel-error` target (or `--rms-error` on one receiver) and
+//! no `--batch-size`, on work that grows its batches (the local estimator;
+//! [`super::BatchWork::grows`]), when the 32 batches' sums fit in
+//! [`GROWN_VALUES`], in one process or over MPI ranks, which trace their
+//! own batches' parts and exchange them at every stage
+//! ([`super::RunConfig::share`]) so that all plan alike and rank 0 folds
+//! the single process's batches. Shards run apart (`--shard`) cannot
+//! exchange: they plan from the pilot. An RMS target over many receivers
+//! is planned on the run's own first batches ([`super::plan`]).
+
+use super::{
+    Batch, BatchWork, Part, Pilot, Progress, RunConfig, RunResult, StopReason, drive_batches,
+    empty_tallies, fold_batches,
+};
+use crate::tally::bucket_count;
+use std::time::Instant;
+
+/// Batches of a grown run.
+pub const GROWN_BATCHES: u64 = super::MIN_BATCHES;
+
+/// Least growth of a batch from one stage to the next.
+pub const MIN_GROWTH: f64 = 1.2;
+
+/// Factor on the size a stage plans, so that about two runs in three end
+/// at the planned stage rather than one after it.
+pub const STAGE_MARGIN: f64 = 1.05;
+
+/// Fall of the variance per chain with a batch's size assumed after the
+/// first stage (`v(n) ~ n^-1`, a smooth integrand's net; measured 1.0 on a
+/// Sobolev point): too steep a fall costs a further stage, too shallow
+/// one chains beyond the target.
+pub const FIRST_FALL: f64 = 1.0;
+
+/// A batch's size is a multiple of this many chains after its first part.
+pub const GRAIN: u64 = 64;
+
+/// Most sums (receivers times buckets times [`GROWN_BATCHES`]) a grown run
+/// keeps: 128 MB.
+pub const GROWN_VALUES: u64 = 1 << 24;
+
+/// Whether a run aiming at an error target grows its batches (module docs).
+pub(super) fn applies(work: &dyn BatchWork, cfg: &RunConfig) -> bool {
+    let n = work.len() as u64;
+    let values = n
+        .saturating_mul(bucket_count(cfg.orders) as u64)
+        .saturating_mul(GROWN_BATCHES);
+    work.grows()
+        && cfg.batch_size.is_none()
+        && cfg.pilot_measure.is_none()
+        && cfg.resume.is_none()
+        && (cfg.shard.is_none() || cfg.share.is_some())
+        && (!cfg.stop.rms || n == 1)
+        && values <= GROWN_VALUES
+}
+
+/// Chains `lo ..` of every batch, as batch work of their own.
+struct PartWork<'a> {
+    work: &'a dyn BatchWork,
+    lo: u64,
+    index: u32,
+}
+
+impl BatchWork for PartWork<'_> {
+    fn len(&self) -> usize {
+        self.work.len()
+    }
+    fn direct(&self) -> &[f64] {
+        self.work.direct()
+    }
+    fn emits(&self) -> bool {
+        self.work.emits()
+    }
+    fn scratch_len(&self, buckets: usize) -> usize {
+        self.work.scratch_len(buckets)
+    }
+    fn checks(&self) -> super::Checks {
+        self.work.checks()
+    }
+    fn default_batch_size(&self, chains: Option<u64>) -> u64 {
+        self.work.default_batch_size(chains)
+    }
+    fn run_batch(
+        &self,
+        cfg: &RunConfig,
+        b: u64,
+        bs: u64,
+        buckets: usize,
+        scratch: &mut [f64],
+    ) -> Batch {
+        let part = Part {
+            lo: self.lo,
+            hi: self.lo + bs,
+            index: self.index,
+        };
+        self.work.run_part(cfg, b, part, buckets, scratch)
+    }
+}
+
+/// The fall of the variance per chain with the size, `v(n) ~ n^-alpha`,
+/// between the first stage and the last, `(size, error)`; `None` with one.
+pub fn fall(stages: &[(u64, f64)]) -> Option<f64> {
+    match stages {
+        [(n1, r1), .., (n, r)] if n > n1 => {
+            Some(2.0 * (r1 / r).ln() / (*n as f64 / *n1 as f64).ln() - 1.0)
+        }
+        _ => None,
+    }
+}
+
+/// The size of the next stage from the stages so far, `(size, error)`
+/// (module docs), at most `cap`.
+pub fn next_size(stages: &[(u64, f64)], target: f64, cap: u64) -> u64 {
+    let (n, r) = *stages.last().expect("a stage");
+    let alpha = match fall(stages) {
+        Some(a) if a.is_nan() => 0.0,
+        Some(a) => a.clamp(0.0, 1.0),
+        None => FIRST_FALL,
+    };
+    let growth = ((r / target).powf(2.0 / (1.0 + alpha)) * STAGE_MARGIN).max(MIN_GROWTH);
+    // (`as` saturates: an enormous growth is capped below.)
+    let want = (n as f64 * growth).ceil() as u64;
+    want.div_ceil(GRAIN)
+        .saturating_mul(GRAIN)
+        .clamp(n + 1, cap.max(n + 1))
+}
+
+/// Run the grown batches (module docs) of `work` under `cfg` (with its
+/// time cap), at most `cap` chains a batch; `plan` carries the target
+/// and is completed here.
+pub(super) fn grown_run(
+    work: &dyn BatchWork,
+    cfg: &RunConfig,
+    cap: u64,
+    start: Instant,
+    observe: &mut dyn FnMut(&Progress) -> bool,
+    mut plan: Pilot,
+) -> RunResult {
+    let target = plan.target;
+    let direct = work.direct();
+    let shared = cfg.shard.and(cfg.share.clone());
+    // Every part run keeps its batches unfolded (a shard's own, where the
+    // shards share them out).
+    let part_cfg = RunConfig {
+        shard: Some(cfg.shard.unwrap_or((0, 1))),
+        ..cfg.clone()
+    };
+    let mut grown: Vec<Batch> = Vec::new();
+    let mut stages: Vec<(u64, f64)> = Vec::new();
+    let mut size = 0;
+    let mut next = super::MIN_TIMED_BATCH.min(cap).max(1);
+    let mut reason = StopReason::RelError;
+    let mut tallies = empty_tallies(work, cfg);
+    let (mut traced, mut stage_wall) = (0u64, 0.0);
+    loop {
+        let t = Instant::now();
+        let part = PartWork {
+            work,
+            lo: size,
+            index: stages.len() as u32,
+        };
+        let r = drive_batches(
+            &part,
+            &part_cfg,
+            next - size,
+            GROWN_BATCHES,
+            start,
+            observe,
+            None,
+        );
+        let mut parts = r.batches;
+        traced += parts.iter().map(|b| b.chains).sum::<u64>();
+        if r.reason != StopReason::Chains {
+            // Stopped by the observer within a stage: the batches are kept
+            // as the last whole stage left them.
+            reason = r.reason;
+            if !grown.is_empty() || shared.is_some() {
+                break;
+            }
+        }
+        if let Some(share) = &shared {
+            parts = (share.0)(parts);
+            parts.sort_by_key(|b| b.index);
+            assert!(
+                parts.iter().map(|b| b.index).eq(0..GROWN_BATCHES),
+                "the shards shared parts other than 0 .. {GROWN_BATCHES}"
+            );
+        }
+        if grown.is_empty() {
+            grown = parts;
+        } else {
+            for (g, p) in grown.iter_mut().zip(&parts) {
+                g.extend(p);
+            }
+        }
+        size = next;
+        stage_wall += t.elapsed().as_secs_f64();
+        tallies = fold_batches(empty_tallies(work, cfg), direct, size, &grown);
+        let e = if cfg.stop.rms {
+            tallies.rms_rel_error(direct)
+        } else {
+            tallies.max_rel_error(direct)
+        };
+        stages.push((size, e));
+        if reason != StopReason::RelError {
+            break;
+        }
+        let chains: u64 = grown.iter().map(|b| b.chains).sum();
+        let progress = Progress {
+            tallies: &tallies,
+            direct,
+            chains,
+            scores: grown.iter().map(|b| b.scores).sum(),
+            collisions: grown.iter().map(|b| b.collisions).sum(),
+            elapsed: start.elapsed().as_secs_f64(),
+        };
+        if !observe(&progress) {
+            reason = StopReason::Observer;
+            break;
+        }
+        if e <= target {
+            break;
+        }
+        // No error a stage can mend, or the chains' cap reached.
+        if !e.is_finite() || size >= cap {
+            reason = StopReason::Chains;
+            break;
+        }
+        next = next_size(&stages, target, cap);
+        // A time limit (not for shards, which plan alike only from what
+        // they share): the next stage fits in what is left at the pace so
+        // far, or the run stops.
+        if let (Some(limit), None) = (cfg.stop.time, cfg.shard) {
+            let left = limit - start.elapsed().as_secs_f64();
+            let pace = traced as f64 / stage_wall.max(1e-9);
+            let fits = (left * pace / GROWN_BATCHES as f64) as u64;
+            if fits < GRAIN {
+                reason = StopReason::Time;
+                break;
+            }
+            next = next.min(size + fits / GRAIN * GRAIN);
+        }
+    }
+    // (Interrupted within the first stage: its whole batches.)
+    if stages.is_empty() && !grown.is_empty() {
+        size = grown[0].chains;
+        tallies = fold_batches(empty_tallies(work, cfg), direct, size, &grown);
+    }
+    let (n_last, e_last) = stages.last().copied().unwrap_or((size, f64::NAN));
+    plan.batches = GROWN_BATCHES;
+    plan.batch_size = n_last;
+    plan.rel_error = e_last;
+    plan.dof = (GROWN_BATCHES - 1) as f64;
+    plan.planned = GROWN_BATCHES;
+    plan.grown = stages.len() as u32;
+    plan.fall = fall(&stages).unwrap_or(f64::NAN);
+    plan.estimated_time = stage_wall;
+    let wall = start.elapsed().as_secs_f64();
+    let threads = if cfg.threads == 0 {
+        std::thread::available_parallelism().map_or(1, |p| p.get())
+    } else {
+        cfg.threads
+    };
+    let mut result = RunResult {
+        direct: direct.to_vec(),
+        tallies,
+        chains: 0,
+        batch_size: size,
+        collisions: 0,
+        scores: 0,
+        wall,
+        threads,
+        reason,
+        pilot: Some(plan),
+        time_sizing: None,
+        batches: Vec::new(),
+        total_batches: 0,
+    };
+    if let Some((i, m)) = cfg.shard {
+        // A shard's own batches, unfolded, for rank 0 to fold.
+        grown.retain(|b| b.index % m == i);
+        result.total_batches = GROWN_BATCHES;
+        result.tallies = empty_tallies(work, cfg);
+    }
+    result.chains = grown.iter().map(|b| b.chains).sum();
+    result.collisions = grown.iter().map(|b| b.collisions).sum();
+    result.scores = grown.iter().map(|b| b.scores).sum();
+    if cfg.shard.is_some() {
+        result.batches = grown;
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The next size: the error's fall assumed after one stage, measured
+    /// after two, the least growth, the grain and the cap.
+    #[test]
+    fn next_size_follows_the_measured_fall() {
+        // One stage at twice the target: the size doubles (fall 1), times
+        // the margin, rounded up to the grain: 256 * 2 * 1.05 = 537.6 -> 576.
+        assert_eq!(next_size(&[(256, 2e-3)], 1e-3, u64::MAX), 576);
+        // Two stages whose error fell like 1 / sqrt(size) (fall 0): the
+        // size grows by the square of the ratio, 512 * 2 * 1.05 = 1075.2.
+        let s = [(256, 2e-3), (512, 2e-3 / 2f64.sqrt())];
+        assert!(fall(&s).unwrap().abs() < 1e-12);
+        assert_eq!(next_size(&s, 1e-3, u64::MAX), 1088);
+        // A fall of 1 measured: the ratio alone, 1024 * 1.05 -> 1088.
+        let s = [(256, 4e-3), (512, 2e-3)];
+        assert!((fall(&s).unwrap() - 1.0).abs() < 1e-12);
+        assert_eq!(next_size(&s, 1e-3, u64::MAX), 1088);
+        // Just above the target: the least growth, 1.2 times.
+        assert_eq!(next_size(&[(256, 1.01e-3)], 1e-3, u64::MAX), 320);
+        // The cap, and never less than one more chain.
+        assert_eq!(next_size(&[(256, 1.0)], 1e-3, 1000), 1000);
+        assert_eq!(next_size(&[(256, 1.0)], 1e-3, 100), 257);
+    }
+}

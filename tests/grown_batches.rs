@@ -1,0 +1,252 @@
+//! A `--rel-error` run that grows its batches (`lumest::run::grow`, issue
+//! 15 item 2): on one Sobolev point at 0.1 % it meets the target at about
+//! the least fixed run's chains, its 95 % intervals cover the exact value
+//! as they should, it is the same on any thread count and over shards
+//! that share its parts, and a part-by-part batch is the net of its final
+//! size.
+
+mod common;
+use lumest::cases::sobolev::{plane_point, sobolev_scene};
+use lumest::estimator::Receivers;
+use lumest::estimator::local::run;
+use lumest::reference::Sobolev;
+use lumest::run::{RunConfig, RunResult, Stop, StopReason};
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+/// The Sobolev problem of `data/sobolev.toml` (planes 1 m apart,
+/// reflectances 0.5, 1 cd half-way) and its floor point at `r = 1`.
+fn point_case() -> (lumest::scene::Scene, Receivers, f64) {
+    let s = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).unwrap();
+    let scene = sobolev_scene(&s);
+    let rec = Receivers::new(&scene, &[plane_point(&s, 1, 1.0, 0.0)]).unwrap();
+    let exact = s.illuminance(1, 1.0).e;
+    (scene, rec, exact)
+}
+
+fn target_cfg(target: f64, seed: u64, threads: usize) -> RunConfig {
+    RunConfig {
+        seed,
+        threads,
+        stop: Stop {
+            rel_error: Some(target),
+            ..Stop::default()
+        },
+        ..RunConfig::default()
+    }
+}
+
+fn bits(r: &RunResult) -> Vec<u64> {
+    let w = &r.tallies.estimated[0];
+    vec![
+        w.mean().to_bits(),
+        w.std_error().to_bits(),
+        r.chains,
+        r.collisions,
+        r.scores,
+    ]
+}
+
+/// 200 runs aiming at 0.1 % on the point: every one meets the target and
+/// says it grew; the exact value lies in the 95 % interval (Student's t
+/// with 31 degrees of freedom, as the CSV's `E_ci95`) of 90 % of them or
+/// more (95 % expected: 3.2 standard deviations of a binomial share below),
+/// the mean `z^2` is that of a calibrated error bar (31/29 expected), and
+/// the mean cost is at most 1.25 times the chains of the least fixed run
+/// that meets the target: 32 batches of 512 chains (R 0.92e-3 over 20
+/// seeds, meeting it in 17; 32 of 448: R 1.17e-3, in 3).
+#[test]
+fn one_point_meets_the_target_near_the_least_chains_with_calibrated_intervals() {
+    let (scene, rec, exact) = point_case();
+    const RUNS: u64 = 200;
+    let t95 = StudentsT::new(0.0, 1.0, 31.0).unwrap().inverse_cdf(0.975);
+    let (mut covered, mut z2, mut chains) = (0, 0.0, 0);
+    for seed in 0..RUNS {
+        let r = run(&scene, &rec, &target_cfg(1e-3, 1000 + seed, 2), &mut |_| {
+            true
+        });
+        assert_eq!(r.reason, StopReason::RelError, "seed {seed}");
+        let plan = r.pilot.expect("a plan");
+        assert!(plan.grown >= 1 && plan.pilot_chains == 0, "{plan:?}");
+        assert!(r.tallies.max_rel_error(&r.direct) <= 1e-3, "seed {seed}");
+        assert_eq!(r.tallies.batches(), 32);
+        let z = common::z(&r, 0, exact);
+        assert!(z.is_finite(), "seed {seed}: z {z}");
+        covered += u32::from(z.abs() <= t95);
+        z2 += z * z;
+        chains += r.chains;
+    }
+    let coverage = f64::from(covered) / RUNS as f64;
+    let z2 = z2 / RUNS as f64;
+    let cost = chains as f64 / RUNS as f64 / (32.0 * 512.0);
+    eprintln!("coverage {coverage:.3}, mean z^2 {z2:.3}, chains / least {cost:.3}");
+    assert!(coverage >= 0.90, "coverage {coverage}");
+    assert!((0.7..=1.45).contains(&z2), "mean z^2 {z2}");
+    assert!((0.95..=1.25).contains(&cost), "chains / least {cost}");
+}
+
+/// The same grown run on 1 and 3 threads, and over three shards that
+/// trace their own batches' parts and share them at every stage (as MPI
+/// ranks do, here through memory), gives the same bits; the shards'
+/// batches fold to the single run's tallies.
+#[test]
+fn grown_runs_are_the_same_on_any_thread_count_and_over_sharing_shards() {
+    let (scene, rec, _) = point_case();
+    // A target the first stage misses, so that the run grows (3 stages).
+    let cfg = |t| target_cfg(4e-4, 5, t);
+    let one = run(&scene, &rec, &cfg(1), &mut |_| true);
+    let three = run(&scene, &rec, &cfg(3), &mut |_| true);
+    let plan = one.pilot.expect("a plan");
+    assert!(plan.grown >= 2, "{plan:?}");
+    assert_eq!(bits(&one), bits(&three));
+    let pool = std::sync::Arc::new((
+        std::sync::Mutex::new(Vec::new()),
+        std::sync::Barrier::new(3),
+    ));
+    let share = {
+        let pool = pool.clone();
+        lumest::run::Share(std::sync::Arc::new(move |own| {
+            pool.0.lock().unwrap().extend(own);
+            pool.1.wait();
+            let all = pool.0.lock().unwrap().clone();
+            pool.1.wait();
+            // Emptied for the next stage, once every shard has its copy.
+            if pool.1.wait().is_leader() {
+                pool.0.lock().unwrap().clear();
+            }
+            pool.1.wait();
+            all
+        }))
+    };
+    let shards: Vec<RunResult> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..3)
+            .map(|i| {
+                let shard = RunConfig {
+                    shard: Some((i, 3)),
+                    share: Some(share.clone()),
+                    ..cfg(1)
+                };
+                let (scene, rec) = (&scene, &rec);
+                s.spawn(move || run(scene, rec, &shard, &mut |_| true))
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let mut batches = Vec::new();
+    for (i, r) in shards.into_iter().enumerate() {
+        assert_eq!(r.pilot.map(|p| p.grown), Some(plan.grown));
+        assert_eq!(r.batches.len(), if i < 2 { 11 } else { 10 });
+        batches.extend(r.batches);
+    }
+    batches.sort_by_key(|b| b.index);
+    let mut empty = lumest::run::Tallies::new(1, cfg(1).orders);
+    empty.watched = one.tallies.watched.clone();
+    let folded = lumest::run::fold_batches(empty, &one.direct, one.batch_size, &batches);
+    let w = &folded.estimated[0];
+    let v = &one.tallies.estimated[0];
+    assert_eq!(w.mean().to_bits(), v.mean().to_bits());
+    assert_eq!(w.std_error().to_bits(), v.std_error().to_bits());
+}
+
+/// Lognormal chains (`sigma`, mean exactly 1; skewness 6.2 at `sigma = 1`)
+/// on one receiver, a chain's value on a stream of its own: work that
+/// grows its batches, to measure what stopping on the batches the
+/// estimate keeps does to the mean and the interval where batch means
+/// are skewed.
+struct SkewedChains {
+    sigma: f64,
+}
+
+impl SkewedChains {
+    fn sum(&self, seed: u64, b: u64, lo: u64, hi: u64) -> f64 {
+        (lo..hi)
+            .map(|i| {
+                let mut rng = lumest::sampling::Philox4x32::new(seed, (b << 32) | i);
+                let [u1, u2] = rng.next_2d();
+                let z = (-2.0 * (1.0 - u1).ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+                (self.sigma * z - 0.5 * self.sigma * self.sigma).exp()
+            })
+            .sum()
+    }
+}
+
+impl lumest::run::BatchWork for SkewedChains {
+    fn len(&self) -> usize {
+        1
+    }
+    fn direct(&self) -> &[f64] {
+        &[0.0]
+    }
+    fn emits(&self) -> bool {
+        true
+    }
+    fn scratch_len(&self, _buckets: usize) -> usize {
+        0
+    }
+    fn default_batch_size(&self, _chains: Option<u64>) -> u64 {
+        4096
+    }
+    fn run_batch(
+        &self,
+        _cfg: &RunConfig,
+        _b: u64,
+        _bs: u64,
+        _k: usize,
+        _s: &mut [f64],
+    ) -> lumest::run::Batch {
+        unreachable!("a grown run traces parts only")
+    }
+    fn grows(&self) -> bool {
+        true
+    }
+    fn run_part(
+        &self,
+        cfg: &RunConfig,
+        b: u64,
+        part: lumest::run::Part,
+        _k: usize,
+        _s: &mut [f64],
+    ) -> lumest::run::Batch {
+        lumest::run::Batch {
+            index: b,
+            chains: part.hi - part.lo,
+            sums: vec![self.sum(cfg.seed, b, part.lo, part.hi)],
+            collisions: 0,
+            scores: 0,
+            near_hits: Vec::new(),
+            direct_sums: Vec::new(),
+        }
+    }
+}
+
+/// Skewed chains at a target that takes three stages or so: over 1,000
+/// runs the mean error is within 0.15 of a standard error of 0 and the 95
+/// % interval covers 1 in 92 % of them or more (measured: see the printed
+/// line; a binomial share of 95 % has a standard deviation of 0.7 % here).
+#[test]
+fn skewed_chains_keep_the_mean_and_the_interval() {
+    use lumest::tally::Welford;
+    let t95 = StudentsT::new(0.0, 1.0, 31.0).unwrap().inverse_cdf(0.975);
+    for sigma in [1.0, 1.5] {
+        let work = SkewedChains { sigma };
+        let target = 0.01;
+        let (mut z, mut covered, mut stages) = (Welford::new(), 0, 0);
+        const RUNS: u64 = 1000;
+        for seed in 0..RUNS {
+            let r = lumest::run::drive(&work, &target_cfg(target, seed, 1), &mut |_| true);
+            let w = &r.tallies.estimated[0];
+            let zi = (w.mean() - 1.0) / w.std_error();
+            z.push(zi);
+            covered += u32::from(zi.abs() <= t95);
+            stages += r.pilot.expect("a plan").grown;
+        }
+        let coverage = f64::from(covered) / RUNS as f64;
+        let bias = z.mean();
+        eprintln!(
+            "sigma {sigma}: mean z {bias:.3} +- {:.3}, coverage {coverage:.3}, mean stages {:.2}",
+            z.std_error(),
+            f64::from(stages) / RUNS as f64
+        );
+        assert!(bias.abs() <= 0.15, "sigma {sigma}: mean z {bias}");
+        assert!(coverage >= 0.92, "sigma {sigma}: coverage {coverage}");
+    }
+}
