@@ -127,11 +127,12 @@ fn planned_batch_size_is_reproducible() {
     assert!(again.tallies.max_rel_error(&again.direct) <= 5e-4);
 }
 
-/// An `--rms-error` run over many points plans from its own first 32
-/// batches: it plans alike on any thread count, its result is that of a
-/// `--chains` run of the planned batches at the planned size, and its
-/// shards (each runs the first 32 batches to plan, and keeps its own, or
-/// they share those out) fold to the same result.
+/// An `--rms-error` run over many points whose batches do not grow (here:
+/// `--batch-size` given) plans from its own first 32 batches: it plans
+/// alike on any thread count, its result is that of a `--chains` run of
+/// the planned batches, and its shards (each runs the first 32 batches to
+/// plan, and keeps its own, or they share those out) fold to the same
+/// result.
 #[test]
 fn calibrated_rms_plan_is_reproducible_and_shards_alike() {
     let p = (0.5, 0.5, 0.5, 0.5);
@@ -144,6 +145,7 @@ fn calibrated_rms_plan_is_reproducible_and_shards_alike() {
             time: Some(120.0),
             ..Stop::default()
         },
+        batch_size: Some(1024),
         ..RunConfig::default()
     };
     let n = 60;

@@ -412,7 +412,7 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
                 p.grown,
                 p.batch_size,
                 if p.fall.is_finite() {
-                    format!(" (variance per chain fell like batch size^-{:.2})", p.fall)
+                    format!(" (variance per chain went like batch size^{:.2})", -p.fall)
                 } else {
                     String::new()
                 },

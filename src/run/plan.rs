@@ -6,8 +6,8 @@
 //! pilot; the one Sobolev point at 0.1 % in about the least fixed run's
 //! chains). The plan here applies where it cannot: with `--batch-size`,
 //! to shards run apart (`--shard`, which cannot exchange the batches a
-//! grown run measures at every stage), to `--figure-target`, to an RMS
-//! target over several receivers, and to work that does not grow.
+//! grown run measures at every stage), to `--figure-target`, and to work
+//! that does not grow (the backward estimator).
 //!
 //! # The `--rel-error` rule: a pilot, then a fixed count
 //!
