@@ -250,3 +250,152 @@ fn skewed_chains_keep_the_mean_and_the_interval() {
         assert!(coverage >= 0.92, "sigma {sigma}: coverage {coverage}");
     }
 }
+
+/// An interrupt (the observer saying stop) within a stage keeps every part
+/// traced: batches that finished their part are larger than the others,
+/// and the estimate of the mean of their means still covers the exact
+/// value. An interrupt within the first stage keeps the batches it has.
+#[test]
+fn an_interrupt_within_a_stage_keeps_every_part() {
+    let (scene, rec, exact) = point_case();
+    // Calls of the observer: one per batch part folded, one per stage end.
+    for stop_after in [10, 33 + 20] {
+        let mut calls = 0;
+        let r = run(&scene, &rec, &target_cfg(2e-4, 3, 1), &mut |_| {
+            calls += 1;
+            calls < stop_after
+        });
+        assert_eq!(r.reason, StopReason::Observer, "stop after {stop_after}");
+        let plan = r.pilot.expect("a plan");
+        let batches = r.tallies.batches();
+        if stop_after < 32 {
+            // Within the first stage: the batches folded (the one whose
+            // call said stop included), 256 chains each.
+            assert_eq!(batches, stop_after);
+            assert_eq!(r.chains, 256 * batches);
+            assert_eq!((plan.grown, r.batch_size, plan.batches), (1, 256, batches));
+        } else {
+            // Within the second (call 33 ends the first stage): all 32
+            // batches, 20 of them grown.
+            assert_eq!(batches, 32);
+            let second = r.batch_size;
+            assert!(second > 256, "{second}");
+            assert_eq!(r.chains, 32 * 256 + 20 * (second - 256));
+            assert_eq!(plan.grown, 2);
+        }
+        let z = common::z(&r, 0, exact);
+        assert!(z.abs() < 4.0, "stop after {stop_after}: z {z}");
+    }
+}
+
+/// The point's direct light sampled (RIS at the point, `--direct-lights
+/// ris`) rather than exact: every part adds its own sampled direct sums,
+/// and 20 grown runs at 2e-3 each cover the exact total within the
+/// Sidak-corrected bound (|z| <= 3.5 for 20 runs at 1 % false alarms),
+/// with a mean `z^2` of a calibrated error bar. Without the parts' direct
+/// sums the total would be 55 % low.
+#[test]
+fn sampled_direct_light_grows_with_the_parts() {
+    let s = Sobolev::new(0.5, 0.5, 0.5, 0.5, 1.0).unwrap();
+    let scene = sobolev_scene(&s).with_direct_lights(lumest::light::array::DirectLights::Ris, 32);
+    let rec = Receivers::new(&scene, &[plane_point(&s, 1, 1.0, 0.0)]).unwrap();
+    assert!(rec.has_sampled_direct() && rec.direct()[0] == 0.0);
+    let exact = s.illuminance(1, 1.0).e;
+    let mut z2 = 0.0;
+    for seed in 0..20 {
+        let r = run(&scene, &rec, &target_cfg(2e-3, 50 + seed, 2), &mut |_| true);
+        assert_eq!(r.reason, StopReason::RelError);
+        assert!(r.pilot.expect("a plan").grown >= 1);
+        let z = common::z(&r, 0, exact);
+        assert!(z.abs() <= 3.5, "seed {seed}: z {z}");
+        z2 += z * z / 20.0;
+    }
+    assert!((0.4..=2.0).contains(&z2), "mean z^2 {z2}");
+}
+
+/// Grown runs over many points, at a largest and at an RMS target, are the
+/// same on 1 and 3 threads (the orders resolved too).
+#[test]
+fn grown_runs_over_many_points_are_the_same_on_any_thread_count() {
+    for rms in [false, true] {
+        let cfg = |t| RunConfig {
+            orders: 2,
+            stop: Stop {
+                rel_error: Some(3e-3),
+                rms,
+                ..Stop::default()
+            },
+            ..target_cfg(3e-3, 21, t)
+        };
+        let p = (0.5, 0.5, 0.5, 0.5);
+        let (_, one) = common::sobolev_run(p, 30, 3.0, &cfg(1));
+        let (_, three) = common::sobolev_run(p, 30, 3.0, &cfg(3));
+        assert!(one.pilot.expect("a plan").grown >= 2, "rms {rms}");
+        let all = |r: &RunResult| -> Vec<u64> {
+            let mut v: Vec<u64> = r
+                .tallies
+                .estimated
+                .iter()
+                .chain(r.tallies.orders.iter().flatten())
+                .flat_map(|w| [w.mean().to_bits(), w.std_error().to_bits()])
+                .collect();
+            v.extend([r.chains, r.collisions, r.scores]);
+            v
+        };
+        assert_eq!(all(&one), all(&three), "rms {rms}");
+    }
+}
+
+/// Shards that share their parts and one of which is interrupted (its
+/// observer says stop within the second stage) all stop after that same
+/// stage, none left waiting in an exchange, and their batches are whole.
+#[test]
+fn an_interrupt_on_one_sharing_shard_stops_them_all_at_a_stage_end() {
+    let (scene, rec, _) = point_case();
+    let pool = std::sync::Arc::new((
+        std::sync::Mutex::new(Vec::new()),
+        std::sync::Barrier::new(3),
+    ));
+    let share = {
+        let pool = pool.clone();
+        lumest::run::Share(std::sync::Arc::new(move |own| {
+            pool.0.lock().unwrap().extend(own);
+            pool.1.wait();
+            let all = pool.0.lock().unwrap().clone();
+            pool.1.wait();
+            if pool.1.wait().is_leader() {
+                pool.0.lock().unwrap().clear();
+            }
+            pool.1.wait();
+            all
+        }))
+    };
+    let shards: Vec<RunResult> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..3)
+            .map(|i| {
+                let shard = RunConfig {
+                    shard: Some((i, 3)),
+                    share: Some(share.clone()),
+                    ..target_cfg(2e-4, 8, 1)
+                };
+                let (scene, rec) = (&scene, &rec);
+                s.spawn(move || {
+                    let mut calls = 0;
+                    run(scene, rec, &shard, &mut |_| {
+                        calls += 1;
+                        i != 1 || calls < 16
+                    })
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let grown: Vec<u32> = shards.iter().map(|r| r.pilot.unwrap().grown).collect();
+    assert!(grown.iter().all(|&g| g == grown[0] && g == 2), "{grown:?}");
+    for r in &shards {
+        assert_eq!(r.reason, StopReason::Observer);
+        assert!(r.batches.iter().all(|b| b.chains == r.batch_size));
+    }
+    let n: usize = shards.iter().map(|r| r.batches.len()).sum();
+    assert_eq!(n, 32);
+}

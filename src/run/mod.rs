@@ -410,7 +410,8 @@ pub trait BatchWork: Sync {
     /// The sums over chains `part.lo .. part.hi` of batch `b`, for a
     /// batch that grows ([`grow`]): added part by part in order, they are a
     /// batch of `hi` chains whose net (the stratified leading uniforms) is
-    /// one net of that size. Called only where [`Self::grows`].
+    /// one net of that size (up to the largest net; beyond, independent
+    /// nets in a row). Called only where [`Self::grows`].
     fn run_part(
         &self,
         _cfg: &RunConfig,
@@ -525,7 +526,8 @@ pub fn drive(
         };
         let cap = stop
             .chains
-            .map_or(u64::MAX, |c| c.div_ceil(grow::GROWN_BATCHES));
+            .map_or(u64::MAX, |c| c.div_ceil(grow::GROWN_BATCHES))
+            .min(grow::MAX_GROWN_CHAINS);
         return grow::grown_run(work, &capped, cap, start, observe, plan);
     }
     let mut bs = cfg
