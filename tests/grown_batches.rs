@@ -93,12 +93,20 @@ fn one_point_meets_the_target_near_the_least_chains_with_calibrated_intervals() 
 #[test]
 fn grown_runs_are_the_same_on_any_thread_count_and_over_sharing_shards() {
     let (scene, rec, _) = point_case();
-    // A target the first stage misses, so that the run grows (3 stages).
-    let cfg = |t| target_cfg(4e-4, 5, t);
+    // A target the first stage misses by far, so that the run grows over
+    // stages whose parts are longer than a chunk (4 stages to 25,344
+    // chains a batch here).
+    let cfg = |t| target_cfg(1e-4, 5, t);
     let one = run(&scene, &rec, &cfg(1), &mut |_| true);
     let three = run(&scene, &rec, &cfg(3), &mut |_| true);
     let plan = one.pilot.expect("a plan");
     assert!(plan.grown >= 2, "{plan:?}");
+    // Some stage's part is longer than a chunk.
+    let chunk = lumest::run::grow::CHUNK;
+    assert!(
+        (one.batch_size - 256) / u64::from(plan.grown - 1) > chunk,
+        "{plan:?}"
+    );
     assert_eq!(bits(&one), bits(&three));
     let pool = std::sync::Arc::new((
         std::sync::Mutex::new(Vec::new()),

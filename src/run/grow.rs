@@ -60,6 +60,12 @@
 //! variance per chain then stops falling with its size, which the fall
 //! measured between the stages follows.
 //!
+//! A stage's part of a batch longer than [`CHUNK`] chains is traced in
+//! chunks of it, each a part of its own (its own streams for near paths,
+//! pool and sampled direct light), so that a long stage is more than 32
+//! tasks; the chunks depend on the sizes alone, so the result does not
+//! depend on the threads.
+//!
 //! An interrupt (the observer saying stop) within a stage keeps every part
 //! traced (batches of two sizes, each mean unbiased); shards that share
 //! their parts vote at every stage's end and all stop there together.
@@ -132,11 +138,29 @@ pub(super) fn applies(work: &dyn BatchWork, cfg: &RunConfig) -> bool {
         && values <= GROWN_VALUES
 }
 
-/// Chains `lo ..` of every batch, as batch work of their own.
+/// Chains a batch's part holds at most: a stage's part of each batch
+/// longer than this is traced in chunks of it, each a part of its own, so
+/// that a stage is more than 32 tasks where it is long (on more than 32
+/// threads, or over ranks). The chunks depend only on the sizes, never on
+/// the threads.
+pub const CHUNK: u64 = 4096;
+
+/// A stage: chains `lo .. hi` of every batch, in chunks of [`CHUNK`], as
+/// batch work of their own; its "batch" `k` is chunk `k % chunks` of batch
+/// `k / chunks`.
 struct PartWork<'a> {
     work: &'a dyn BatchWork,
     lo: u64,
-    index: u32,
+    hi: u64,
+    /// Part number of the stage's first chunk.
+    first: u32,
+}
+
+impl PartWork<'_> {
+    /// Chunks per batch in the stage.
+    fn chunks(&self) -> u64 {
+        (self.hi - self.lo).div_ceil(CHUNK)
+    }
 }
 
 impl BatchWork for PartWork<'_> {
@@ -161,17 +185,33 @@ impl BatchWork for PartWork<'_> {
     fn run_batch(
         &self,
         cfg: &RunConfig,
-        b: u64,
-        bs: u64,
+        k: u64,
+        _bs: u64,
         buckets: usize,
         scratch: &mut [f64],
     ) -> Batch {
+        let (b, c) = (k / self.chunks(), k % self.chunks());
+        let lo = self.lo + c * CHUNK;
         let part = Part {
-            lo: self.lo,
-            hi: self.lo + bs,
-            index: self.index,
+            lo,
+            hi: (lo + CHUNK).min(self.hi),
+            index: self.first + c as u32,
         };
-        self.work.run_part(cfg, b, part, buckets, scratch)
+        let mut chunk = self.work.run_part(cfg, b, part, buckets, scratch);
+        chunk.index = k;
+        chunk
+    }
+}
+
+/// Add a stage's chunks (`index` counting chunk `c` of batch `b` as `b
+/// chunks + c`, in that order) to the batches grown so far.
+fn add_chunks(grown: &mut Vec<Batch>, chunks: Vec<Batch>, per_batch: u64) {
+    for mut c in chunks {
+        c.index /= per_batch;
+        match grown.get_mut(c.index as usize) {
+            Some(g) => g.extend(&c),
+            None => grown.push(c),
+        }
     }
 }
 
@@ -232,13 +272,19 @@ pub(super) fn grown_run(
     let mut cut = false;
     let mut tallies = empty_tallies(work, cfg);
     let (mut traced, mut stage_wall) = (0u64, 0.0);
+    // Parts begun in all batches' nets so far (each chunk one).
+    let mut part_index = 0u32;
     loop {
         let t = Instant::now();
         let part = PartWork {
             work,
             lo: size,
-            index: stages.len() as u32,
+            hi: next,
+            first: part_index,
         };
+        let chunks = part.chunks();
+        part_index += chunks as u32;
+        let tasks = GROWN_BATCHES * chunks;
         // Shards that share their parts finish every stage: an interrupt
         // is noted and put to a vote at the stage's end (below), so that
         // all stop after the same stage rather than one leaving the others
@@ -253,21 +299,13 @@ pub(super) fn grown_run(
                 &part,
                 &part_cfg,
                 next - size,
-                GROWN_BATCHES,
+                tasks,
                 start,
                 &mut relay,
                 None,
             )
         } else {
-            drive_batches(
-                &part,
-                &part_cfg,
-                next - size,
-                GROWN_BATCHES,
-                start,
-                observe,
-                None,
-            )
+            drive_batches(&part, &part_cfg, next - size, tasks, start, observe, None)
         };
         let mut parts = r.batches;
         traced += parts.iter().map(|b| b.chains).sum::<u64>();
@@ -282,13 +320,7 @@ pub(super) fn grown_run(
             reason = r.reason;
             if shared.is_none() {
                 cut = true;
-                if grown.is_empty() {
-                    grown = parts;
-                } else {
-                    for (g, p) in grown.iter_mut().zip(&parts) {
-                        g.extend(p);
-                    }
-                }
+                add_chunks(&mut grown, parts, chunks);
                 tallies = empty_tallies(work, cfg);
                 let mut means = vec![0.0; bucket_count(cfg.orders) * work.len()];
                 for b in &grown {
@@ -301,17 +333,11 @@ pub(super) fn grown_run(
             parts = (share.0)(parts);
             parts.sort_by_key(|b| b.index);
             assert!(
-                parts.iter().map(|b| b.index).eq(0..GROWN_BATCHES),
-                "the shards shared parts other than 0 .. {GROWN_BATCHES}"
+                parts.iter().map(|b| b.index).eq(0..tasks),
+                "the shards shared parts other than 0 .. {tasks}"
             );
         }
-        if grown.is_empty() {
-            grown = parts;
-        } else {
-            for (g, p) in grown.iter_mut().zip(&parts) {
-                g.extend(p);
-            }
-        }
+        add_chunks(&mut grown, parts, chunks);
         size = next;
         stage_wall += t.elapsed().as_secs_f64();
         tallies = fold_batches(empty_tallies(work, cfg), direct, size, &grown);
