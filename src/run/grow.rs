@@ -141,8 +141,9 @@ pub(super) fn applies(work: &dyn BatchWork, cfg: &RunConfig) -> bool {
 /// Chains a batch's part holds at most: a stage's part of each batch
 /// longer than this is traced in chunks of it, each a part of its own, so
 /// that a stage is more than 32 tasks where it is long (on more than 32
-/// threads, or over ranks). The chunks depend only on the sizes, never on
-/// the threads.
+/// threads, or over ranks); fewer, larger chunks where the stage's chunks
+/// would hold more than [`GROWN_VALUES`] sums. The chunks depend only on
+/// the sizes and the receivers, never on the threads.
 pub const CHUNK: u64 = 4096;
 
 /// A stage: chains `lo .. hi` of every batch, in chunks of [`CHUNK`], as
@@ -152,6 +153,9 @@ struct PartWork<'a> {
     work: &'a dyn BatchWork,
     lo: u64,
     hi: u64,
+    /// Chains per chunk: [`CHUNK`], or more where the stage's chunks
+    /// would hold more sums than [`GROWN_VALUES`] at once.
+    chunk: u64,
     /// Part number of the stage's first chunk.
     first: u32,
 }
@@ -159,7 +163,7 @@ struct PartWork<'a> {
 impl PartWork<'_> {
     /// Chunks per batch in the stage.
     fn chunks(&self) -> u64 {
-        (self.hi - self.lo).div_ceil(CHUNK)
+        (self.hi - self.lo).div_ceil(self.chunk)
     }
 }
 
@@ -191,10 +195,10 @@ impl BatchWork for PartWork<'_> {
         scratch: &mut [f64],
     ) -> Batch {
         let (b, c) = (k / self.chunks(), k % self.chunks());
-        let lo = self.lo + c * CHUNK;
+        let lo = self.lo + c * self.chunk;
         let part = Part {
             lo,
-            hi: (lo + CHUNK).min(self.hi),
+            hi: (lo + self.chunk).min(self.hi),
             index: self.first + c as u32,
         };
         let mut chunk = self.work.run_part(cfg, b, part, buckets, scratch);
@@ -272,14 +276,19 @@ pub(super) fn grown_run(
     let mut cut = false;
     let mut tallies = empty_tallies(work, cfg);
     let (mut traced, mut stage_wall) = (0u64, 0.0);
-    // Parts begun in all batches' nets so far (each chunk one).
+    // Parts begun in all batches' nets so far (each chunk one), and the
+    // most chunks a batch's part is cut into: a stage holds its chunks'
+    // sums until it ends, at most GROWN_VALUES of them.
     let mut part_index = 0u32;
+    let per_batch = (work.len() * bucket_count(cfg.orders)) as u64 * GROWN_BATCHES;
+    let max_chunks = (GROWN_VALUES / per_batch.max(1)).max(1);
     loop {
         let t = Instant::now();
         let part = PartWork {
             work,
             lo: size,
             hi: next,
+            chunk: CHUNK.max((next - size).div_ceil(max_chunks)),
             first: part_index,
         };
         let chunks = part.chunks();
