@@ -108,25 +108,7 @@ fn grown_runs_are_the_same_on_any_thread_count_and_over_sharing_shards() {
         "{plan:?}"
     );
     assert_eq!(bits(&one), bits(&three));
-    let pool = std::sync::Arc::new((
-        std::sync::Mutex::new(Vec::new()),
-        std::sync::Barrier::new(3),
-    ));
-    let share = {
-        let pool = pool.clone();
-        lumest::run::Share(std::sync::Arc::new(move |own| {
-            pool.0.lock().unwrap().extend(own);
-            pool.1.wait();
-            let all = pool.0.lock().unwrap().clone();
-            pool.1.wait();
-            // Emptied for the next stage, once every shard has its copy.
-            if pool.1.wait().is_leader() {
-                pool.0.lock().unwrap().clear();
-            }
-            pool.1.wait();
-            all
-        }))
-    };
+    let share = common::share_through_memory(3);
     let shards: Vec<RunResult> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..3)
             .map(|i| {
@@ -362,24 +344,7 @@ fn grown_runs_over_many_points_are_the_same_on_any_thread_count() {
 #[test]
 fn an_interrupt_on_one_sharing_shard_stops_them_all_at_a_stage_end() {
     let (scene, rec, _) = point_case();
-    let pool = std::sync::Arc::new((
-        std::sync::Mutex::new(Vec::new()),
-        std::sync::Barrier::new(3),
-    ));
-    let share = {
-        let pool = pool.clone();
-        lumest::run::Share(std::sync::Arc::new(move |own| {
-            pool.0.lock().unwrap().extend(own);
-            pool.1.wait();
-            let all = pool.0.lock().unwrap().clone();
-            pool.1.wait();
-            if pool.1.wait().is_leader() {
-                pool.0.lock().unwrap().clear();
-            }
-            pool.1.wait();
-            all
-        }))
-    };
+    let share = common::share_through_memory(3);
     let shards: Vec<RunResult> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..3)
             .map(|i| {

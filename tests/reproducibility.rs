@@ -199,20 +199,7 @@ fn calibrated_rms_plan_is_reproducible_and_shards_alike() {
     // Three shards at once that share the planning batches (as MPI ranks
     // do, here through memory): each traces its own 10 or 11 of the 32,
     // and the fold is the same again.
-    let pool = std::sync::Arc::new((
-        std::sync::Mutex::new(Vec::new()),
-        std::sync::Barrier::new(3),
-    ));
-    let share = {
-        let pool = pool.clone();
-        lumest::run::Share(std::sync::Arc::new(move |own| {
-            pool.0.lock().unwrap().extend(own);
-            pool.1.wait();
-            let all = pool.0.lock().unwrap().clone();
-            pool.1.wait();
-            all
-        }))
-    };
+    let share = common::share_through_memory(3);
     let shared: Vec<lumest::run::RunResult> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..3)
             .map(|i| {

@@ -248,17 +248,17 @@ pub fn next_size(stages: &[(u64, f64)], target: f64, cap: u64) -> u64 {
 }
 
 /// Run the grown batches (module docs) of `work` under `cfg` (with its
-/// time cap), at most `cap` chains a batch; `plan` carries the target
-/// and is completed here.
+/// time cap, the default one being `default_cap`) to `target`, at most
+/// `cap` chains a batch.
 pub(super) fn grown_run(
     work: &dyn BatchWork,
     cfg: &RunConfig,
+    target: f64,
     cap: u64,
+    default_cap: Option<f64>,
     start: Instant,
     observe: &mut dyn FnMut(&Progress) -> bool,
-    mut plan: Pilot,
 ) -> RunResult {
-    let target = plan.target;
     let direct = work.direct();
     let shared = cfg.shard.and(cfg.share.clone());
     // Every part run keeps its batches unfolded (a shard's own, where the
@@ -412,15 +412,26 @@ pub(super) fn grown_run(
     if cut {
         size = grown.iter().map(|b| b.chains).max().unwrap_or(size);
     }
-    let e_last = stages.last().map_or(f64::NAN, |s| s.1);
-    plan.batches = tallies.batches();
-    plan.batch_size = size;
-    plan.rel_error = e_last;
-    plan.dof = (plan.batches.max(2) - 1) as f64;
-    plan.planned = GROWN_BATCHES;
-    plan.grown = stages.len() as u32 + u32::from(cut);
-    plan.fall = fall(&stages).unwrap_or(f64::NAN);
-    plan.estimated_time = stage_wall;
+    let batches = tallies.batches();
+    let plan = Pilot {
+        target,
+        batches,
+        batch_size: size,
+        wall: 0.0,
+        rel_error: stages.last().map_or(f64::NAN, |s| s.1),
+        rms: cfg.stop.rms,
+        custom: false,
+        dof: (batches.max(2) - 1) as f64,
+        fall: fall(&stages).unwrap_or(f64::NAN),
+        planned: GROWN_BATCHES,
+        estimated_time: stage_wall,
+        default_cap,
+        stages: 0,
+        pilot_chains: 0,
+        calibration: 0,
+        calibration_traced: 0,
+        grown: stages.len() as u32 + u32::from(cut),
+    };
     let wall = start.elapsed().as_secs_f64();
     let threads = if cfg.threads == 0 {
         std::thread::available_parallelism().map_or(1, |p| p.get())

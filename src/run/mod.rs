@@ -505,30 +505,11 @@ pub fn drive(
         ..cfg.clone()
     };
     if let Some(target) = stop.rel_error.filter(|_| grow::applies(work, cfg)) {
-        let plan = Pilot {
-            target,
-            batches: 0,
-            batch_size: 0,
-            wall: 0.0,
-            rel_error: f64::NAN,
-            rms: stop.rms,
-            custom: false,
-            dof: 0.0,
-            fall: 0.0,
-            planned: 0,
-            estimated_time: f64::INFINITY,
-            default_cap,
-            stages: 0,
-            pilot_chains: 0,
-            calibration: 0,
-            calibration_traced: 0,
-            grown: 0,
-        };
         let cap = stop
             .chains
             .map_or(u64::MAX, |c| c.div_ceil(grow::GROWN_BATCHES))
             .min(grow::MAX_GROWN_CHAINS);
-        return grow::grown_run(work, &capped, cap, start, observe, plan);
+        return grow::grown_run(work, &capped, target, cap, default_cap, start, observe);
     }
     let mut bs = cfg
         .batch_size

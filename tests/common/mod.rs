@@ -118,3 +118,25 @@ pub fn from_floor(rho: f64, dz: f64, e: impl Fn(f64) -> f64) -> f64 {
         .map(|w| rule.integrate(w[0], w[1], f))
         .sum()
 }
+
+/// How `shards` shards that run at once on threads share batches, as MPI
+/// ranks do through an all-gather ([`lumest::run::Share`]): every call
+/// returns every shard's batches of that call, and may be repeated (the
+/// pool is emptied once every shard has its copy).
+pub fn share_through_memory(shards: usize) -> lumest::run::Share {
+    let pool = std::sync::Arc::new((
+        std::sync::Mutex::new(Vec::new()),
+        std::sync::Barrier::new(shards),
+    ));
+    lumest::run::Share(std::sync::Arc::new(move |own| {
+        pool.0.lock().unwrap().extend(own);
+        pool.1.wait();
+        let all = pool.0.lock().unwrap().clone();
+        pool.1.wait();
+        if pool.1.wait().is_leader() {
+            pool.0.lock().unwrap().clear();
+        }
+        pool.1.wait();
+        all
+    }))
+}
