@@ -629,8 +629,20 @@ fn join_pool<F: FnMut(u32, f64)>(
     let mut tests = 0;
     let scale = pool.seen as f64 / (f64::from(picks) * pool.chains as f64);
     let from = Some((h.surface, h.prim));
-    for _ in 0..picks {
-        let i = ((rng.next_f64() * n as f64) as usize).min(n - 1);
+    // Every pick is drawn first (the same draws in the same order: the loop
+    // below draws nothing) and the picked collisions are read together, so
+    // that their cache misses in a pool of megabytes overlap instead of
+    // coming one per pick after a shadow test each.
+    let mut picked = [0usize; Pool::PICKS as usize];
+    let picked = &mut picked[..(picks.min(Pool::PICKS) as usize)];
+    let mut touch = 0.0;
+    for i in picked.iter_mut() {
+        *i = ((rng.next_f64() * n as f64) as usize).min(n - 1);
+        let y = &pool.items[*i];
+        touch += y.p.x + y.q;
+    }
+    std::hint::black_box(touch);
+    for &i in picked.iter() {
         let y = &pool.items[i];
         if max_order.is_some_and(|m| y.order + k > m) {
             continue;
