@@ -7,7 +7,7 @@
 use glam::DVec3;
 use lumest::geometry::mesh::star_blob;
 
-/// Radius [m] of the object in the unit direction `u`: smooth everywhere on
+/// Radius \[m\] of the object in the unit direction `u`: smooth everywhere on
 /// the sphere (Gaussian bumps of the chord distance), not a finite
 /// spherical-harmonic sum, so a fit of degree L leaves an honest residual.
 pub fn blob_radius(u: DVec3) -> f64 {
