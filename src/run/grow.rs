@@ -219,6 +219,14 @@ fn add_chunks(grown: &mut Vec<Batch>, chunks: Vec<Batch>, per_batch: u64) {
     }
 }
 
+/// The next size `next` held to what a time limit leaves: at most `fits`
+/// more chains per batch than `size`, in whole grains. Saturating: a time
+/// limit far beyond any run (`--time 1e15`) gives `fits` near `u64::MAX`,
+/// whose sum with `size` wrapped to a size below `size` before.
+fn time_bound(next: u64, size: u64, fits: u64) -> u64 {
+    next.min(size.saturating_add(fits / GRAIN * GRAIN))
+}
+
 /// The fall of the variance per chain with the size, `v(n) ~ n^-alpha`,
 /// between the first stage and the last, `(size, error)`; `None` with one.
 pub fn fall(stages: &[(u64, f64)]) -> Option<f64> {
@@ -404,7 +412,7 @@ pub(super) fn grown_run(
                 reason = StopReason::Time;
                 break;
             }
-            next = next.min(size + fits / GRAIN * GRAIN);
+            next = time_bound(next, size, fits);
         }
     }
     // An interrupted stage counts, and its batches are as large as the
@@ -493,5 +501,19 @@ mod tests {
         // The cap, and never less than one more chain.
         assert_eq!(next_size(&[(256, 1.0)], 1e-3, 1000), 1000);
         assert_eq!(next_size(&[(256, 1.0)], 1e-3, 100), 257);
+    }
+
+    /// A time limit holds the next size to whole grains beyond the current
+    /// one, and one far beyond any run (`fits` near `u64::MAX`, as `--time
+    /// 1e15` gives) leaves the planned size, never one below the current.
+    #[test]
+    fn time_bound_saturates() {
+        assert_eq!(time_bound(4096, 1024, 1000), 1024 + 960);
+        assert_eq!(time_bound(4096, 1024, 1 << 20), 4096);
+        assert_eq!(time_bound(4096, 1024, u64::MAX), 4096);
+        assert_eq!(time_bound(u64::MAX, u64::MAX - 10, u64::MAX), u64::MAX);
+        for fits in [GRAIN, 1 << 40, u64::MAX - 1, u64::MAX] {
+            assert!(time_bound(1 << 33, 1 << 32, fits) > 1 << 32);
+        }
     }
 }
