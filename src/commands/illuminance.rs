@@ -324,7 +324,11 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
         r.direct.len(),
         r.chains,
         r.tallies.batches(),
-        r.batch_size,
+        if r.pilot.as_ref().is_some_and(|p| p.cut) {
+            format!("up to {}", r.batch_size)
+        } else {
+            r.batch_size.to_string()
+        },
         r.wall,
         r.threads,
         r.reason,
@@ -410,7 +414,16 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
                  chains each, each stage's own {what} R sizing the next{}",
                 p.batches,
                 p.grown,
-                p.batch_size,
+                if p.cut {
+                    // (Stopped within the last stage: the batches differ.)
+                    format!(
+                        "up to {} (stopped within the last stage; {:.0} on average)",
+                        p.batch_size,
+                        r.chains as f64 / p.batches.max(1) as f64
+                    )
+                } else {
+                    p.batch_size.to_string()
+                },
                 if p.fall.is_finite() {
                     format!(" (variance per chain went like batch size^{:.2})", -p.fall)
                 } else {
@@ -463,6 +476,12 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
                 " (target met)".to_string()
             } else if max.is_nan() {
                 " (target MISSED: the error is not a number; see the flagged rows)".to_string()
+            } else if max.is_infinite() {
+                // (An estimate of 0 with a nonzero error bar: no count of
+                // chains can be read off it.)
+                " (target MISSED: a relative error is infinite, an estimate of 0 with a nonzero \
+                 error bar; see the flagged rows)"
+                    .to_string()
             } else if r.reason == crate::run::StopReason::Time {
                 let by = p.default_cap.map_or_else(
                     || "--time".to_string(),

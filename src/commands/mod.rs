@@ -83,9 +83,11 @@ pub struct RunArgs {
     )]
     pub rel_error: Option<f64>,
     /// Aim at a root mean square of the points' relative standard errors
-    /// below this: over several effective points, a count planned on the
-    /// run's own first 32 batches (kept); otherwise the pilot rule of
-    /// `--rel-error` (see `lumest::run`).
+    /// below this: the run's 32 batches grow stage by stage until their own
+    /// RMS meets it (as `--rel-error` does for the largest); with
+    /// `--batch-size`, shards run apart, `--figure-target`, the backward
+    /// estimator or more than 2^24 sums at once, a count planned on the
+    /// run's own first 32 batches or the pilot rule (see `lumest::run`).
     #[arg(long = "rms-error", allow_negative_numbers = true)]
     pub rms_error: Option<f64>,
     /// Seed of the random streams.

@@ -66,9 +66,11 @@
 //! tasks; the chunks depend on the sizes alone, so the result does not
 //! depend on the threads.
 //!
-//! An interrupt (the observer saying stop) within a stage keeps every part
-//! traced (batches of two sizes, each mean unbiased); shards that share
-//! their parts vote at every stage's end and all stop there together.
+//! An interrupt (the observer saying stop) within a stage keeps the
+//! stage's chunks folded by then, a prefix in chunk order (so the batches
+//! differ in size: extended, partly extended, not extended; each mean is
+//! unbiased for its size); shards that share their parts vote at every
+//! stage's end and all stop there together.
 //!
 //! # Where it applies
 //!
@@ -121,7 +123,13 @@ pub const MAX_GROWN_CHAINS: u64 = 1 << 32;
 const STOP_VOTE: u64 = u64::MAX;
 
 /// Most sums (receivers times buckets times [`GROWN_BATCHES`]) a grown run
-/// keeps: 128 MB.
+/// keeps: 128 MB of sums. Each batch (and each chunk of a stage, held
+/// until the stage ends) also keeps per receiver its near-hit counts (one,
+/// or three with reach counts) and its sampled direct sum, 8 bytes each;
+/// the batches grown so far and a stage's chunks (sized so that their sums
+/// stay within the bound too) are held at once. So at the bound, with one
+/// order, a run holds up to about six times 128 MB (not measured), more
+/// with reach counts or MPI's exchange buffers.
 pub const GROWN_VALUES: u64 = 1 << 24;
 
 /// Whether a run aiming at an error target grows its batches (module docs).
@@ -327,13 +335,17 @@ pub(super) fn grown_run(
         let mut parts = r.batches;
         traced += parts.iter().map(|b| b.chains).sum::<u64>();
         if r.reason != StopReason::Chains {
-            // Stopped by the observer (an interrupt) within a stage: every
-            // part traced is kept, so the batches that finished their part
-            // are larger than the others. Each batch mean is unbiased
-            // whatever its size, and which batches finished depends on the
-            // threads, not on their values, so the mean of the batch means
-            // is unbiased and their spread estimates its variance. (Shards
-            // keep the last whole stage: they cannot agree on what was cut.)
+            // Stopped by the observer (an interrupt) within a stage: the
+            // chunks folded by then are kept, a prefix in chunk order (a
+            // chunk traced but after the cut is dropped), so the batches
+            // whose chunks made it are larger than the others. Each batch
+            // mean is unbiased for its size, and where the prefix ends
+            // depends on the threads' timing; a chunk's time correlates only
+            // weakly with its value (more collisions, more score), a
+            // second-order effect confined to the chunks at the cut, so the
+            // mean of the batch means is unbiased to that order and their
+            // spread estimates its variance. (Shards keep the last whole
+            // stage: they cannot agree on what was cut.)
             reason = r.reason;
             if shared.is_none() {
                 cut = true;
@@ -439,6 +451,7 @@ pub(super) fn grown_run(
         calibration: 0,
         calibration_traced: 0,
         grown: stages.len() as u32 + u32::from(cut),
+        cut,
     };
     let wall = start.elapsed().as_secs_f64();
     let threads = if cfg.threads == 0 {

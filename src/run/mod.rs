@@ -14,9 +14,14 @@
 //!
 //! # The `--rel-error` and `--rms-error` rules
 //!
-//! A run aimed at an error target is planned from a pilot (or from its own
-//! first batches) by the rule of [`plan`]: [`drive`] runs the stages and
-//! the run proper, [`plan`] holds the statistics that size them.
+//! A run aimed at an error target grows its 32 batches stage by stage until
+//! their own error meets it ([`grow`]: `--rel-error` and `--rms-error` on
+//! the local estimator, in one process or over MPI ranks). Where batches
+//! cannot grow (`--batch-size`, shards run apart, `--figure-target`, the
+//! backward estimator, more than 2^24 sums at once) it is planned from a
+//! pilot (or from its own first batches) by the rule of [`plan`]: [`drive`]
+//! runs the stages and the run proper, [`plan`] holds the statistics that
+//! size them.
 //!
 //! Why batches rather than per-chain tallies: a chain scores into every point
 //! at every collision, so per-chain squares would cost as much as the scores
@@ -52,8 +57,9 @@ pub struct Stop {
     /// [`MIN_BATCHES`] batches, so a very short limit may be exceeded.
     pub time: Option<f64>,
     /// Target for the largest relative standard error of `E` over the
-    /// points, met by a pilot and a fixed count of fresh batches (see the
-    /// [`plan`] docs).
+    /// points (the RMS with `rms`), met by batches grown to it ([`grow`])
+    /// or, where they cannot grow, by a pilot and a fixed count of fresh
+    /// batches (see the [`plan`] docs).
     pub rel_error: Option<f64>,
     /// Time limit \[s\] of a `rel_error` run given no `time`; `None`:
     /// [`DEFAULT_REL_ERROR_CAP`].
@@ -656,6 +662,7 @@ pub fn drive(
         calibration: 0,
         calibration_traced: 0,
         grown: 0,
+        cut: false,
     };
     if calibrate {
         return calibrated_run(work, &capped, bs, by_chains, start, observe, plan);

@@ -199,6 +199,9 @@ pub struct Pilot {
     /// its last stage, and `fall` the fall of its variance per chain
     /// measured between its first stage and its last. 0: a planned run.
     pub grown: u32,
+    /// A grown run stopped within its last stage (an interrupt): its
+    /// batches differ in size and `batch_size` is the largest of them.
+    pub cut: bool,
 }
 
 /// Batches of the run proper that an RMS target's plan is measured on
