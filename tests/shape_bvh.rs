@@ -265,6 +265,46 @@ fn same(a: &Option<Hit>, b: &Option<Hit>) -> bool {
     }
 }
 
+/// A search bounded at `t_max` (`Scene::intersect_within`,
+/// `first_hit_within`) answers as the full search filtered to `t < t_max`:
+/// checked at the hit's own `t`, a hair either side of it, and at `t_max`
+/// well before and beyond, on both scenes. At an edge or emitter tie the
+/// competing hits lie within 1e-9 (relative) of the answer, so a bound
+/// that cut them off would change it.
+fn check_within(
+    scenes: [&Scene; 2],
+    ray: Ray,
+    from: Option<(u32, u32)>,
+    observer: bool,
+    full: &Option<Hit>,
+    rng: &mut Philox4x32,
+) {
+    let t = full.as_ref().map_or(1.0, |h| h.t);
+    for t_max in [
+        t,
+        t * (1.0 + 1e-12),
+        t * (1.0 - 1e-12),
+        t * (1.0 + 1e-10),
+        t * 0.5 * rng.next_f64(),
+        t * (1.0 + 4.0 * rng.next_f64()),
+    ] {
+        let want = full.filter(|h| h.t < t_max);
+        for s in scenes {
+            let got = if observer {
+                s.first_hit_within(ray.o, ray.d, t_max)
+            } else {
+                s.intersect_within(&ray, from, t_max)
+            };
+            assert!(
+                same(&want, &got),
+                "within {t_max}: o {} d {} from {from:?}: full {full:?}, bounded {got:?}",
+                ray.o,
+                ray.d
+            );
+        }
+    }
+}
+
 fn unit(u: &mut Philox4x32) -> DVec3 {
     let z = 2.0 * u.next_f64() - 1.0;
     let phi = std::f64::consts::TAU * u.next_f64();
@@ -301,7 +341,10 @@ fn compare(f: &Furnished, seed: u64, s: f64, off: DVec3, n_rays: usize) -> Seen 
             * s
     };
     let mut surface_points: Vec<(DVec3, (u32, u32))> = vec![];
-    let check_ray = |ray: Ray, from: Option<(u32, u32)>, what: &str| -> Option<Hit> {
+    // (Their own streams: the rays drawn from `rng` stay those of before.)
+    let mut within_rng = Philox4x32::new(seed, 2);
+    let mut observer_rng = Philox4x32::new(seed, 3);
+    let mut check_ray = |ray: Ray, from: Option<(u32, u32)>, what: &str| -> Option<Hit> {
         let a = lin.intersect(&ray, from);
         let b = tree.intersect(&ray, from);
         assert!(
@@ -310,6 +353,7 @@ fn compare(f: &Furnished, seed: u64, s: f64, off: DVec3, n_rays: usize) -> Seen 
             ray.o,
             ray.d
         );
+        check_within([&lin, &tree], ray, from, false, &a, &mut within_rng);
         a
     };
     // Rays from the air, then chains of rays leaving the surfaces they hit.
@@ -343,6 +387,14 @@ fn compare(f: &Furnished, seed: u64, s: f64, off: DVec3, n_rays: usize) -> Seen 
         assert!(
             same(&a, &b),
             "observer at {o} d {d}: linear {a:?}, tree {b:?}"
+        );
+        check_within(
+            [&lin, &tree],
+            Ray { o, d },
+            None,
+            true,
+            &a,
+            &mut observer_rng,
         );
         seen.observers += 1;
     }
@@ -526,4 +578,66 @@ fn runs_are_bit_identical_with_and_without_the_tree() {
     let a = lumest::backward::run(&lin, &rl, &cfg, &mut |_| true);
     let b = lumest::backward::run(&tree, &rt, &cfg, &mut |_| true);
     assert_eq!(bits(&a), bits(&b));
+}
+
+/// The bounded search's margin: an area source set a hair (1e-11 m,
+/// within the emitter tie) behind a ceiling panel wins the tie, so a search
+/// bounded between the panel's `t` and the source's must answer `None`, as
+/// the full search filtered does; a bound with no margin would collect the
+/// panel alone and answer it.
+#[test]
+fn a_bounded_search_keeps_the_tie_beyond_its_bound() {
+    let lam = |rho| Material::Lambertian { rho };
+    let panel = Rect::new(
+        DVec3::new(0.0, 0.0, 2.0),
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(0.0, 1.0, 0.0),
+    )
+    .unwrap();
+    let specs = vec![SurfaceSpec::Rect(
+        "panel".into(),
+        panel,
+        Sides::Both,
+        lam(0.5),
+    )];
+    let light = Light::Area(Arc::new(AreaLight {
+        shape: AreaShape::Rect {
+            corner: DVec3::new(0.0, 0.0, 2.0 + 1e-11),
+            e1: DVec3::new(0.0, 1.0, 0.0),
+            e2: DVec3::new(1.0, 0.0, 0.0),
+        },
+        l0: 100.0,
+        two_sided: false,
+        material: lam(0.0),
+        surface: u32::MAX,
+    }));
+    let scene = Scene::build(specs, vec![light]).unwrap();
+    let emitter = (0..scene.surfaces.len() as u32)
+        .find(|&k| scene.surfaces[k as usize].emitter.is_some())
+        .unwrap();
+    let ray = Ray {
+        o: DVec3::new(0.4, 0.3, 0.0),
+        d: DVec3::Z,
+    };
+    let full = scene.intersect(&ray, None).unwrap();
+    assert_eq!(full.surface, emitter, "the source wins the tie");
+    let panel_t = 2.0;
+    assert!(
+        full.t > panel_t,
+        "the source lies beyond the panel: {}",
+        full.t
+    );
+    for t_max in [panel_t + 2e-12, 0.5 * (panel_t + full.t), full.t] {
+        assert!(t_max > panel_t && t_max <= full.t);
+        assert!(
+            scene.intersect_within(&ray, None, t_max).is_none(),
+            "{t_max}"
+        );
+        assert!(
+            scene.first_hit_within(ray.o, ray.d, t_max).is_none(),
+            "{t_max}"
+        );
+    }
+    let beyond = scene.intersect_within(&ray, None, full.t * (1.0 + 1e-12));
+    assert_eq!(beyond.map(|h| h.surface), Some(emitter));
 }

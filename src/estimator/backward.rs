@@ -464,7 +464,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     let beta0 = beta;
     let rr = cfg.chain.rr_weight * beta0;
     let mut d = frame.to_world(d_local);
-    let mut hit = scene.first_hit_from(rec.p, d).filter(|h| h.t < first_max);
+    let mut hit = scene.first_hit_within(rec.p, d, first_max);
     rays += 1;
     let mut order = 0u32;
     let mut vertices = 0;
@@ -552,9 +552,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         };
         beta = survivor;
         d = f_frame.to_world(s.w);
-        hit = scene
-            .intersect(&Ray { o: h.p, d }, from)
-            .filter(|h| h.t < seg_max);
+        hit = scene.intersect_within(&Ray { o: h.p, d }, from, seg_max);
         rays += 1;
     }
     Walk {

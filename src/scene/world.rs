@@ -1100,23 +1100,51 @@ impl Scene {
     #[inline]
     pub fn intersect(&self, ray: &Ray, from: Option<(u32, u32)>) -> Option<Hit> {
         match from {
-            Some((s, p)) => self.nearest(ray, Start::On(s, p)),
-            None => self.nearest(ray, Start::On(u32::MAX, 0)),
+            Some((s, p)) => self.nearest(ray, Start::On(s, p), f64::INFINITY),
+            None => self.nearest(ray, Start::On(u32::MAX, 0), f64::INFINITY),
         }
     }
 
     /// First surface hit by a ray leaving `o` (an observer, possibly standing
     /// on surfaces: a surface through `o` is not hit at `t ~ 0`) in unit direction `d`.
     pub fn first_hit_from(&self, o: DVec3, d: DVec3) -> Option<Hit> {
-        self.nearest(&Ray { o, d }, Start::Observer)
+        self.nearest(&Ray { o, d }, Start::Observer, f64::INFINITY)
     }
 
-    fn nearest(&self, ray: &Ray, start: Start) -> Option<Hit> {
+    /// [`Self::intersect`] for a ray that matters only before `t_max` \[m\]:
+    /// the same hit where it lies nearer than `t_max`, else `None`. Shapes
+    /// beyond `t_max` are not tested (a backward path's segment within a
+    /// split radius).
+    #[inline]
+    pub fn intersect_within(&self, ray: &Ray, from: Option<(u32, u32)>, t_max: f64) -> Option<Hit> {
+        let start = match from {
+            Some((s, p)) => Start::On(s, p),
+            None => Start::On(u32::MAX, 0),
+        };
+        self.nearest(ray, start, t_max).filter(|h| h.t < t_max)
+    }
+
+    /// [`Self::first_hit_from`] for a ray that matters only before `t_max`
+    /// \[m\] (see [`Self::intersect_within`]).
+    pub fn first_hit_within(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<Hit> {
+        self.nearest(&Ray { o, d }, Start::Observer, t_max)
+            .filter(|h| h.t < t_max)
+    }
+
+    /// The nearest hit, of those that can be nearer than `t_max` \[m\]
+    /// (`INFINITY`: all): the search starts bounded just beyond `t_max`.
+    /// The answer is one of the hits, and every hit that can compete with
+    /// it lies within a relative `PRUNE` (1e-8) of the nearest hit
+    /// (`nearest.rs`): where the answer lies nearer than `t_max`, all of
+    /// them lie nearer than `t_max (1 + 1e-6)` and are still collected, so
+    /// the answer is the unbounded search's.
+    fn nearest(&self, ray: &Ray, start: Start, t_max: f64) -> Option<Hit> {
         let on = |s: u32| matches!(start, Start::On(x, _) if x == s);
         let observer = matches!(start, Start::Observer);
         // Every hit is collected; which one wins follows the rules of
         // `nearest.rs`, whatever the order of the tests.
         let mut acc = Nearest::new();
+        acc.bound = t_max * (1.0 + 1e-6);
         for (i, pl) in self.planes.iter().enumerate() {
             let s = self.plane_surface[i];
             if on(s) || (observer && pl.side(ray.o) == 0) {
