@@ -427,8 +427,9 @@ pub(super) fn grown_run(
             next = time_bound(next, size, fits);
         }
     }
-    // An interrupted stage counts, and its batches are as large as the
-    // largest of them.
+    // An interrupted stage counts; its batches differ in size, and
+    // `batch_size` reports the largest of them (`Pilot::cut`: the summary
+    // says "up to").
     if cut {
         size = grown.iter().map(|b| b.chains).max().unwrap_or(size);
     }

@@ -335,6 +335,17 @@ enum Start {
     Observer,
 }
 
+impl Start {
+    /// A ray leaving `from` (a collision's surface and primitive), or from
+    /// the air (`None`: no surface is skipped).
+    fn leaving(from: Option<(u32, u32)>) -> Self {
+        match from {
+            Some((s, p)) => Start::On(s, p),
+            None => Start::On(u32::MAX, 0),
+        }
+    }
+}
+
 impl Scene {
     /// Build a planes-only scene; used by programmatic scenes such as the
     /// Sobolev validation case. Validated as [`Scene::build`].
@@ -1099,10 +1110,7 @@ impl Scene {
     /// the ray leaves (a collision), which it does not meet again at its origin.
     #[inline]
     pub fn intersect(&self, ray: &Ray, from: Option<(u32, u32)>) -> Option<Hit> {
-        match from {
-            Some((s, p)) => self.nearest(ray, Start::On(s, p), f64::INFINITY),
-            None => self.nearest(ray, Start::On(u32::MAX, 0), f64::INFINITY),
-        }
+        self.nearest(ray, Start::leaving(from), f64::INFINITY)
     }
 
     /// First surface hit by a ray leaving `o` (an observer, possibly standing
@@ -1117,11 +1125,8 @@ impl Scene {
     /// split radius).
     #[inline]
     pub fn intersect_within(&self, ray: &Ray, from: Option<(u32, u32)>, t_max: f64) -> Option<Hit> {
-        let start = match from {
-            Some((s, p)) => Start::On(s, p),
-            None => Start::On(u32::MAX, 0),
-        };
-        self.nearest(ray, start, t_max).filter(|h| h.t < t_max)
+        self.nearest(ray, Start::leaving(from), t_max)
+            .filter(|h| h.t < t_max)
     }
 
     /// [`Self::first_hit_from`] for a ray that matters only before `t_max`
