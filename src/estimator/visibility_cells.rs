@@ -11,6 +11,7 @@
 use crate::scene::Scene;
 use crate::scene::world::Occluder;
 use glam::DVec3;
+use rayon::prelude::*;
 
 /// One cell's split ([`VisibilityCells::split`]): the open responses, the
 /// entries left to a test (their masks are the cell's), and the cell's masks.
@@ -102,32 +103,33 @@ impl VisibilityCells {
             if e.z > 0.0 { n[2] as f64 / e.z } else { 0.0 },
         );
         let len = points.len();
-        let mut vis = Vec::with_capacity(n[0] * n[1] * n[2] * len);
-        for k in 0..n[2] {
-            for j in 0..n[1] {
-                for i in 0..n[0] {
-                    let idx = [i, j, k];
-                    // The cell's box; the last along an axis ends at the
-                    // region's own bound.
-                    let c0 =
-                        DVec3::from_array(std::array::from_fn(|a| lo[a] + step[a] * idx[a] as f64));
-                    let c1 = DVec3::from_array(std::array::from_fn(|a| {
-                        if idx[a] + 1 == n[a] {
-                            hi[a]
-                        } else {
-                            lo[a] + step[a] * (idx[a] + 1) as f64
-                        }
-                    }));
-                    for (e, p) in points.iter().enumerate() {
-                        let o = &occ[start[e] as usize..start[e + 1] as usize];
-                        vis.push(if o.is_empty() {
-                            0
-                        } else {
-                            scene.cell_visibility(*p, o, (c0, c1))
-                        });
+        // The cells in parallel, each filling its own row (x fastest, as
+        // `cell` indexes them): the same masks whatever the threads. A
+        // list's cells can be most of a run's set-up, and the lists
+        // themselves are built in parallel but unevenly (the walls' lists
+        // hold most points).
+        let mut vis = vec![0u64; n[0] * n[1] * n[2] * len];
+        if len > 0 {
+            vis.par_chunks_mut(len).enumerate().for_each(|(c, row)| {
+                let idx = [c % n[0], (c / n[0]) % n[1], c / (n[0] * n[1])];
+                // The cell's box; the last along an axis ends at the
+                // region's own bound.
+                let c0 =
+                    DVec3::from_array(std::array::from_fn(|a| lo[a] + step[a] * idx[a] as f64));
+                let c1 = DVec3::from_array(std::array::from_fn(|a| {
+                    if idx[a] + 1 == n[a] {
+                        hi[a]
+                    } else {
+                        lo[a] + step[a] * (idx[a] + 1) as f64
+                    }
+                }));
+                for ((e, p), m) in points.iter().enumerate().zip(row.iter_mut()) {
+                    let o = &occ[start[e] as usize..start[e + 1] as usize];
+                    if !o.is_empty() {
+                        *m = scene.cell_visibility(*p, o, (c0, c1));
                     }
                 }
-            }
+            });
         }
         let (mut open_w, mut test_start, mut tests) = (Vec::new(), Vec::new(), Vec::new());
         if let Some(w) = split {
