@@ -37,6 +37,31 @@ fn target_cfg(target: f64, seed: u64, threads: usize) -> RunConfig {
     }
 }
 
+/// Three shards of `cfg` that share their parts through memory (as MPI
+/// ranks do), each on a thread of its own with the observer `observe(i)`.
+fn sharing_shards<O: FnMut(&lumest::run::Progress) -> bool>(
+    scene: &lumest::scene::Scene,
+    rec: &Receivers,
+    cfg: &RunConfig,
+    observe: impl Fn(u64) -> O + Sync,
+) -> Vec<RunResult> {
+    let share = common::share_through_memory(3);
+    std::thread::scope(|s| {
+        let handles: Vec<_> = (0..3)
+            .map(|i| {
+                let shard = RunConfig {
+                    shard: Some((i, 3)),
+                    share: Some(share.clone()),
+                    ..cfg.clone()
+                };
+                let observe = &observe;
+                s.spawn(move || run(scene, rec, &shard, &mut observe(i)))
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    })
+}
+
 fn bits(r: &RunResult) -> Vec<u64> {
     let w = &r.tallies.estimated[0];
     vec![
@@ -108,21 +133,7 @@ fn grown_runs_are_the_same_on_any_thread_count_and_over_sharing_shards() {
         "{plan:?}"
     );
     assert_eq!(bits(&one), bits(&three));
-    let share = common::share_through_memory(3);
-    let shards: Vec<RunResult> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..3)
-            .map(|i| {
-                let shard = RunConfig {
-                    shard: Some((i, 3)),
-                    share: Some(share.clone()),
-                    ..cfg(1)
-                };
-                let (scene, rec) = (&scene, &rec);
-                s.spawn(move || run(scene, rec, &shard, &mut |_| true))
-            })
-            .collect();
-        handles.into_iter().map(|h| h.join().unwrap()).collect()
-    });
+    let shards = sharing_shards(&scene, &rec, &cfg(1), |_| |_: &_| true);
     let mut batches = Vec::new();
     for (i, r) in shards.into_iter().enumerate() {
         assert_eq!(r.pilot.map(|p| p.grown), Some(plan.grown));
@@ -243,12 +254,13 @@ fn skewed_chains_keep_the_mean_and_the_interval() {
     }
 }
 
-/// An interrupt (the observer saying stop) within a stage keeps every part
-/// traced: batches that finished their part are larger than the others,
-/// and the estimate of the mean of their means still covers the exact
-/// value. An interrupt within the first stage keeps the batches it has.
+/// An interrupt (the observer saying stop) within a stage keeps the
+/// stage's parts folded by then (on one thread, every part traced):
+/// batches that finished their part are larger than the others, and the
+/// estimate of the mean of their means still covers the exact value. An
+/// interrupt within the first stage keeps the batches it has.
 #[test]
-fn an_interrupt_within_a_stage_keeps_every_part() {
+fn an_interrupt_within_a_stage_keeps_the_parts_folded() {
     let (scene, rec, exact) = point_case();
     // Calls of the observer: one per batch part folded, one per stage end.
     for stop_after in [10, 33 + 20] {
@@ -344,26 +356,12 @@ fn grown_runs_over_many_points_are_the_same_on_any_thread_count() {
 #[test]
 fn an_interrupt_on_one_sharing_shard_stops_them_all_at_a_stage_end() {
     let (scene, rec, _) = point_case();
-    let share = common::share_through_memory(3);
-    let shards: Vec<RunResult> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..3)
-            .map(|i| {
-                let shard = RunConfig {
-                    shard: Some((i, 3)),
-                    share: Some(share.clone()),
-                    ..target_cfg(2e-4, 8, 1)
-                };
-                let (scene, rec) = (&scene, &rec);
-                s.spawn(move || {
-                    let mut calls = 0;
-                    run(scene, rec, &shard, &mut |_| {
-                        calls += 1;
-                        i != 1 || calls < 16
-                    })
-                })
-            })
-            .collect();
-        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    let shards = sharing_shards(&scene, &rec, &target_cfg(2e-4, 8, 1), |i| {
+        let mut calls = 0;
+        move |_: &_| {
+            calls += 1;
+            i != 1 || calls < 16
+        }
     });
     let grown: Vec<u32> = shards.iter().map(|r| r.pilot.unwrap().grown).collect();
     assert!(grown.iter().all(|&g| g == grown[0] && g == 2), "{grown:?}");
