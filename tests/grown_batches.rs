@@ -292,6 +292,37 @@ fn an_interrupt_within_a_stage_keeps_the_parts_folded() {
     }
 }
 
+/// What the observer sees of a grown run (the progress bar's position, a
+/// checkpoint's counts) is the run so far: within a stage the stages
+/// before it plus the stage's parts folded by then, never the stage's
+/// parts alone. Its chains never fall, pass the first stage's total
+/// within the second, and end at the run's.
+#[test]
+fn the_observer_sees_the_chains_so_far() {
+    let (scene, rec, _) = point_case();
+    let mut seen: Vec<(u64, u64, u64)> = Vec::new();
+    let r = run(&scene, &rec, &target_cfg(2e-4, 3, 1), &mut |p| {
+        seen.push((p.chains, p.scores, p.collisions));
+        true
+    });
+    assert_eq!(r.reason, StopReason::RelError);
+    let plan = r.pilot.expect("a plan");
+    assert!(plan.grown >= 2, "{plan:?}");
+    assert!(
+        seen.windows(2)
+            .all(|w| w[1].0 >= w[0].0 && w[1].1 >= w[0].1 && w[1].2 >= w[0].2),
+        "{seen:?}"
+    );
+    assert_eq!(
+        seen.last().copied(),
+        Some((r.chains, r.scores, r.collisions))
+    );
+    // Call 33 ends the first stage (32 batches of 256); the next ones are
+    // the second stage's parts, on top of it.
+    assert_eq!(seen[32].0, 32 * 256);
+    assert!(seen[33].0 > 32 * 256, "{:?}", &seen[30..36]);
+}
+
 /// The point's direct light sampled (RIS at the point, `--direct-lights
 /// ris`) rather than exact: every part adds its own sampled direct sums,
 /// and 20 grown runs at 2e-3 each cover the exact total within the

@@ -425,7 +425,17 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
                     p.batch_size.to_string()
                 },
                 if p.fall.is_finite() {
-                    format!(" (variance per chain went like batch size^{:.2})", -p.fall)
+                    // (The plan takes the fall within 0 ..= 1: `run::grow`.)
+                    let planned = p.fall.clamp(0.0, 1.0);
+                    format!(
+                        " (variance per chain went like batch size^{:.2}{})",
+                        -p.fall,
+                        if planned == p.fall {
+                            String::new()
+                        } else {
+                            format!(", planned with ^{:.0}", 0.0 - planned)
+                        }
+                    )
                 } else {
                     String::new()
                 },

@@ -315,23 +315,36 @@ pub(super) fn grown_run(
         // all stop after the same stage rather than one leaving the others
         // waiting in an exchange.
         let mut asked = false;
-        let r = if shared.is_some() {
-            let mut relay = |p: &Progress| {
-                asked |= !observe(p);
-                true
+        // Within a stage the observer sees the run so far: the stages
+        // before this one (their tallies, last folded) and this stage's
+        // chains folded by now, so that a progress bar never goes back.
+        let before = (
+            grown.iter().map(|b| b.chains).sum::<u64>(),
+            grown.iter().map(|b| b.scores).sum::<u64>(),
+            grown.iter().map(|b| b.collisions).sum::<u64>(),
+        );
+        let mut relay = |p: &Progress| {
+            let so_far = Progress {
+                tallies: &tallies,
+                direct,
+                chains: before.0 + p.chains,
+                scores: before.1 + p.scores,
+                collisions: before.2 + p.collisions,
+                elapsed: p.elapsed,
             };
-            drive_batches(
-                &part,
-                &part_cfg,
-                next - size,
-                tasks,
-                start,
-                &mut relay,
-                None,
-            )
-        } else {
-            drive_batches(&part, &part_cfg, next - size, tasks, start, observe, None)
+            let go = observe(&so_far);
+            asked |= !go;
+            go || shared.is_some()
         };
+        let r = drive_batches(
+            &part,
+            &part_cfg,
+            next - size,
+            tasks,
+            start,
+            &mut relay,
+            None,
+        );
         let mut parts = r.batches;
         traced += parts.iter().map(|b| b.chains).sum::<u64>();
         if r.reason != StopReason::Chains {
