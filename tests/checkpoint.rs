@@ -111,3 +111,28 @@ fn an_interrupted_run_resumes_to_the_identical_result() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("--time"), "{err}");
 }
+
+/// The checkpoint is an output like the others: never written over an
+/// input (the points it reads) or another output (a checkpoint named like
+/// `--out` would be lost to the results), refused before the run.
+#[test]
+fn a_checkpoint_never_goes_over_an_input_or_an_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts = dir.path().join("pts.csv");
+    std::fs::copy("data/office_grid.csv", &pts).unwrap();
+    let before = std::fs::read(&pts).unwrap();
+    let out = dir.path().join("e.csv");
+    let (pts_s, out_s) = (pts.to_str().unwrap(), out.to_str().unwrap());
+    for (ck, want) in [(pts_s, "overwrite the input"), (out_s, "same file")] {
+        let mut a = args(out_s, "1");
+        a[4] = pts_s;
+        a[8] = "1000";
+        a.extend(["--checkpoint", ck, "--checkpoint-every", "0.01"]);
+        let o = lumest(&a);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && e.contains(want), "{ck}: {e}");
+        assert!(e.contains("--checkpoint"), "{e}");
+        assert_eq!(std::fs::read(&pts).unwrap(), before);
+        assert!(!out.exists());
+    }
+}

@@ -155,6 +155,45 @@ fn merged_shards_are_the_single_run_byte_for_byte() {
         dir.path(),
     );
     assert!(full == merged, "backward run through one shard differs");
+    // The scene set up as a single run sets it up: the direct light
+    // sampled (`--direct-lights ris`), and a light at infinity over an
+    // infinite plane, whose start density is fitted to the points. (A
+    // shard that skipped either read about 0.3 % and 2.5 % off.)
+    let (full, merged) = whole_and_merged(
+        &data("office.toml"),
+        &data("office_grid.csv"),
+        &["--chains", "8000", "--seed", "3", "--direct-lights", "ris"],
+        2,
+        dir.path(),
+    );
+    assert!(full == merged, "sharded office run with RIS differs");
+    let (full, merged) = whole_and_merged(
+        &data("sun_floor.toml"),
+        &data("sun_floor_points.csv"),
+        &["--chains", "8000", "--seed", "4"],
+        2,
+        dir.path(),
+    );
+    assert!(full == merged, "sharded run under the sun differs");
+    // A scene that emits nothing: the shards hold no batch, and the merge
+    // writes the single run's exact zeros (flagged `ok`, not `batches`).
+    let dark = dir.path().join("dark.toml");
+    std::fs::write(
+        &dark,
+        "[[surface]]\ntype = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n\
+         material = { type = \"lambertian\", reflectance = 0.5 }\n\
+         [[light]]\ntype = \"point\"\nposition = [0.0, 0.0, 2.0]\nflux = 0.0\n",
+    )
+    .unwrap();
+    let (full, merged) = whole_and_merged(
+        dark.to_str().unwrap(),
+        &data("sobolev_points.csv"),
+        &["--chains", "1000"],
+        2,
+        dir.path(),
+    );
+    assert!(String::from_utf8_lossy(&full).contains(",ok\n"));
+    assert!(full == merged, "sharded dark run differs");
 }
 
 /// Writes shard `i/m` of a Sobolev run with `seed` (and `extra`) to `name`.
@@ -179,6 +218,14 @@ fn shard(dir: &Path, name: &str, i: u64, m: u64, seed: &str, scene: &str) -> Str
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     p
+}
+
+/// FNV-1a 64, the states' documented checksum (written out here from its
+/// definition).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h: u64, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
 }
 
 fn merge_err(parts: &[&str], out: &Path) -> String {
@@ -221,6 +268,34 @@ fn mismatched_missing_repeated_or_damaged_shards_are_refused() {
     std::fs::write(&cut, &flipped).unwrap();
     let e = merge_err(&[&a0, &cut], &out);
     assert!(e.contains("checksum"), "{e}");
+    // A header edited by hand, its checksum made good: refused with the
+    // field named, not a crash.
+    let text_end = bytes.windows(2).position(|w| w == b"\n\n").unwrap();
+    let header = String::from_utf8(bytes[..text_end].to_vec()).unwrap();
+    for (from, to, want) in [
+        ("shard = 1/2", "shard = 5/2", "shard 5/2"),
+        ("shard = 1/2", "shard = 0/0", "shard 0/0"),
+        (
+            "shard = 1/2",
+            "shard = 1/99999999999999",
+            "shard 1/99999999999999",
+        ),
+        ("orders = 0", "orders = 2", "sums"),
+    ] {
+        assert!(header.contains(from), "{header}");
+        let mut edited = header.replace(from, to).into_bytes();
+        edited.extend(&bytes[text_end..bytes.len() - 8]);
+        let sum = fnv1a(&edited);
+        edited.extend(sum.to_le_bytes());
+        std::fs::write(&cut, &edited).unwrap();
+        let e = merge_err(&[&a0, &cut], &out);
+        assert!(
+            e.contains("not a shard state lumest writes")
+                && e.contains(want)
+                && !e.contains("panicked"),
+            "{to}: {e}"
+        );
+    }
     // A CSV is not a shard.
     let e = merge_err(&[&a0, &data("sobolev_points.csv")], &out);
     assert!(e.contains("not a lumest shard state"), "{e}");
@@ -264,6 +339,72 @@ fn shard_options_are_checked() {
         assert!(!o.status.success() && e.contains(want), "{extra:?}: {e}");
         assert!(!Path::new(&p).exists());
     }
+    // What a single run refuses, a shard refuses too: glass panes with
+    // the backward estimator, a near part with a light at infinity.
+    for (scene, points, extra, want) in [
+        (
+            "office_daylight.toml",
+            "office_grid.csv",
+            ["--estimator", "backward"],
+            "glass panes",
+        ),
+        (
+            "sun_floor.toml",
+            "sun_floor_points.csv",
+            ["--near-radius", "0.1"],
+            "--near-radius is not supported",
+        ),
+    ] {
+        let (scene, points) = (data(scene), data(points));
+        let mut a = vec![
+            "illuminance",
+            "--scene",
+            &scene,
+            "--points",
+            &points,
+            "--out",
+            &p,
+        ];
+        a.extend(["--shard", "0/1", "--chains", "1000"]);
+        a.extend(extra);
+        let o = lumest(&a);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && e.contains(want), "{extra:?}: {e}");
+        assert!(!Path::new(&p).exists());
+    }
+    // A shard's state never goes over a file the scene names.
+    let sc = dir.path().join("sc");
+    std::fs::create_dir(&sc).unwrap();
+    for f in [
+        "office.toml",
+        "office_grid.csv",
+        "blob.obj",
+        "downlight.ldt",
+        "pendant.ies",
+    ] {
+        std::fs::copy(data(f), sc.join(f)).unwrap();
+    }
+    let ies = sc.join("pendant.ies");
+    let before = std::fs::read(&ies).unwrap();
+    let o = lumest(&[
+        "illuminance",
+        "--scene",
+        sc.join("office.toml").to_str().unwrap(),
+        "--points",
+        sc.join("office_grid.csv").to_str().unwrap(),
+        "--chains",
+        "1000",
+        "--shard",
+        "0/1",
+        "--out",
+        ies.to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("overwrite the input"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(&ies).unwrap(), before);
     // A points column named like a result column, refused by a shard as by
     // a single run (the merge would write it twice).
     let pts = dir.path().join("pts.csv");

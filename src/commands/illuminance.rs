@@ -936,25 +936,21 @@ pub(crate) struct GridOutputs<'a> {
     pub targets: Vec<super::figure_target::FigureTarget>,
 }
 
-/// [`measure_with`], also writing the grid figures, report and plots and
-/// planning for figure targets ([`GridOutputs`]).
-pub(crate) fn measure_full(
+/// The scene and the job of a run as every run of them sees it, a single
+/// run and each shard alike: the scene loaded (the sky alone with
+/// `--daylight-factor`), its direct-light rule set (`--direct-lights`,
+/// `--ris-candidates`), the settings it cannot take refused, the points and
+/// views read (a light at infinity's start density fitted to them, with
+/// infinite planes), the daylight factor's reference, the tally size and
+/// the result columns checked.
+pub(crate) fn prepare_job(
     scene_path: &std::path::Path,
     points: Option<(&str, &str)>,
     views: Option<(&str, Option<ViewTable>, &str)>,
     estimator: EstimatorKind,
     run_args: &RunArgs,
-    grid: &GridOutputs,
-) -> anyhow::Result<(Job, RunResult)> {
-    let (figures_out, report, targets) = (
-        grid.figures_out,
-        grid.report.as_ref(),
-        grid.targets.as_slice(),
-    );
-    let mut cfg = run_args.config()?;
-    if estimator == EstimatorKind::Backward {
-        run_args.check_local_only("backward")?;
-    }
+    cfg: &RunConfig,
+) -> anyhow::Result<(Scene, Job)> {
     // A daylight factor counts the sky's light alone (`DF` and `E` alike).
     let mut scene = if run_args.daylight_factor {
         let (scene, left_out, kept) = scene::load_sky_only(scene_path)?;
@@ -1059,6 +1055,31 @@ pub(crate) fn measure_full(
         names.extend(["sx", "sy", "sz"].map(String::from));
         reserved_columns(&t.headers, &names, input)?;
     }
+    Ok((scene, job))
+}
+
+/// [`measure_with`], also writing the grid figures, report and plots and
+/// planning for figure targets ([`GridOutputs`]).
+pub(crate) fn measure_full(
+    scene_path: &std::path::Path,
+    points: Option<(&str, &str)>,
+    views: Option<(&str, Option<ViewTable>, &str)>,
+    estimator: EstimatorKind,
+    run_args: &RunArgs,
+    grid: &GridOutputs,
+) -> anyhow::Result<(Job, RunResult)> {
+    let (figures_out, report, targets) = (
+        grid.figures_out,
+        grid.report.as_ref(),
+        grid.targets.as_slice(),
+    );
+    let mut cfg = run_args.config()?;
+    if estimator == EstimatorKind::Backward {
+        run_args.check_local_only("backward")?;
+    }
+    let view_paths = views.as_ref().map(|v| (v.0, v.2));
+    let (scene, mut job) = prepare_job(scene_path, points, views, estimator, run_args, &cfg)?;
+    let views = view_paths;
     // Points grouped by a `grid` column get grid figures, from their
     // per-batch means.
     let groups = match (points, &job.points) {
@@ -1156,6 +1177,31 @@ pub(crate) fn measure_full(
         (cfg.stop.time.is_none() && cfg.stop.rel_error.is_none() && out != "-")
             .then(|| format!("{out}.checkpoint"))
     });
+    if let Some(ck) = &ckpt_path {
+        // The checkpoint is an output too: never over an input or another
+        // output (a checkpoint named like `--out` would be lost to it).
+        let referenced = scene::referenced_files(scene_path);
+        let mut inputs = vec![scene_path];
+        inputs.extend(referenced.iter().map(|p| p.as_path()));
+        inputs.extend(points.map(|p| Path::new(p.0)));
+        inputs.extend(views.map(|v| Path::new(v.0)));
+        let name = if run_args.checkpoint.is_some() {
+            "--checkpoint"
+        } else {
+            "the interrupt's checkpoint"
+        };
+        let mut outputs = vec![(name, Path::new(ck.as_str()))];
+        match report {
+            // (The report's list holds every output of the command.)
+            Some(rep) => outputs.extend(rep.outputs.iter().map(|o| ("an output", o.as_path()))),
+            None => {
+                outputs.extend(points.map(|p| ("the points' output", Path::new(p.1))));
+                outputs.extend(views.map(|v| ("the views' output", Path::new(v.1))));
+                outputs.extend(figures_out.map(|f| ("--figures-out", Path::new(f))));
+            }
+        }
+        check_outputs(&inputs, &outputs)?;
+    }
     let checkpointer = ckpt_path.as_ref().map(|p| {
         let every = if run_args.checkpoint.is_some() {
             run_args.checkpoint_every

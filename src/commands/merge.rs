@@ -44,10 +44,10 @@ fn parse_shard(s: &str) -> anyhow::Result<(u64, u64)> {
 /// Run one shard (`lumest illuminance ... --shard I/M`) and write its state.
 pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
     let (i, m) = parse_shard(shard)?;
-    check_outputs(
-        &[a.scene.as_path(), Path::new(&a.points)],
-        &[("--out", Path::new(&a.out))],
-    )?;
+    let referenced = crate::scene::referenced_files(&a.scene);
+    let mut inputs = vec![a.scene.as_path(), Path::new(&a.points)];
+    inputs.extend(referenced.iter().map(|p| p.as_path()));
+    check_outputs(&inputs, &[("--out", Path::new(&a.out))])?;
     let state = shard_state(a, i, m, None)?;
     write_atomic_with(&a.out, |w| state.write(w)).with_context(|| format!("writing {}", a.out))?;
     eprintln!(
@@ -94,10 +94,15 @@ pub fn shard_state(
         "a sharded run stops by --chains or --rel-error, not by --time (each shard would stop at its own batch)"
     );
     let chains = cfg.stop.chains.unwrap_or(0);
-    let scene = crate::scene::load(&a.scene)?;
-    let mut job = super::illuminance::Job::new(&scene, Some(&a.points), None)?;
-    let table = job.points.as_ref().context("no points")?;
-    super::illuminance::reserved_point_columns(table, cfg.orders, &a.points)?;
+    // The single run's scene and job, the same set-up and checks.
+    let (scene, mut job) = super::illuminance::prepare_job(
+        &a.scene,
+        Some((&a.points, &a.out)),
+        None,
+        a.estimator,
+        &a.run,
+        &cfg,
+    )?;
     cfg.shard = Some((i, m));
     cfg.share = share;
     // (Each line in one write: under `mpirun` the ranks share the stream.)
@@ -110,6 +115,7 @@ pub fn shard_state(
         crate::estimator::local::prepare(&scene, &mut job.receivers, &cfg);
     }
     let r = run_job(&scene, &job, &cfg, a.estimator, a.run.quiet, None);
+    let table = job.points.as_ref().context("no points")?;
     anyhow::ensure!(
         !crate::io::interrupt::interrupted(),
         "interrupted: a shard is written whole or not at all (run it again)"
@@ -143,6 +149,47 @@ pub fn shard_state(
     })
 }
 
+/// Refuse a state whose parts do not fit together (one that passed its
+/// checksum but was made or edited by hand): the shard `I/M`, the orders
+/// and receivers the tallies are sized by, each batch's sums.
+fn well_formed(s: &ShardState) -> anyhow::Result<()> {
+    let (i, m) = s.shard;
+    anyhow::ensure!(
+        m >= 1 && i < m && m <= MAX_SHARDS,
+        "shard {i}/{m}: expected I/M with 0 <= I < M <= {MAX_SHARDS}"
+    );
+    let run = &s.run;
+    anyhow::ensure!(
+        run.orders <= super::MAX_ORDERS,
+        "orders {}: at most {}",
+        run.orders,
+        super::MAX_ORDERS
+    );
+    super::check_tally_size(run.orders, run.receivers as usize)?;
+    let n = run.receivers as usize;
+    anyhow::ensure!(
+        s.checks.iter().all(|c| c.is_empty() || c.len() == n),
+        "its per-point checks are not one per receiver ({n})"
+    );
+    let sums = n * crate::tally::bucket_count(run.orders);
+    for b in &s.batches {
+        anyhow::ensure!(
+            b.sums.len() == sums
+                && [0, n].contains(&b.direct_sums.len())
+                && [0, n, 3 * n].contains(&b.near_hits.len()),
+            "batch {} holds {} sums, {} direct sums and {} near-hit counts; {n} receivers and \
+             orders {} take {sums} sums, 0 or {n} direct sums and 0, {n} or {} counts",
+            b.index,
+            b.sums.len(),
+            b.direct_sums.len(),
+            b.near_hits.len(),
+            run.orders,
+            3 * n
+        );
+    }
+    Ok(())
+}
+
 /// Run `lumest merge`.
 pub fn merge(a: &MergeArgs) -> anyhow::Result<()> {
     let inputs: Vec<&Path> = a.parts.iter().map(Path::new).collect();
@@ -159,6 +206,9 @@ pub fn merge(a: &MergeArgs) -> anyhow::Result<()> {
 /// Fold the shards `states` (named for messages) of one run and write the
 /// single run's CSV to `out`.
 pub fn merge_states(mut states: Vec<(String, ShardState)>, out: &str) -> anyhow::Result<()> {
+    for (name, s) in &states {
+        well_formed(s).with_context(|| format!("{name}: not a shard state lumest writes"))?;
+    }
     let (first_name, first) = &states[0];
     let m = first.shard.1;
     let mut seen: Vec<Option<&str>> = vec![None; m as usize];
@@ -172,7 +222,10 @@ pub fn merge_states(mut states: Vec<(String, ShardState)>, out: &str) -> anyhow:
             Ok(())
         };
         let (r, f) = (&s.run, &first.run);
-        same("scenes", r.scene == f.scene)?;
+        same(
+            "scenes (the scene file and the files it names, as set up: --direct-lights, --ris-candidates)",
+            r.scene == f.scene,
+        )?;
         same(
             "points",
             r.points == f.points && s.headers == first.headers && s.rows == first.rows,
@@ -248,20 +301,35 @@ pub fn merge_states(mut states: Vec<(String, ShardState)>, out: &str) -> anyhow:
         tallies.batch_means = crate::tally::BatchMeans::new(table.rows.len().min(n));
     }
     let tallies = fold_batches(tallies, &first.direct, run.batch_size, &batches);
-    let result = RunResult {
-        direct: first.direct.clone(),
-        tallies,
-        chains: batches.iter().map(|b| b.chains).sum(),
-        batch_size: run.batch_size,
-        collisions: batches.iter().map(|b| b.collisions).sum(),
-        scores: batches.iter().map(|b| b.scores).sum(),
-        wall,
-        threads: 0,
-        reason: StopReason::Chains,
-        pilot: None,
-        time_sizing: None,
-        batches: Vec::new(),
-        total_batches: 0,
+    let result = if run.batches == 0 {
+        // A scene that emits nothing: every shard holds no batch, and the
+        // single run's exact zeros are the answer.
+        let cfg = crate::run::RunConfig {
+            orders: run.orders,
+            keep_batch_means: if pairs.is_empty() {
+                0
+            } else {
+                table.rows.len()
+            },
+            ..crate::run::RunConfig::default()
+        };
+        crate::run::no_light(&first.direct, &cfg)
+    } else {
+        RunResult {
+            direct: first.direct.clone(),
+            tallies,
+            chains: batches.iter().map(|b| b.chains).sum(),
+            batch_size: run.batch_size,
+            collisions: batches.iter().map(|b| b.collisions).sum(),
+            scores: batches.iter().map(|b| b.scores).sum(),
+            wall,
+            threads: 0,
+            reason: StopReason::Chains,
+            pilot: None,
+            time_sizing: None,
+            batches: Vec::new(),
+            total_batches: 0,
+        }
     };
     let mut headers = first.headers.clone();
     headers.extend(result_headers("E", run.orders));

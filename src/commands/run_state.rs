@@ -139,7 +139,10 @@ pub fn resume(
     let c = Checkpoint::read(&bytes).with_context(|| path.to_string())?;
     let want = identity(scene, job, cfg, estimator, c.run.batch_size);
     let differ: Vec<&str> = [
-        ("scene", want.scene != c.run.scene),
+        (
+            "scene (or its --direct-lights, --ris-candidates)",
+            want.scene != c.run.scene,
+        ),
         (
             "points or views",
             want.points != c.run.points || want.receivers != c.run.receivers,

@@ -451,8 +451,9 @@ pub fn cap_batch_size(bs: u64, chains: Option<u64>) -> u64 {
     }
 }
 
-/// The exact answer of work that emits nothing: zero batches.
-fn no_light(direct: &[f64], cfg: &RunConfig) -> RunResult {
+/// The exact answer of work that emits nothing: zero batches (a merge of
+/// such a run's shards, which hold none, gives the same).
+pub fn no_light(direct: &[f64], cfg: &RunConfig) -> RunResult {
     let mut tallies = Tallies::new(direct.len(), cfg.orders);
     tallies.batch_means = crate::tally::BatchMeans::new(cfg.keep_batch_means.min(direct.len()));
     for _ in 0..MIN_BATCHES {
