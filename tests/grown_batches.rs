@@ -292,6 +292,41 @@ fn an_interrupt_within_a_stage_keeps_the_parts_folded() {
     }
 }
 
+/// An interrupt within a stage of several chunks per batch keeps the
+/// chunks folded by then in chunk-major order: every batch within one
+/// chunk ([`lumest::run::grow::CHUNK`] chains) of the largest, so the
+/// stage's chains count for all batches alike. (Batch-major, a cut kept
+/// some batches whole and left the rest at the last stage's size.)
+#[test]
+fn a_cut_stage_keeps_its_batches_within_a_chunk() {
+    let (scene, rec, exact) = point_case();
+    let chunk = lumest::run::grow::CHUNK;
+    let stop_at = 32 * 256 + 32 * 3 * chunk;
+    let mut stopped = false;
+    let r = run(&scene, &rec, &target_cfg(2e-5, 5, 1), &mut |p| {
+        stopped |= p.chains > stop_at;
+        !stopped
+    });
+    assert_eq!(r.reason, StopReason::Observer);
+    let plan = r.pilot.expect("a plan");
+    assert!(plan.cut, "{plan:?}");
+    // The stage cut is long enough to hold several chunks per batch.
+    assert!(r.batch_size > 256 + 3 * chunk, "{}", r.batch_size);
+    assert!(
+        r.chains > stop_at && r.chains <= stop_at + chunk,
+        "{}",
+        r.chains
+    );
+    assert!(
+        32 * r.batch_size - r.chains < 32 * chunk,
+        "largest batch {} of {} chains in all",
+        r.batch_size,
+        r.chains
+    );
+    let z = common::z(&r, 0, exact);
+    assert!(z.abs() < 4.0, "z {z}");
+}
+
 /// What the observer sees of a grown run (the progress bar's position, a
 /// checkpoint's counts) is the run so far: within a stage the stages
 /// before it plus the stage's parts folded by then, never the stage's
