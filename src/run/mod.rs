@@ -299,19 +299,22 @@ pub const MIN_TIMED_BATCH: u64 = 256;
 /// Seed offset of the timing probe's streams.
 const PROBE_KEY: u64 = 0x7072_6f62_6554_494d; // "probeTIM"
 
-/// Batch size for a run limited by `seconds` of wall time on `threads`
-/// threads: one probe batch of [`MIN_TIMED_BATCH`] chains (its own
-/// streams, not kept) measures the pace, and the default size `bs` is
-/// halved until [`MIN_BATCHES`] batches fit in 80 % of the time left,
-/// down to [`MIN_TIMED_BATCH`]. Timed runs depend on the machine anyway
-/// (their chain count does); runs with `--chains` or `--rel-error` never
-/// use this.
+/// Batch size for a run limited by `seconds` of wall time, on `threads`
+/// threads that each add pace (at most the cores) and with `in_flight`
+/// batches in hand at once (one per thread asked for): one probe batch of
+/// [`MIN_TIMED_BATCH`] chains (its own streams, not kept) measures the
+/// pace, and the default size `bs` is halved until [`MIN_BATCHES`]
+/// batches fit in 80 % of the time left and the batches in flight (those
+/// the limit finds in hand, all folded) in 10 %, down to
+/// [`MIN_TIMED_BATCH`]. Timed runs depend on the machine anyway (their
+/// chain count does); runs with `--rel-error` never use this, nor runs
+/// with `--chains` whose batches fit in the time.
 pub fn time_batch_size(
     work: &dyn BatchWork,
     cfg: &RunConfig,
     bs: u64,
     seconds: f64,
-    threads: usize,
+    (threads, in_flight): (usize, u64),
     start: Instant,
 ) -> TimeSizing {
     let probe_cfg = RunConfig {
@@ -325,7 +328,10 @@ pub fn time_batch_size(
     let rate = probe as f64 / t.elapsed().as_secs_f64().max(1e-9) * threads.max(1) as f64;
     let left = (seconds - start.elapsed().as_secs_f64()).max(0.0);
     let mut chosen = bs;
-    while chosen > MIN_TIMED_BATCH && (MIN_BATCHES * chosen) as f64 / rate > 0.8 * left {
+    let too_long = |c: u64| {
+        (MIN_BATCHES * c) as f64 / rate > 0.8 * left || (in_flight * c) as f64 / rate > 0.1 * left
+    };
+    while chosen > MIN_TIMED_BATCH && too_long(chosen) {
         chosen /= 2;
     }
     let chosen = chosen.max(MIN_TIMED_BATCH.min(bs));
@@ -522,18 +528,23 @@ pub fn drive(
         .batch_size
         .unwrap_or_else(|| work.default_batch_size(stop.chains))
         .max(1);
-    // A run limited by time alone sizes its batches so that the minimum of
-    // batches fits in the limit.
+    // A run limited by time (and perhaps by a chain count it may not
+    // reach) sizes its batches so that the minimum of batches fits in the
+    // limit; where the chains' batches fit, they stay as they are.
     let mut time_sizing = None;
-    if let (Some(seconds), None, None, None) =
-        (stop.time, stop.chains, stop.rel_error, cfg.batch_size)
-    {
+    if let (Some(seconds), None, None) = (stop.time, stop.rel_error, cfg.batch_size) {
+        // Threads beyond the cores add no pace (the probe's rate times
+        // 64 threads on 2 cores planned batches 30 times too large).
+        let cores = std::thread::available_parallelism().map_or(1, |p| p.get());
         let threads = if cfg.threads == 0 {
-            std::thread::available_parallelism().map_or(1, |p| p.get())
+            cores
         } else {
-            cfg.threads
+            cfg.threads.min(cores)
         };
-        let sizing = time_batch_size(work, cfg, bs, seconds, threads, start);
+        // At the limit every thread's batch in hand is folded: that many
+        // batches must fit too.
+        let in_flight = if cfg.threads == 0 { cores } else { cfg.threads } as u64;
+        let sizing = time_batch_size(work, cfg, bs, seconds, (threads, in_flight), start);
         bs = sizing.batch_size;
         time_sizing = Some(sizing);
     }
