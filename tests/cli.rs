@@ -810,9 +810,16 @@ fn plain_messages_for_odd_numbers_and_separators() {
         !o.status.success() && err.contains("-1e300") && !err.contains("0000000000"),
         "{err}"
     );
-    let o = lumest().args(["bench", "--points", "0"]).output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("at least 1"), "{err}");
+    // A count of no points, a fraction, or more points than memory holds
+    // (1e30 overflowed an allocation, 1e9 ran out of memory, 2.5 ran 2).
+    for n in ["0", "2.5", "1e9", "1e30"] {
+        let o = lumest().args(["bench", "--points", n]).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("whole number, at least 1 and at most 1e7"),
+            "{n}: {err}"
+        );
+    }
 }
 
 /// `bench --shapes`: the bare room, then each count with its shapes in
