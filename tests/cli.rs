@@ -1004,3 +1004,36 @@ fn rms_error_targets_the_root_mean_square() {
         "{err}"
     );
 }
+
+/// A target far beyond the time limit is said at once, with what it
+/// would take, and the run stops at the limit with an honest summary (it
+/// ran silently to the hour's default cap).
+#[test]
+fn a_target_beyond_the_time_limit_is_said_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("e.csv");
+    let o = lumest()
+        .args([
+            "illuminance",
+            "--scene",
+            "data/sobolev.toml",
+            "--points",
+            "data/sobolev_points.csv",
+            "--out",
+            out.to_str().unwrap(),
+            "--rel-error",
+            "1e-9",
+            "--time",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let said = err
+        .lines()
+        .find(|l| l.contains("at this pace the target 1.000e-9 needs at least about"))
+        .unwrap_or_else(|| panic!("{err}"));
+    assert!(said.contains("time limit (1 s, --time)"), "{said}");
+    assert!(err.contains("target MISSED: stopped by --time"), "{err}");
+}

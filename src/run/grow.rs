@@ -303,6 +303,8 @@ pub(super) fn grown_run(
     // most chunks a batch's part is cut into: a stage holds its chunks'
     // sums until it ends, at most GROWN_VALUES of them.
     let mut part_index = 0u32;
+    // Whether the run said that its target lies beyond its time limit.
+    let mut warned = false;
     let per_batch = (work.len() * bucket_count(cfg.orders)) as u64 * GROWN_BATCHES;
     let max_chunks = (GROWN_VALUES / per_batch.max(1)).max(1);
     loop {
@@ -444,7 +446,28 @@ pub(super) fn grown_run(
                 reason = StopReason::Time;
                 break;
             }
-            next = time_bound(next, size, fits);
+            let bound = time_bound(next, size, fits);
+            if bound < next && !warned {
+                // Said once, as soon as the pace shows it (a target far
+                // out of reach ran silently to the hour's default cap).
+                warned = true;
+                let alpha = fall(&stages).map_or(FIRST_FALL, |a| {
+                    if a.is_nan() { 0.0 } else { a.clamp(0.0, 1.0) }
+                });
+                let need = size as f64 * (e / target).powf(2.0 / (1.0 + alpha));
+                eprintln!(
+                    "lumest: at this pace the target {target:.3e} needs at least about {need:.3e} chains a \
+                     batch, {:.3e} s more; the run stops at its time limit ({limit} s{}) with the \
+                     error it reaches",
+                    (need - size as f64) * GROWN_BATCHES as f64 / pace,
+                    if default_cap.is_some() {
+                        ", the default without --time"
+                    } else {
+                        ", --time"
+                    }
+                );
+            }
+            next = bound;
         }
     }
     // An interrupted stage counts; its batches differ in size, and
