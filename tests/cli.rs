@@ -1037,3 +1037,60 @@ fn a_target_beyond_the_time_limit_is_said_at_once() {
     assert!(said.contains("time limit (1 s, --time)"), "{said}");
     assert!(err.contains("target MISSED: stopped by --time"), "{err}");
 }
+
+/// Exact points (no light reaches them: R = 0) count as 0 in the RMS, and
+/// the summary says how many and gives the RMS over the others (here one
+/// lit point, whose error it is; an RMS target met thanks to the dark
+/// points would otherwise read as the lit point's).
+#[test]
+fn exact_points_in_the_rms_are_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let pts = dir.path().join("p.csv");
+    std::fs::write(
+        &pts,
+        "x,y,z,nx,ny,nz\n1,0,0,0,0,1\n0,0,2,0,0,1\n1,0,2,0,0,1\n",
+    )
+    .unwrap();
+    let out = dir.path().join("e.csv");
+    let o = lumest()
+        .args([
+            "illuminance",
+            "--scene",
+            "data/sobolev.toml",
+            "--points",
+            pts.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--chains",
+            "4096",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let num = |line: &str, after: &str| -> f64 {
+        line.split(after)
+            .nth(1)
+            .unwrap()
+            .split([',', ';', ' '])
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let rms_line = err
+        .lines()
+        .find(|l| l.contains("relative standard error: RMS"))
+        .unwrap();
+    let (rms, max) = (num(rms_line, "RMS "), num(rms_line, "max "));
+    let said = err
+        .lines()
+        .find(|l| l.contains("2 of the 3 receivers are exact"))
+        .unwrap_or_else(|| panic!("{err}"));
+    let others = num(said, "over the other 1 it is ");
+    assert!(
+        rms > 0.0 && (rms * 3f64.sqrt() / max - 1.0).abs() < 2e-3,
+        "{rms_line}"
+    );
+    assert!((others / max - 1.0).abs() < 2e-3, "{said} vs {rms_line}");
+}

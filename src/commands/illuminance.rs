@@ -353,7 +353,25 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
             "undefined (zero error: every estimate is exact)".to_string()
         },
     );
-    let mut text = format!("{text}\n{flags}");
+    // Exact points (R = 0: no light reaches them, or their light is all
+    // exact direct light) count in the RMS as 0; said, so that an RMS
+    // below a target is not read as every point's.
+    let exact = r
+        .tallies
+        .rel_errors(&r.direct)
+        .filter(|e| *e == 0.0)
+        .count();
+    let mut text = if exact > 0 && exact < r.direct.len() {
+        format!(
+            "{text}\n{exact} of the {} receivers are exact (R = 0: no light reaches them, or only \
+             exact direct light) and count as 0 in the RMS; over the other {} it is {:.3e}\n{flags}",
+            r.direct.len(),
+            r.direct.len() - exact,
+            rms * (r.direct.len() as f64 / (r.direct.len() - exact) as f64).sqrt()
+        )
+    } else {
+        format!("{text}\n{flags}")
+    };
     if let Some(t) = &r.time_sizing
         && t.batch_size < t.default_batch_size
     {
