@@ -339,6 +339,16 @@ fn shard_options_are_checked() {
         assert!(!o.status.success() && e.contains(want), "{extra:?}: {e}");
         assert!(!Path::new(&p).exists());
     }
+    // A binary state on standard output, which `merge` cannot read.
+    let mut a = base.to_vec();
+    a[6] = "-";
+    a.extend(["--shard", "0/2", "--chains", "1000"]);
+    let o = lumest(&a);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("not `-`") && o.stdout.is_empty(),
+        "{e}"
+    );
     // What a single run refuses, a shard refuses too: glass panes with
     // the backward estimator, a near part with a light at infinity.
     for (scene, points, extra, want) in [

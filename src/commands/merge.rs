@@ -44,6 +44,10 @@ fn parse_shard(s: &str) -> anyhow::Result<(u64, u64)> {
 /// Run one shard (`lumest illuminance ... --shard I/M`) and write its state.
 pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
     let (i, m) = parse_shard(shard)?;
+    anyhow::ensure!(
+        a.out != "-",
+        "--shard writes its state to a file for `lumest merge`, which reads files: give --out a file name, not `-`"
+    );
     let referenced = crate::scene::referenced_files(&a.scene);
     let mut inputs = vec![a.scene.as_path(), Path::new(&a.points)];
     inputs.extend(referenced.iter().map(|p| p.as_path()));

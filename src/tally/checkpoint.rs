@@ -119,7 +119,33 @@ impl Checkpoint {
         let flat = get_u64v(r)?;
         let kept = get_u64(r)? as usize;
         let batch_means = super::batch_means::BatchMeans::from_values(kept, get_f64v(r)?);
-        if !body.is_empty() || flat.len() % 2 != 0 || estimated.len() as u64 != run.receivers {
+        // Every per-receiver list one per receiver (or empty where a run
+        // keeps none), the order tallies as the header's orders make them,
+        // the batch means whole batches of at most every receiver: a
+        // checkpoint edited by hand with its checksum made good is refused
+        // here, not met later as a panic.
+        let n = estimated.len();
+        let buckets = if run.orders == 0 {
+            0
+        } else {
+            run.orders as usize + 1
+        };
+        let per_receiver = |len: usize| len == 0 || len == n;
+        let fits = body.is_empty()
+            && n as u64 == run.receivers
+            && per_receiver(sampled_direct.len())
+            && orders.len() == buckets
+            && orders.iter().all(|o| o.len() == n)
+            && snapshots.iter().all(|(_, v)| v.len() == n)
+            && per_receiver(near_hits.len())
+            && [&watched, &near_plain, &near_reach, &enclosed]
+                .iter()
+                .all(|f| per_receiver(f.len()))
+            && flat.len() % 2 == 0
+            && per_receiver(flat.len() / 2)
+            && kept <= n
+            && batch_means.batches() * kept == batch_means.values().len();
+        if !fits {
             return Err(StateError::Damaged(
                 "the tallies do not fit the header".into(),
             ));
@@ -209,5 +235,34 @@ mod tests {
         let k = b.len() - 20;
         b[k] ^= 4;
         assert!(Checkpoint::read(&b).is_err());
+        // Well made, checksum and all, but the tallies do not fit the
+        // header: refused (before, the resumed run met them as a panic).
+        let misfit = |edit: &dyn Fn(&mut Checkpoint)| {
+            let mut e = c.clone();
+            edit(&mut e);
+            let mut bytes = Vec::new();
+            e.write(&mut bytes).unwrap();
+            Checkpoint::read(&bytes).err()
+        };
+        assert!(misfit(&|_| {}).is_none());
+        assert!(misfit(&|e| e.run.orders = 3).is_some());
+        assert!(misfit(&|e| e.run.orders = 0).is_some());
+        assert!(misfit(&|e| e.tallies.orders[1].pop().map(|_| ()).unwrap()).is_some());
+        assert!(misfit(&|e| e.tallies.sampled_direct.truncate(2)).is_some());
+        assert!(misfit(&|e| e.tallies.watched.push(true)).is_some());
+        assert!(misfit(&|e| e.tallies.near_vertices.push([1, 2])).is_some());
+        assert!(misfit(&|e| e.tallies.snapshots[0].1.push(0.0)).is_some());
+        assert!(
+            misfit(
+                &|e| e.tallies.batch_means = crate::tally::BatchMeans::from_values(2, vec![1.0; 5])
+            )
+            .is_some()
+        );
+        assert!(
+            misfit(
+                &|e| e.tallies.batch_means = crate::tally::BatchMeans::from_values(2, vec![1.0; 6])
+            )
+            .is_none()
+        );
     }
 }
