@@ -1094,3 +1094,35 @@ fn exact_points_in_the_rms_are_said() {
     );
     assert!((others / max - 1.0).abs() < 2e-3, "{said} vs {rms_line}");
 }
+
+/// A `--chains` run that fits in its `--time` keeps its batches, and so
+/// its bytes, on any number of threads (the rule that the batches every
+/// thread holds at the limit fit in a tenth of the time halved them with
+/// 64 threads, though the run finished in time).
+#[test]
+fn chains_within_the_time_keep_their_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| -> Vec<u8> {
+        let out = dir.path().join(name);
+        let mut a = vec![
+            "illuminance",
+            "--scene",
+            "data/office.toml",
+            "--points",
+            "data/office_grid.csv",
+            "--out",
+            out.to_str().unwrap(),
+            "--chains",
+            "20000",
+            "--seed",
+            "3",
+        ];
+        a.extend(extra);
+        let o = lumest().args(&a).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(&out).unwrap()
+    };
+    let plain = run("a.csv", &[]);
+    assert_eq!(run("b.csv", &["--time", "0.5", "--threads", "64"]), plain);
+    assert_eq!(run("c.csv", &["--time", "100"]), plain);
+}

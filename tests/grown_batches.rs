@@ -327,8 +327,8 @@ fn a_cut_stage_keeps_its_batches_within_a_chunk() {
     assert!(z.abs() < 4.0, "z {z}");
 }
 
-/// What the observer sees of a grown run (the progress bar's position, a
-/// checkpoint's counts) is the run so far: within a stage the stages
+/// What the observer sees of a grown run (the progress bar's position and
+/// message) is the run so far: within a stage the stages
 /// before it plus the stage's parts folded by then, never the stage's
 /// parts alone. Its chains never fall, pass the first stage's total
 /// within the second, and end at the run's.

@@ -376,12 +376,17 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
         && t.batch_size < t.default_batch_size
     {
         text += &format!(
-            "\n--time: batches of {} chains (default {}) so that {} batches fit at the measured {:.3e} chains/s{}",
+            "\n--time: batches of {} chains (default {}) so that {} batches, and the batches every \
+             thread holds at the limit, fit at the measured {:.3e} chains/s{}",
             t.batch_size,
             t.default_batch_size,
             crate::run::MIN_BATCHES,
             t.rate,
-            if r.reason == crate::run::StopReason::Time {
+            if matches!(
+                r.reason,
+                crate::run::StopReason::Time | crate::run::StopReason::Chains
+            ) {
+                // (Stopped by the time, or by --chains reached first.)
                 String::new()
             } else {
                 format!(
@@ -448,7 +453,7 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
                     format!(
                         " (variance per chain went like batch size^{:.2}{})",
                         -p.fall,
-                        if planned == p.fall {
+                        if (planned - p.fall).abs() < 0.005 {
                             String::new()
                         } else {
                             format!(", planned with ^{:.0}", 0.0 - planned)

@@ -172,6 +172,12 @@ fn well_formed(s: &ShardState) -> anyhow::Result<()> {
     super::check_tally_size(run.orders, run.receivers as usize)?;
     let n = run.receivers as usize;
     anyhow::ensure!(
+        s.rows.len() <= n && s.direct.len() == n,
+        "{} rows and {} direct values for {n} receivers",
+        s.rows.len(),
+        s.direct.len()
+    );
+    anyhow::ensure!(
         s.checks.iter().all(|c| c.is_empty() || c.len() == n),
         "its per-point checks are not one per receiver ({n})"
     );
@@ -264,7 +270,8 @@ pub fn merge_states(mut states: Vec<(String, ShardState)>, out: &str) -> anyhow:
     // Every batch of the run once, in index order.
     let run = first.run.clone();
     let n = run.receivers as usize;
-    let mut batches = Vec::with_capacity(run.batches as usize);
+    // (Not sized by the header's count, which is checked against them.)
+    let mut batches = Vec::new();
     let mut wall = 0.0;
     for (_, s) in &mut states {
         wall += s.wall;

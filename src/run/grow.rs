@@ -160,8 +160,8 @@ pub const CHUNK: u64 = 4096;
 /// an interrupt or a time limit keeps leaves the batches within one chunk
 /// of each other (batch-major, it kept some batches whole and the rest at
 /// the last stage's size, and their mean lost most of the stage: the
-/// office cut by `--time 3` read max R 1.2e-2 where whole stages read
-/// 1.6e-3).
+/// office cut by `--time 3` read max R 7.7e-3 to 1.2e-2 where whole
+/// stages read 1.6e-3).
 struct PartWork<'a> {
     work: &'a dyn BatchWork,
     lo: u64,
@@ -446,15 +446,19 @@ pub(super) fn grown_run(
                 reason = StopReason::Time;
                 break;
             }
-            let bound = time_bound(next, size, fits);
-            if bound < next && !warned {
-                // Said once, as soon as the pace shows it (a target far
-                // out of reach ran silently to the hour's default cap).
+            // Said once, as soon as the pace shows it (a target far out of
+            // reach ran silently to the hour's default cap): where what the
+            // target needs, without the stage's margins, does not fit.
+            let alpha =
+                fall(&stages).map_or(
+                    FIRST_FALL,
+                    |a| {
+                        if a.is_nan() { 0.0 } else { a.clamp(0.0, 1.0) }
+                    },
+                );
+            let need = size as f64 * (e / target).powf(2.0 / (1.0 + alpha));
+            if need > size.saturating_add(fits) as f64 && !warned {
                 warned = true;
-                let alpha = fall(&stages).map_or(FIRST_FALL, |a| {
-                    if a.is_nan() { 0.0 } else { a.clamp(0.0, 1.0) }
-                });
-                let need = size as f64 * (e / target).powf(2.0 / (1.0 + alpha));
                 eprintln!(
                     "lumest: at this pace the target {target:.3e} needs at least about {need:.3e} chains a \
                      batch, {:.3e} s more; the run stops at its time limit ({limit} s{}) with the \
@@ -467,7 +471,7 @@ pub(super) fn grown_run(
                     }
                 );
             }
-            next = bound;
+            next = time_bound(next, size, fits);
         }
     }
     // An interrupted stage counts; its batches differ in size, and

@@ -307,13 +307,13 @@ const PROBE_KEY: u64 = 0x7072_6f62_6554_494d; // "probeTIM"
 /// batches fit in 80 % of the time left and the batches in flight (those
 /// the limit finds in hand, all folded) in 10 %, down to
 /// [`MIN_TIMED_BATCH`]. Timed runs depend on the machine anyway (their
-/// chain count does); runs with `--rel-error` never use this, nor runs
-/// with `--chains` whose batches fit in the time.
+/// chain count does); runs with `--rel-error` never use this, and a run
+/// whose `chains` fit in 80 % of the time left keeps `bs`.
 pub fn time_batch_size(
     work: &dyn BatchWork,
     cfg: &RunConfig,
     bs: u64,
-    seconds: f64,
+    (seconds, chains): (f64, Option<u64>),
     (threads, in_flight): (usize, u64),
     start: Instant,
 ) -> TimeSizing {
@@ -327,11 +327,14 @@ pub fn time_batch_size(
     work.run_batch(&probe_cfg, 0, probe, bucket_count(cfg.orders), &mut scratch);
     let rate = probe as f64 / t.elapsed().as_secs_f64().max(1e-9) * threads.max(1) as f64;
     let left = (seconds - start.elapsed().as_secs_f64()).max(0.0);
+    // A `--chains` run that fits in the time keeps its batches (and so its
+    // bytes); one that may not reach its chains is sized by the time.
+    let fits = chains.is_some_and(|c| c as f64 / rate <= 0.8 * left);
     let mut chosen = bs;
     let too_long = |c: u64| {
         (MIN_BATCHES * c) as f64 / rate > 0.8 * left || (in_flight * c) as f64 / rate > 0.1 * left
     };
-    while chosen > MIN_TIMED_BATCH && too_long(chosen) {
+    while !fits && chosen > MIN_TIMED_BATCH && too_long(chosen) {
         chosen /= 2;
     }
     let chosen = chosen.max(MIN_TIMED_BATCH.min(bs));
@@ -544,7 +547,14 @@ pub fn drive(
         // At the limit every thread's batch in hand is folded: that many
         // batches must fit too.
         let in_flight = if cfg.threads == 0 { cores } else { cfg.threads } as u64;
-        let sizing = time_batch_size(work, cfg, bs, seconds, (threads, in_flight), start);
+        let sizing = time_batch_size(
+            work,
+            cfg,
+            bs,
+            (seconds, stop.chains),
+            (threads, in_flight),
+            start,
+        );
         bs = sizing.batch_size;
         time_sizing = Some(sizing);
     }

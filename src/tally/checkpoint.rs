@@ -137,12 +137,11 @@ impl Checkpoint {
             && orders.len() == buckets
             && orders.iter().all(|o| o.len() == n)
             && snapshots.iter().all(|(_, v)| v.len() == n)
-            && per_receiver(near_hits.len())
+            && near_hits.len() == n
             && [&watched, &near_plain, &near_reach, &enclosed]
                 .iter()
                 .all(|f| per_receiver(f.len()))
-            && flat.len() % 2 == 0
-            && per_receiver(flat.len() / 2)
+            && flat.len() == 2 * n
             && kept <= n
             && batch_means.batches() * kept == batch_means.values().len();
         if !fits {
@@ -251,6 +250,8 @@ mod tests {
         assert!(misfit(&|e| e.tallies.sampled_direct.truncate(2)).is_some());
         assert!(misfit(&|e| e.tallies.watched.push(true)).is_some());
         assert!(misfit(&|e| e.tallies.near_vertices.push([1, 2])).is_some());
+        assert!(misfit(&|e| e.tallies.near_vertices.clear()).is_some());
+        assert!(misfit(&|e| e.tallies.near_hits.clear()).is_some());
         assert!(misfit(&|e| e.tallies.snapshots[0].1.push(0.0)).is_some());
         assert!(
             misfit(
