@@ -135,4 +135,27 @@ fn a_checkpoint_never_goes_over_an_input_or_an_output() {
         assert_eq!(std::fs::read(&pts).unwrap(), before);
         assert!(!out.exists());
     }
+    // An output of the command's own that the run does not see: a fan's
+    // polar plot.
+    let plot = dir.path().join("fan.png");
+    let o = lumest(&[
+        "luminance",
+        "--scene",
+        "data/sobolev.toml",
+        "--fan-at",
+        "0,0,0,0,0,1",
+        "--fan",
+        "30,90",
+        "--out",
+        out_s,
+        "--plot",
+        plot.to_str().unwrap(),
+        "--chains",
+        "1000",
+        "--checkpoint",
+        plot.to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("same file"), "{e}");
+    assert!(!out.exists() && !plot.exists());
 }

@@ -1495,6 +1495,11 @@ pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
     if let Some(plot) = &a.plot {
         outputs.push(("--plot", Path::new(plot)));
     }
+    // (The run checks the checkpoint against the outputs it knows; the
+    // plot is this command's own.)
+    if let Some(ck) = &a.run.checkpoint {
+        outputs.push(("--checkpoint", Path::new(ck)));
+    }
     check_outputs(&inputs, &outputs)?;
     if let (Some(at), Some(steps)) = (&a.fan_at, &a.fan) {
         let v = numbers(at, 6, "--fan-at")?;

@@ -237,10 +237,15 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<()> {
     if per_pixel > 1 {
         outs.push(format!("{base}_pixels.csv"));
     }
-    let outputs: Vec<(&str, &std::path::Path)> = outs
+    let mut outputs: Vec<(&str, &std::path::Path)> = outs
         .iter()
         .map(|o| ("--out", std::path::Path::new(o)))
         .collect();
+    // (The run checks the checkpoint against the CSV only; the images are
+    // this command's own.)
+    if let Some(ck) = &a.run.checkpoint {
+        outputs.push(("--checkpoint", std::path::Path::new(ck)));
+    }
     let referenced = crate::scene::referenced_files(&a.scene);
     let mut inputs = vec![a.scene.as_path()];
     inputs.extend(referenced.iter().map(|p| p.as_path()));
