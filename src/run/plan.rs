@@ -46,7 +46,10 @@
 //! every thread count and every shard plans alike):
 //!
 //! 1. a first pilot stage of 32 batches of [`super::MIN_TIMED_BATCH`] chains (the
-//!    smallest batches whose means are near enough normal for the checks)
+//!    smallest batches whose means are near enough normal for the checks;
+//!    where the work's own batch `bs` is no larger, costly chains such as
+//!    the backward estimator's, a quarter of `bs`, at least 8, so that the
+//!    pilot costs a quarter of a minimum run, not a whole one)
 //!    gives the chains `N` the target needs ([`planned_chains`]);
 //! 2. the run's batch size is the largest power of two giving at least 32
 //!    batches for `N` chains, between the pilot's and `bs`
