@@ -543,20 +543,15 @@ pub fn drive(
         // Threads beyond the cores add no pace (the probe's rate times
         // 64 threads on 2 cores planned batches 30 times too large).
         let cores = std::thread::available_parallelism().map_or(1, |p| p.get());
-        let threads = if cfg.threads == 0 {
-            cores
-        } else {
-            cfg.threads.min(cores)
-        };
         // At the limit every thread's batch in hand is folded: that many
-        // batches must fit too.
-        let in_flight = if cfg.threads == 0 { cores } else { cfg.threads } as u64;
+        // batches must fit too; only the threads up to the cores add pace.
+        let asked = if cfg.threads == 0 { cores } else { cfg.threads };
         let sizing = time_batch_size(
             work,
             cfg,
             bs,
             (seconds, stop.chains),
-            (threads, in_flight),
+            (asked.min(cores), asked as u64),
             start,
         );
         bs = sizing.batch_size;
