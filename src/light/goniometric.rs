@@ -552,18 +552,13 @@ fn expand(p: &Photometry) -> (Vec<f64>, Vec<Vec<f64>>) {
             Symmetry::BilateralC0 => mirror(&mut planes, &|a| 360.0 - a),
             Symmetry::BilateralC90 => {
                 // C(phi) = C(180 - phi): the stored C90-C270 half gives the
-                // rest (180 -> 0, 135 -> 45, 225 -> 315, ...).
+                // rest (180 -> 0, 135 -> 45, 225 -> 315, ...). Without a
+                // stored C180 no mirrored plane lands on C0: the turn is
+                // closed across it.
                 mirror(&mut planes, &|a| (540.0 - a) % 360.0);
-                if let Some(r0) = planes.iter().find(|q| q.0 == 0.0).map(|q| q.1.clone()) {
-                    planes.push((360.0, r0));
-                }
+                close_turn(&mut planes);
             }
-            Symmetry::None => {
-                if p.h_angles.last() != Some(&360.0) {
-                    let r = planes[0].1.clone();
-                    planes.push((360.0, r));
-                }
-            }
+            Symmetry::None => close_turn(&mut planes),
         },
         PhotometricType::A | PhotometricType::B => {
             if p.h_angles.first().is_some_and(|&a| a >= 0.0) && p.h_angles.len() > 1 {
@@ -577,6 +572,42 @@ fn expand(p: &Photometry) -> (Vec<f64>, Vec<Vec<f64>>) {
     planes.sort_by(|a, b| a.0.total_cmp(&b.0));
     planes.dedup_by(|a, b| a.0 == b.0);
     planes.into_iter().unzip()
+}
+
+/// Give the planes of a periodic type C table (angles in `[0, 360]`, at
+/// least one) the planes C0 and C360 where they lack them: the row at C0
+/// is the linear interpolation across it between the last plane and the
+/// first one (a turn on), so the interpolant, periodic in C, is the one
+/// the stored planes define, and C360 repeats C0.
+fn close_turn(planes: &mut Vec<(f64, Vec<f64>)>) {
+    planes.sort_by(|a, b| a.0.total_cmp(&b.0));
+    planes.dedup_by(|a, b| a.0 == b.0);
+    let (Some(first), Some(last)) = (planes.first(), planes.last()) else {
+        return;
+    };
+    let (a0, a1) = (first.0, last.0);
+    if a0 == 0.0 && a1 == 360.0 {
+        return;
+    }
+    let row0 = if a0 == 0.0 {
+        first.1.clone()
+    } else if a1 == 360.0 {
+        last.1.clone()
+    } else {
+        // From the last plane (at a1 - 360) to the first (at a0).
+        let t = (360.0 - a1) / (a0 + 360.0 - a1);
+        last.1
+            .iter()
+            .zip(&first.1)
+            .map(|(l, f)| l + t * (f - l))
+            .collect()
+    };
+    if a0 != 0.0 {
+        planes.insert(0, (0.0, row0.clone()));
+    }
+    if a1 != 360.0 {
+        planes.push((360.0, row0));
+    }
 }
 
 #[cfg(test)]
@@ -653,6 +684,15 @@ mod tests {
                 ),
             ),
             (
+                "bilateral C90 without C180",
+                table(
+                    PhotometricType::C,
+                    &[90.0, 150.0, 210.0, 270.0],
+                    &full,
+                    asym,
+                ),
+            ),
+            (
                 "no symmetry",
                 table(PhotometricType::C, &[0.0, 90.0, 180.0, 270.0], &full, asym),
             ),
@@ -687,6 +727,45 @@ mod tests {
                 "{name}: power {} vs quadrature {q}",
                 g.power()
             );
+        }
+    }
+
+    /// A table symmetric about C90-C270 (first plane 90, last 270, LM-63)
+    /// need not store C180: planes 90, 150, 210, 270 of 100, 120, 180,
+    /// 200 cd at every gamma over 0-90. Mirrored (C -> 180 - C) they stand
+    /// at 30 (120 cd), 90, 150, 210, 270 and 330 (180 cd), and C0 lies half
+    /// way from C330 to C390 = C30: 150 cd, as C180 does half way from
+    /// C150 to C210. By hand, the mean over the turn of the piecewise
+    /// linear intensity is 54000 / 360 = 150 cd, so the flux over the
+    /// lower hemisphere is 150 x 2 pi lm; at C15, (150 + 120) / 2 = 135 cd.
+    /// (The turn was left open at C0 before: 785.4 lm, and 0 cd at C0.)
+    #[test]
+    fn a_c90_c270_table_without_c180_closes_the_turn() {
+        let g: Vec<f64> = (0..=6).map(|k| k as f64 * 15.0).collect();
+        let value = |c: f64| match c as i64 {
+            90 => 100.0,
+            150 => 120.0,
+            210 => 180.0,
+            _ => 200.0,
+        };
+        let p = table(
+            PhotometricType::C,
+            &[90.0, 150.0, 210.0, 270.0],
+            &g,
+            |c, _| value(c),
+        );
+        assert_eq!(p.symmetry(), Symmetry::BilateralC90);
+        let gon = Goniometric::new(&p, 1.0);
+        assert!(
+            (gon.power() / (150.0 * 2.0 * PI) - 1.0).abs() < 1e-12,
+            "{}",
+            gon.power()
+        );
+        for (c, want) in [(0.0, 150.0), (15.0, 135.0), (180.0, 150.0), (345.0, 165.0)] {
+            let got = gon.intensity_at(f64::to_radians(c), f64::to_radians(40.0));
+            assert!((got - want).abs() < 1e-9, "C{c}: {got} cd, not {want}");
+            let d = gon.direction(f64::to_radians(c), f64::to_radians(40.0));
+            assert!((gon.intensity(d) - want).abs() < 1e-9, "C{c}: by direction");
         }
     }
 
