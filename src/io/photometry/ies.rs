@@ -13,14 +13,17 @@
 //!    angles, photometric type (1 = C, 2 = B, 3 = A), units (1 = feet,
 //!    2 = metres), width, length, height of the luminous opening;
 //! 3. ballast factor, a factor whose meaning depends on the version (the
-//!    ballast-lamp photometric factor in 1986-1995, "future use" in 2002,
-//!    the file-generation type in 2019), input watts;
+//!    ballast-lamp photometric factor in 1986 and 1991, "future use" in
+//!    1995 and 2002, the file-generation type in 2019), input watts;
 //! 4. the vertical angles, the horizontal angles, and the candela values,
 //!    all vertical angles of the first horizontal angle first.
 //!
 //! The intensity is the file's candela value times the candela multiplier
 //! times the ballast factor, times the ballast-lamp photometric factor for
-//! the versions that define one (never the 2019 file-generation type).
+//! the versions that define one, 1986 and 1991 (as Radiance's `ies2rad`
+//! and Ashdown's reference parser read them: never the 1995 and 2002
+//! "future use" field, whatever it holds, nor the 2019 file-generation
+//! type).
 //! With `TILT=INCLUDE` the tilt table is kept ([`super::Tilt`]) and its
 //! factor at the luminaire's installed tilt multiplies later, where the
 //! light is placed (it depends on the aim); `lumest photometry` shows the
@@ -266,12 +269,12 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         ));
     }
     let (second, s_line) = t.number(match version {
-        Version::Lm2002 => "future use",
+        Version::Lm1995 | Version::Lm2002 => "future use",
         Version::Lm2019 => "file generation type",
         _ => "ballast-lamp photometric factor",
     })?;
     let lamp_factor = match version {
-        Version::Lm1986 | Version::Lm1991 | Version::Lm1995 => {
+        Version::Lm1986 | Version::Lm1991 => {
             if second <= 0.0 {
                 return Err(err(
                     s_line,
@@ -281,7 +284,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
             }
             second
         }
-        Version::Lm2002 | Version::Lm2019 => 1.0,
+        Version::Lm1995 | Version::Lm2002 | Version::Lm2019 => 1.0,
     };
     let (watts, w_line) = t.number("input watts")?;
     if watts < 0.0 {
@@ -656,20 +659,26 @@ TILT=NONE
         assert_eq!(p.v_angles, [0.0, 45.0, 90.0]);
         assert_eq!(p.candela[0], [12.0, 15.0, 18.0]);
         assert_eq!(p.opening, Opening::default());
-        // 2002: the second factor is "future use"; 2019: the file generation
-        // type. Neither multiplies.
-        for (head, fmt) in [
-            ("IESNA:LM-63-2002", "IES LM-63-2002"),
-            ("IES:LM-63-2019", "IES LM-63-2019"),
+        // 1995 and 2002: the second factor is "future use" (0.0001 here,
+        // or 0, which a factor could not be); 2019: the file generation
+        // type. None multiplies.
+        for (head, fmt, second) in [
+            ("IESNA:LM-63-1995", "IES LM-63-1995", "0.0001"),
+            ("IESNA:LM-63-1995", "IES LM-63-1995", "0"),
+            ("IESNA:LM-63-2002", "IES LM-63-2002", "1.10001"),
+            ("IES:LM-63-2019", "IES LM-63-2019", "1.10001"),
         ] {
             let f = format!(
-                "{head}\n[TEST] x\nTILT=NONE\n1 -1 2 3 1 1 2 0 0 0\n0.5 1.10001 10\n0 45 90 0\n4 5 6\n"
+                "{head}\n[TEST] x\nTILT=NONE\n1 -1 2 3 1 1 2 0 0 0\n0.5 {second} 10\n0 45 90 0\n4 5 6\n"
             );
             let p = parse(&f, "b.ies").unwrap();
             assert_eq!(p.format, fmt);
             assert_eq!(p.candela[0], [4.0, 5.0, 6.0]);
             assert_eq!(p.lamp_lumens, None);
         }
+        // 1991: the ballast-lamp photometric factor (3) multiplies.
+        let f = "IESNA91\n[TEST] x\nTILT=NONE\n1 -1 2 3 1 1 2 0 0 0\n0.5 3 10\n0 45 90 0\n4 5 6\n";
+        assert_eq!(parse(f, "b.ies").unwrap().candela[0], [12.0, 15.0, 18.0]);
         // TILT=INCLUDE: the table is kept, not applied; upright (tilt 0)
         // its factor is 0.5.
         let f = "IESNA91\nTILT=INCLUDE\n1\n3\n-10 0 10\n0.8 0.5 0.8\n1 100 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\n2 4\n";
