@@ -809,4 +809,15 @@ fn openexr_maps_read_like_radiance_ones() {
     std::fs::write(d.join("bad.exr"), b"not an exr").unwrap();
     let e = lumest::io::envmap::read_luminance_map(&d.join("bad.exr")).unwrap_err();
     assert!(e.contains("bad.exr"), "{e}");
+    // An 8-bit image holds gamma-encoded display values, not luminance: a
+    // grey 128 PNG read as 128/255 gave pi 0.502 lx facing up, where its
+    // sRGB decoding would give pi 0.216; it is refused instead.
+    image::RgbImage::from_pixel(4, 2, image::Rgb([128, 128, 128]))
+        .save(d.join("grey.png"))
+        .unwrap();
+    let e = lumest::io::envmap::read_luminance_map(&d.join("grey.png")).unwrap_err();
+    assert!(
+        e.contains("grey.png") && e.contains("Png image") && e.contains("not luminance"),
+        "{e}"
+    );
 }

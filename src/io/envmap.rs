@@ -8,6 +8,19 @@
 //! and, per channel, every `COLORCORR` factor found in the header, so the
 //! true value is the stored one divided by their products (Ward, "The
 //! RADIANCE Picture File Format", and Radiance's `getheader(1)`/`pfilt(1)`).
+//!
+//! Only these two float formats are read: an 8- or 16-bit image (PNG,
+//! JPEG, ...) holds display values, gamma-encoded and clipped, not
+//! luminance, and is refused rather than read as if it were.
+//!
+//! An RGBE pixel of mantissa byte `m` and exponent byte `e` decodes to
+//! `m 2^(e - 136)`, as the `image` crate and Walter's widely used
+//! `rgbe.c` read it; Radiance's own `colr_color` adds half a step,
+//! `(m + 0.5) 2^(e - 136)`, the middle of the interval its truncating
+//! writer maps to `m`. A map written by Radiance's tools therefore reads
+//! low here by half a step, `0.5 / m` relative: 0.2-0.4 % for the largest
+//! channel (`m` 128-255). Not corrected: maps from writers that round to
+//! nearest (lumest's own, the `image` crate's) would then read high.
 
 use ::image::codecs::hdr::HdrDecoder;
 use ::image::{DynamicImage, ImageFormat};
@@ -99,8 +112,8 @@ pub fn luminance_of(r: f64, g: f64, b: f64) -> f64 {
     }
 }
 
-/// Read an environment map (`.hdr`, `.exr`; any format the `image` crate was built
-/// with) as luminance values. Errors name the problem; the caller adds the
+/// Read an environment map (a Radiance `.hdr` or an OpenEXR `.exr`; any
+/// other image is refused, module docs) as luminance values. Errors name the problem; the caller adds the
 /// file and field.
 pub fn read_luminance_map(path: &Path) -> Result<LuminanceMap, String> {
     let reader = ::image::ImageReader::open(path)
@@ -108,6 +121,20 @@ pub fn read_luminance_map(path: &Path) -> Result<LuminanceMap, String> {
         .with_guessed_format()
         .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
     let decode_error = |e: ::image::ImageError| format!("cannot decode `{}`: {e}", path.display());
+    match reader.format() {
+        Some(ImageFormat::Hdr | ImageFormat::OpenExr) => {}
+        other => {
+            let what = other.map_or("not a Radiance .hdr or OpenEXR .exr file".to_string(), |f| {
+                format!("a {f:?} image")
+            });
+            return Err(format!(
+                "`{}` is {what}: an environment map must be a float Radiance .hdr or OpenEXR \
+                 .exr file (8- and 16-bit images hold gamma-encoded display values, not \
+                 luminance)",
+                path.display()
+            ));
+        }
+    }
     let (img, exposure, corr) = if reader.format() == Some(ImageFormat::Hdr) {
         // Decode through the Radiance decoder itself to read its header.
         let file = std::fs::File::open(path)
