@@ -998,6 +998,16 @@ fn ies_cases() -> Vec<Case> {
             Accept("flux of the table 444.9 lm"),
         ),
         ies(
+            "CR line ends (old Mac OS)",
+            &IES.replace('\n', "\r"),
+            Accept("flux of the table 444.9 lm"),
+        ),
+        ies(
+            "DOS end-of-file mark (Ctrl-Z) after the data",
+            &format!("{IES}\u{1a}"),
+            Accept("flux of the table 444.9 lm"),
+        ),
+        ies(
             "Latin-1 byte in a keyword",
             "IESNA:LM-63-2002\n[TEST] Leuchte f\u{fc}r B\u{fc}ro\nTILT=NONE\n1 1000 1 3 1 1 2 0 0 0\n1.0 1.0 20\n0 45 90\n0\n100 80 50\n",
             Accept("flux of the table 444.9 lm"),
@@ -1078,6 +1088,12 @@ fn ldt_cases() -> Vec<Case> {
             Ch::Ldt,
             "CRLF line ends",
             text(ldt().replace('\n', "\r\n")),
+            Accept("flux of the table"),
+        ),
+        case(
+            Ch::Ldt,
+            "DOS end-of-file mark (Ctrl-Z) after the data",
+            text(format!("{}\u{1a}", ldt())),
             Accept("flux of the table"),
         ),
         case(Ch::Ldt, "an IES file named .ldt", text(IES), Error("f.ldt")),

@@ -124,9 +124,10 @@ pub fn read_luminance_map(path: &Path) -> Result<LuminanceMap, String> {
     match reader.format() {
         Some(ImageFormat::Hdr | ImageFormat::OpenExr) => {}
         other => {
-            let what = other.map_or("not a Radiance .hdr or OpenEXR .exr file".to_string(), |f| {
-                format!("a {f:?} image")
-            });
+            let what = other.map_or(
+                "not a Radiance .hdr or OpenEXR .exr file".to_string(),
+                |f| format!("a {f:?} image"),
+            );
             return Err(format!(
                 "`{}` is {what}: an environment map must be a float Radiance .hdr or OpenEXR \
                  .exr file (8- and 16-bit images hold gamma-encoded display values, not \

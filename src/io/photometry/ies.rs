@@ -33,7 +33,7 @@
 
 use super::{
     Opening, PhotometricType, Photometry, PhotometryError, Tilt, TiltGeometry, check_angles,
-    strip_bom, whole,
+    text_lines, whole,
 };
 
 /// Most angles per axis and values in a table (larger files are refused
@@ -120,7 +120,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
     // when looking for the version (left there, they would make a 2019
     // file read as 1986, its file-generation type a candela factor); line
     // numbers still count the blank lines.
-    let lines: Vec<&str> = strip_bom(text).lines().collect();
+    let lines: Vec<&str> = text_lines(text);
     let first = lines
         .iter()
         .map(|l| l.trim())
@@ -142,10 +142,13 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
         }
         _ => Version::Lm1986,
     };
-    let Some(tilt_at) = lines
-        .iter()
-        .position(|l| l.trim_start().starts_with("TILT"))
-    else {
+    let Some(tilt_at) = lines.iter().position(|l| {
+        // (`TILT`, then `=`: a 1986 label line may begin with a word
+        // such as `TILTED`.)
+        l.trim_start()
+            .strip_prefix("TILT")
+            .is_some_and(|r| r.trim_start().starts_with('='))
+    }) else {
         return Err(err(0, "TILT", "no `TILT=` line".into()));
     };
     let tilt_line = lines[tilt_at].trim();
@@ -647,6 +650,26 @@ TILT=NONE
         );
         assert_eq!(file(v95, -0.1, 1.2, -0.2).shape, S::Ellipsoid);
         assert_eq!(file(v95, -1.0, 0.0, 1.92).shape, S::Ellipse);
+    }
+
+    /// Files as old tools wrote them: a 1986 label line beginning with
+    /// `TILT` but no `=` (`TILTED FLOOD`, taken for the TILT line before),
+    /// lone-CR line ends (old Mac OS: one line before) and a DOS
+    /// end-of-file mark, Ctrl-Z, after the data (refused as data before).
+    /// Each reads as its LF twin does.
+    #[test]
+    fn old_line_ends_labels_and_end_of_file_marks() {
+        let lf = "TILTED FLOOD\nTILT=NONE\n1 1000 2 3 1\n1 2 0 0 0 0.5\n3 10 0 45\n90 0 4 5\n6\n";
+        let want = parse(lf, "a.ies").unwrap();
+        assert_eq!(want.candela[0], [12.0, 15.0, 18.0]);
+        for text in [
+            lf.replace('\n', "\r"),
+            lf.replace('\n', "\r\n"),
+            format!("{lf}\u{1a}"),
+            format!("{}\u{1a}", lf.replace('\n', "\r\n")),
+        ] {
+            assert_eq!(parse(&text, "a.ies").unwrap(), want, "{text:?}");
+        }
     }
 
     #[test]

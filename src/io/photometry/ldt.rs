@@ -34,7 +34,7 @@
 //! are accepted.
 
 use super::{
-    Opening, OpeningShape, PhotometricType, Photometry, PhotometryError, check_angles, strip_bom,
+    Opening, OpeningShape, PhotometricType, Photometry, PhotometryError, check_angles, text_lines,
     whole,
 };
 
@@ -105,7 +105,7 @@ pub fn parse(text: &str, file: &str) -> Result<Photometry, PhotometryError> {
     // (text, unused): stripped all the same. Blank lines are not skipped:
     // an empty first line is an empty company identification.
     let mut l = Lines {
-        lines: strip_bom(text).lines().collect(),
+        lines: text_lines(text),
         next: 0,
         file,
     };
@@ -406,6 +406,24 @@ mod tests {
             t = t.replace('.', ",");
         }
         t
+    }
+
+    /// Lone-CR line ends (old Mac OS) and a DOS end-of-file mark (Ctrl-Z)
+    /// after the last intensity read as the CR LF file does (before: no
+    /// lines, and "unexpected data after the last intensity").
+    #[test]
+    fn old_line_ends_and_end_of_file_marks() {
+        let rows: Vec<Vec<f64>> = (0..5).map(|k| vec![100.0 + k as f64, 50.0, 0.0]).collect();
+        let crlf = ldt(2, 8, 1, &rows, false);
+        let want = parse(&crlf, "t.ldt").unwrap();
+        for text in [
+            crlf.replace("\r\n", "\r"),
+            crlf.replace("\r\n", "\n"),
+            format!("{crlf}\u{1a}"),
+            format!("{crlf}\r\n\u{1a}"),
+        ] {
+            assert_eq!(parse(&text, "t.ldt").unwrap(), want, "{text:?}");
+        }
     }
 
     #[test]

@@ -351,6 +351,21 @@ pub fn read(path: &std::path::Path) -> Result<Photometry, PhotometryError> {
 /// `EF BB BF` as [`read`] decodes them (one Latin-1 character per byte).
 /// Editors on Windows write one; left in place it would hide an IES file's
 /// version line.
+/// The lines of a photometric file's text: a byte-order mark skipped
+/// ([`strip_bom`]), the text ended at a DOS end-of-file mark (Ctrl-Z,
+/// 0x1A, which files from DOS tools often end with), and lines ended by
+/// LF or CR LF, or in a file without any LF by a lone CR (old Mac OS
+/// files; a stray CR elsewhere stays, as trailing white space of its line).
+pub(crate) fn text_lines(text: &str) -> Vec<&str> {
+    let text = strip_bom(text);
+    let text = text.find('\u{1a}').map_or(text, |i| &text[..i]);
+    if text.contains('\n') {
+        text.lines().collect()
+    } else {
+        text.split_terminator('\r').collect()
+    }
+}
+
 pub(crate) fn strip_bom(text: &str) -> &str {
     text.strip_prefix('\u{feff}')
         .or_else(|| text.strip_prefix("\u{ef}\u{bb}\u{bf}"))
