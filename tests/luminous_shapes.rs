@@ -739,3 +739,103 @@ fn a_luminous_solid_cut_by_the_ceiling_is_reported() {
     assert_eq!(with("flat.ies", 3.0), (0.0, false));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A view that meets a luminaire's luminous shape sees its luminance
+/// `I(w) / A_p(w)` towards `w = -d` (it was black before: only sphere and
+/// area lights were seen). References by hand: a closed box `2a x 2b x 2c`
+/// projects `4 (bc |w_x| + ac |w_y| + ab |w_z|)`, an ellipsoid of
+/// semi-axes `a, b, c` projects `pi sqrt(b^2 c^2 w_x^2 + a^2 c^2 w_y^2 +
+/// a^2 b^2 w_z^2)`, a flat rectangle `A |w_z|`. Views that miss the
+/// shape, start inside it, look away or meet a surface first see nothing
+/// of it.
+#[test]
+fn views_see_a_luminous_shape_as_its_luminance() {
+    use lumest::estimator::emitted_luminance;
+    let dir = std::env::temp_dir().join(format!("lumest-shape-views-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("box.ies"), isotropic_ies(0.3, 0.6, 0.2)).unwrap();
+    std::fs::write(dir.join("flat.ies"), isotropic_ies(0.3, 0.6, 0.0)).unwrap();
+    std::fs::write(dir.join("egg.ies"), sloped_ies(-0.4, -0.6, -0.2)).unwrap();
+    let c = DVec3::new(0.0, 0.0, 3.0);
+    let light =
+        |f: &str| format!("type = \"ies\"\nfile = \"{f}\"\nposition = [0, 0, 3]\nopening = true");
+    let inf = f64::INFINITY;
+    let toward = |o: DVec3| (c - o).normalize();
+    let close = |got: f64, want: f64, what: &str| {
+        assert!(
+            (got - want).abs() <= 1e-9 * want.abs().max(1.0),
+            "{what}: {got} cd/m^2, not {want}"
+        );
+    };
+    // The box, 0.6 m (x) x 0.3 m (y) x 0.2 m.
+    let s = scene_in(&dir, &light("box.ies"));
+    let (a, b, h) = (0.3, 0.15, 0.1);
+    let box_ap = |w: DVec3| 4.0 * (b * h * w.x.abs() + a * h * w.y.abs() + a * b * w.z.abs());
+    let below = DVec3::new(0.1, 0.05, 0.5);
+    close(
+        emitted_luminance(&s, below, DVec3::Z, inf),
+        I0 / (4.0 * a * b),
+        "box from below",
+    );
+    for o in [
+        DVec3::new(1.0, 0.8, 2.0),
+        DVec3::new(-0.9, 0.2, 3.05),
+        DVec3::new(0.4, -1.1, 4.0),
+    ] {
+        let d = toward(o);
+        close(
+            emitted_luminance(&s, o, d, inf),
+            I0 / box_ap(-d),
+            &format!("box from {o}"),
+        );
+    }
+    for (o, d, t_max, what) in [
+        (DVec3::new(0.5, 0.0, 0.5), DVec3::Z, inf, "beside the box"),
+        (c, DVec3::X, inf, "from inside the box"),
+        (below, -DVec3::Z, inf, "looking away"),
+        (below, DVec3::Z, 1.0, "a surface first"),
+    ] {
+        assert_eq!(emitted_luminance(&s, o, d, t_max), 0.0, "{what}");
+    }
+    // The flat opening (0.6 m x 0.3 m at z = 3): I / (A |w_z|) from either
+    // side, nothing edge-on.
+    let s = scene_in(&dir, &light("flat.ies"));
+    let o = DVec3::new(0.7, -0.4, 2.1);
+    let d = toward(o);
+    close(
+        emitted_luminance(&s, o, d, inf),
+        I0 / (4.0 * a * b * d.z.abs()),
+        "flat from below",
+    );
+    let o = DVec3::new(-0.6, 0.3, 3.8);
+    let d = toward(o);
+    close(
+        emitted_luminance(&s, o, d, inf),
+        I0 / (4.0 * a * b * d.z.abs()),
+        "flat from above",
+    );
+    assert_eq!(
+        emitted_luminance(&s, DVec3::new(-1.0, 0.0, 3.0), DVec3::X, inf),
+        0.0,
+        "edge-on"
+    );
+    // The ellipsoid of semi-axes 0.3 (x), 0.2 (y), 0.1 m with the sloped
+    // distribution.
+    let s = scene_in(&dir, &light("egg.ies"));
+    let (ea, eb, ec) = (0.3, 0.2, 0.1);
+    for o in [
+        DVec3::new(0.7, -0.5, 2.2),
+        DVec3::new(0.05, 0.1, 1.0),
+        DVec3::new(-0.3, 0.9, 3.6),
+    ] {
+        let w = -toward(o);
+        let ap = PI
+            * ((eb * ec * w.x).powi(2) + (ea * ec * w.y).powi(2) + (ea * eb * w.z).powi(2)).sqrt();
+        close(
+            emitted_luminance(&s, o, -w, inf),
+            sloped_intensity(w) / ap,
+            &format!("ellipsoid from {o}"),
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

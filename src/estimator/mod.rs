@@ -28,8 +28,9 @@
 //! receiver at once. The first order (light straight from the sources) is
 //! computed exactly and separately ([`Receivers::direct`]) where a closed
 //! form exists, and sampled per batch elsewhere ([`direct`]); point sources
-//! are never seen directly, while a view that meets an emitting surface or
-//! sphere adds its luminance ([`emitted_luminance`]).
+//! are never seen directly, while a view that meets an emitting surface, a
+//! sphere or a luminaire's luminous shape adds its luminance
+//! ([`emitted_luminance`]).
 
 pub mod backward;
 pub mod direct;
@@ -303,7 +304,8 @@ pub fn exact_direct(scene: &Scene, k: usize) -> bool {
 }
 
 /// Emitted luminance [cd/m^2] seen along the ray `o + t d` (unit `d`) from
-/// an observer at `o`: that of the sphere lights it enters before `t_max`
+/// an observer at `o`: that of the sphere lights and the luminous shapes
+/// of luminaires ([`Light::shape_luminance`]) it enters before `t_max`
 /// \[m\] (they do not block what lies behind them), plus that of an area
 /// source whose emitting side is the first surface it meets (within
 /// `t_max`).
@@ -314,6 +316,10 @@ pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
         .iter()
         .filter(|l| l.hit(o, d, t_max).is_some())
         .fold(0.0, |a, l| a + l.luminance());
+    let shapes = scene
+        .lights
+        .iter()
+        .fold(0.0, |a, l| a + l.shape_luminance(o, d, t_max));
     let hit = scene.first_hit_from(o, d);
     // A ray that leaves the scene sees the lights at infinity.
     let sky = if hit.is_none() {
@@ -334,7 +340,7 @@ pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
             }
         })
         .unwrap_or(0.0);
-    spheres + area + sky
+    spheres + shapes + area + sky
 }
 
 /// Trace the view ray from observer `o` \[m\] looking along unit `d` to its sub-point.

@@ -267,6 +267,93 @@ fn cylinder(d: DVec3, a: f64, b: f64, c: f64, [ex, ey, ez]: [DVec3; 3]) -> [(f64
     [end, mantle, (0.0, Part::None)]
 }
 
+/// Where the ray `o + t v` (local coordinates \[m\], `v` a unit direction)
+/// enters the closed luminous solid `shape` of half extents `half` from
+/// outside: the least `t > 0` at which it meets the solid, or where it
+/// crosses a flat shape (a rectangle or an ellipse without sides at
+/// `z = 0`, a vertical ellipse) within its outline; `None` where it misses,
+/// and where it starts inside the solid (the shape emits outwards only).
+/// The views of a luminaire emitting from its shape see it there
+/// ([`crate::light::Light::shape_luminance`]).
+pub fn entry(shape: OpeningShape, half: DVec3, o: DVec3, v: DVec3) -> Option<f64> {
+    use OpeningShape as S;
+    let (x, y, z, h) = (DVec3::X, DVec3::Y, DVec3::Z, half);
+    // A flat outline in the plane through the centre normal to `n`.
+    let flat = |n: DVec3, inside: &dyn Fn(DVec3) -> bool| {
+        let q = v.dot(n);
+        if q.abs() < 1e-300 {
+            return None;
+        }
+        let t = -o.dot(n) / q;
+        (t > 0.0 && inside(o + v * t)).then_some(t)
+    };
+    let (t0, _) = match shape {
+        S::Point => return None,
+        S::Rectangle | S::Ellipse if h.z == 0.0 => {
+            return if shape == S::Rectangle {
+                flat(z, &|p| p.x.abs() <= h.x && p.y.abs() <= h.y)
+            } else {
+                flat(z, &|p| (p.x / h.x).powi(2) + (p.y / h.y).powi(2) <= 1.0)
+            };
+        }
+        S::Rectangle => meet(
+            meet(slab(o, v, x, h.x), slab(o, v, y, h.y)),
+            slab(o, v, z, h.z),
+        ),
+        S::Ellipse => meet(ecyl(o, v, (x, h.x), (y, h.y)), slab(o, v, z, h.z)),
+        S::Ellipsoid => {
+            let (o1, v1) = (o / h, v / h);
+            let (qa, qb, qc) = (v1.dot(v1), 2.0 * o1.dot(v1), o1.dot(o1) - 1.0);
+            let disc = qb * qb - 4.0 * qa * qc;
+            (disc >= 0.0).then(|| {
+                let s = disc.sqrt();
+                ((-qb - s) / (2.0 * qa), (-qb + s) / (2.0 * qa))
+            })
+        }
+        S::CylinderC0 => meet(slab(o, v, x, h.x), ecyl(o, v, (y, h.y), (z, h.z))),
+        S::CylinderC90 => meet(slab(o, v, y, h.y), ecyl(o, v, (x, h.x), (z, h.z))),
+        S::VerticalEllipseC0 => {
+            return flat(x, &|p| (p.y / h.y).powi(2) + (p.z / h.z).powi(2) <= 1.0);
+        }
+        S::VerticalEllipseC90 => {
+            return flat(y, &|p| (p.x / h.x).powi(2) + (p.z / h.z).powi(2) <= 1.0);
+        }
+    }?;
+    (t0 > 0.0).then_some(t0)
+}
+
+/// The parameter interval where the line `o + t v` lies in the slab
+/// `|p . e| <= h` (`None` when it misses).
+fn slab(o: DVec3, v: DVec3, e: DVec3, h: f64) -> Option<(f64, f64)> {
+    let (p, q) = (o.dot(e), v.dot(e));
+    if q.abs() < 1e-300 {
+        return (p.abs() <= h).then_some((f64::NEG_INFINITY, f64::INFINITY));
+    }
+    let (t0, t1) = ((-h - p) / q, (h - p) / q);
+    Some((t0.min(t1), t0.max(t1)))
+}
+
+/// The interval inside the elliptical cylinder `(p.e1/a)^2 + (p.e2/b)^2 <= 1`.
+fn ecyl(o: DVec3, v: DVec3, (e1, a): (DVec3, f64), (e2, b): (DVec3, f64)) -> Option<(f64, f64)> {
+    let (o1, o2, v1, v2) = (o.dot(e1) / a, o.dot(e2) / b, v.dot(e1) / a, v.dot(e2) / b);
+    let qa = v1 * v1 + v2 * v2;
+    let (qb, qc) = (2.0 * (o1 * v1 + o2 * v2), o1 * o1 + o2 * o2 - 1.0);
+    if qa < 1e-300 {
+        return (qc <= 0.0).then_some((f64::NEG_INFINITY, f64::INFINITY));
+    }
+    let disc = qb * qb - 4.0 * qa * qc;
+    (disc >= 0.0).then(|| {
+        let s = disc.sqrt();
+        ((-qb - s) / (2.0 * qa), (-qb + s) / (2.0 * qa))
+    })
+}
+
+fn meet(a: Option<(f64, f64)>, b: Option<(f64, f64)>) -> Option<(f64, f64)> {
+    let (a, b) = (a?, b?);
+    let (t0, t1) = (a.0.max(b.0), a.1.min(b.1));
+    (t0 <= t1).then_some((t0, t1))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -307,43 +394,6 @@ mod tests {
         .iter()
         .map(|v| DVec3::from_array(*v).normalize())
         .collect()
-    }
-
-    /// The parameter interval where the line `o + t v` lies in the slab
-    /// `|p . e| <= h` (`None` when it misses).
-    fn slab(o: DVec3, v: DVec3, e: DVec3, h: f64) -> Option<(f64, f64)> {
-        let (p, q) = (o.dot(e), v.dot(e));
-        if q.abs() < 1e-300 {
-            return (p.abs() <= h).then_some((f64::NEG_INFINITY, f64::INFINITY));
-        }
-        let (t0, t1) = ((-h - p) / q, (h - p) / q);
-        Some((t0.min(t1), t0.max(t1)))
-    }
-
-    /// The interval inside the elliptical cylinder `(p.e1/a)^2 + (p.e2/b)^2 <= 1`.
-    fn ecyl(
-        o: DVec3,
-        v: DVec3,
-        (e1, a): (DVec3, f64),
-        (e2, b): (DVec3, f64),
-    ) -> Option<(f64, f64)> {
-        let (o1, o2, v1, v2) = (o.dot(e1) / a, o.dot(e2) / b, v.dot(e1) / a, v.dot(e2) / b);
-        let qa = v1 * v1 + v2 * v2;
-        let (qb, qc) = (2.0 * (o1 * v1 + o2 * v2), o1 * o1 + o2 * o2 - 1.0);
-        if qa < 1e-300 {
-            return (qc <= 0.0).then_some((f64::NEG_INFINITY, f64::INFINITY));
-        }
-        let disc = qb * qb - 4.0 * qa * qc;
-        (disc >= 0.0).then(|| {
-            let s = disc.sqrt();
-            ((-qb - s) / (2.0 * qa), (-qb + s) / (2.0 * qa))
-        })
-    }
-
-    fn meet(a: Option<(f64, f64)>, b: Option<(f64, f64)>) -> Option<(f64, f64)> {
-        let (a, b) = (a?, b?);
-        let (t0, t1) = (a.0.max(b.0), a.1.min(b.1));
-        (t0 <= t1).then_some((t0, t1))
     }
 
     /// Whether the line from far out towards the eye side, `o + t v` with

@@ -661,6 +661,36 @@ impl Light {
         }
     }
 
+    /// Luminance [cd/m^2] of a luminaire's luminous shape (`opening =
+    /// true`, [`LuminousShape`]) seen along the ray `o + t d` (unit `d`)
+    /// from an observer at `o`, where the ray enters the shape before
+    /// `t_max` \[m\]: `I(w) / A_p(w)` towards `w = -d`, as the shape emits;
+    /// 0 for every other light, and where the ray misses the shape. Like a
+    /// sphere source, the shape does not block what lies behind it.
+    pub fn shape_luminance(&self, o: DVec3, d: DVec3, t_max: f64) -> f64 {
+        let Light::Gonio {
+            p,
+            frame,
+            dist,
+            opening: Some(s),
+        } = self
+        else {
+            return 0.0;
+        };
+        let (ol, vl) = (frame.to_local(o - *p), frame.to_local(d));
+        match luminous_parts::entry(s.shape, s.half, ol, vl) {
+            Some(t) if t < t_max => {
+                let a = s.projected(-vl);
+                if a > 0.0 {
+                    dist.intensity_world(frame, -d) / a
+                } else {
+                    0.0
+                }
+            }
+            _ => 0.0,
+        }
+    }
+
     /// Unoccluded direct illuminance \[lx\] at `x` on a receiver with unit
     /// normal `n`: `I cos / d^2` for a point (zero from behind); for a sphere
     /// `L int_cone max(0, n . w) dw` over the cone the sphere subtends, which
