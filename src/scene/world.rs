@@ -53,8 +53,10 @@ pub const MAX_INTENSITY: f64 = 1e60;
 /// below it scores would underflow.
 pub const MIN_INTENSITY: f64 = 1e-60;
 
-/// Relative tolerance within which an emitter's hit wins a tie with a
-/// coplanar surface ([`Scene::first_hit_from`], [`Scene::intersect`]).
+/// Relative tolerance within which the hit of a surface set onto another
+/// (an emitter in a ceiling, a rectangle in a plane or on a box's face)
+/// wins a tie with it ([`Scene::first_hit_from`], [`Scene::intersect`];
+/// the rules: `world/nearest.rs`).
 const EMITTER_TIE: f64 = 1e-9;
 
 /// Key of the first finite shape in the fixed order of the nearest-hit
@@ -1162,7 +1164,7 @@ impl Scene {
                     surface: s,
                     prim: 0,
                 };
-                acc.flat(c, false);
+                acc.plane(c);
             }
         }
         match &self.tree {
