@@ -450,8 +450,8 @@ pub struct Receivers {
     view_r: Vec<f64>,
     /// Per receiver: whether it is enclosed ([`view_probe`]).
     enclosed: Vec<bool>,
-    /// Per receiver: the near/far radius \[m\] it needs, a tenth of its
-    /// distance to the nearest light where a surface lies closer than that
+    /// Per receiver: the near/far radius \[m\] it needs, a quarter of its
+    /// distance to the nearest light where a surface lies closer than a tenth
     /// (0: none needed); see [`near_need`].
     need_r: Vec<f64>,
     /// The receivers in a slot ([`slot_table`]), by index, with the table
@@ -1612,30 +1612,54 @@ fn collision_context(scene: &Scene, list: &ReceiverList, x: DVec3) -> (SideMask,
     (xm, x_inside, open, shapes_open)
 }
 
+/// Share of a receiver's distance to the nearest light within which a
+/// surface makes it need the near/far split ([`near_need`]).
+pub const NEAR_TRIGGER: f64 = 0.1;
+
+/// The split's radius where a receiver needs it ([`near_need`]), as a share
+/// of its distance to the nearest light: a quarter, not the tenth it was
+/// (the share that triggers the split, [`NEAR_TRIGGER`]). Between the
+/// Sobolev planes (h = 0.5, rho = 0.5, 20,000 chains, 100 seeds each) a
+/// tenth left the points at r = 12-30 with their first-order light from
+/// 3-10 m away to rare light-tracing collisions, whose batch means were so
+/// skewed that the 95 % intervals covered 82-90 % of runs (mean z^2
+/// 1.7-2.3, the misses all low; z = -7.4 at r = 30 with seed 94, every
+/// check `ok`). A quarter: R 5-10 times smaller there at 1.6 times the
+/// run time, coverage 91-97 % (mean z^2 0.9-1.3); the office's FOM at its
+/// 506 planar grid points unchanged within the machine's noise (1.35e4 and
+/// 1.74e4 against 1.35e4-1.64e4, `lumest bench --scene data/office.toml`).
+/// A half helped the far points as much but cost the office about 10 %;
+/// a quarter as the trigger too split the points at r = 5-10 as well (R
+/// 2-8 % -> about 1 %) but split many points near walls that had none, and
+/// is left for another turn.
+pub const NEAR_SHARE: f64 = 0.25;
+
 /// The near/far radius \[m\] a receiver at `p` (normal frame `frame`) needs:
-/// a tenth of the distance to the nearest light, `R = 0.1 min_l |p - x_l|`,
+/// [`NEAR_SHARE`] of the distance `d` to the nearest light, `R = 0.25 d`,
 /// where one of 64 probe rays over the receiver's hemisphere (a Fibonacci
 /// spiral, cosine-distributed; over the whole sphere for a solid receiver,
-/// `sphere`) meets a surface closer than `R`; 0 elsewhere
-/// (and in a scene without lights). Closer than that, the local
-/// estimate's `1/d^2` kernel dominates its variance (infinite in a corner).
+/// `sphere`) meets a surface closer than [`NEAR_TRIGGER`] `d = 0.1 d`; 0
+/// elsewhere (and in a scene without lights). Closer than that, the local estimate's `1/d^2`
+/// kernel dominates its variance (infinite in a corner), and far from the
+/// lights the light reaching the point from around it comes from rare
+/// collisions.
 pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame, sphere: bool) -> f64 {
     const PROBES: usize = 64;
-    let r = 0.1
-        * scene
-            .lights
-            .iter()
-            .filter(|l| !l.is_directional())
-            .map(|l| (l.position() - p).length())
-            .fold(f64::INFINITY, f64::min);
+    let d = scene
+        .lights
+        .iter()
+        .filter(|l| !l.is_directional())
+        .map(|l| (l.position() - p).length())
+        .fold(f64::INFINITY, f64::min);
+    let r = NEAR_TRIGGER * d;
     if !r.is_finite() || r <= 0.0 {
         return 0.0;
     }
     let near = (0..PROBES).any(|k| {
-        let d = probe_direction(k, PROBES, frame, sphere);
-        scene.first_hit_from(p, d).is_some_and(|h| h.t < r)
+        let w = probe_direction(k, PROBES, frame, sphere);
+        scene.first_hit_from(p, w).is_some_and(|h| h.t < r)
     });
-    if near { r } else { 0.0 }
+    if near { NEAR_SHARE * d } else { 0.0 }
 }
 
 /// Largest mean reach of a slot's table ([`GrazingTable::mean_reach`]):
