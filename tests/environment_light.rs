@@ -199,6 +199,20 @@ fn bright_cap_map_against_its_closed_form() {
     // Within 2 % of the continuous cap (pixelised edge).
     assert!((e_h / exact[0] - 1.0).abs() < 0.02, "{e_h} vs {}", exact[0]);
     check(&sa, &pts[..1], &[e_h], 400_000, 4);
+    // An angular map that is not square would be stretched into an
+    // ellipse: refused, naming the file's line and field.
+    write_map(&d.join("wide.hdr"), 64, 40, |_, _| 1.0);
+    let p = d.join("wide.toml");
+    std::fs::write(
+        &p,
+        "[[light]]\ntype = \"environment\"\nfile = \"wide.hdr\"\nmapping = \"angular\"\n",
+    )
+    .unwrap();
+    let e = lumest::scene::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("wide.toml:") && e.contains("must be square") && e.contains("64 x 40"),
+        "{e}"
+    );
 }
 
 /// Receivers at the origin facing north, east, south and west (`+x` east,

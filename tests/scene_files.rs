@@ -548,11 +548,14 @@ fn impossible_sun_dates_are_refused_with_file_line_and_field() {
         "2026-04-30",
         "2026-12-31",
         "2026-01-31",
+        "2100-12-31",
+        "1800-01-01",
     ] {
         parse(&scene(date)).unwrap_or_else(|e| panic!("{date}: {e}"));
     }
-    // Day 0 and month 13 stay refused as before.
-    for date in ["2026-02-00", "2026-13-01"] {
+    // Day 0 and month 13 stay refused as before; so are years beyond the
+    // algorithm's 1800-2100 (2200 was accepted).
+    for date in ["2026-02-00", "2026-13-01", "2150-06-21", "1799-12-31"] {
         let e = parse(&scene(date)).unwrap_err();
         assert!(
             e.contains("test.toml:4") && e.contains("`date`"),

@@ -86,6 +86,13 @@ impl Environment {
         let (values, rows, cols) = match mapping {
             Mapping::Equirect => (y.iter().map(|v| v * scale).collect(), height, width),
             Mapping::Angular => {
+                // The mirror-ball disc fills a square image; another shape
+                // would be stretched into an ellipse without a word.
+                if width != height {
+                    return Err(format!(
+                        "an angular map must be square (its disc fills the image), got {width} x {height} pixels"
+                    ));
+                }
                 let n = width.max(height);
                 (resample_angular(y, width, height, n, scale), n, 2 * n)
             }

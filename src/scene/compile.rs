@@ -1141,7 +1141,7 @@ fn sun_position(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(DVec3, Strin
     };
     let (year, month, day) = match ymd {
         (Some(y), Some(m), Some(dd))
-            if (1800..=2200).contains(&y) && (1..=12).contains(&m) && dd >= 1 =>
+            if (1800..=2100).contains(&y) && (1..=12).contains(&m) && dd >= 1 =>
         {
             let last = days_in_month(y, m);
             if dd > last {
@@ -1161,7 +1161,7 @@ fn sun_position(l: &Spanned<LightDesc>, ctx: &SourceCtx) -> Result<(DVec3, Strin
                 ds.span(),
                 "date",
                 format!(
-                    "`{}` is not a date YYYY-MM-DD (years 1800-2200)",
+                    "`{}` is not a date YYYY-MM-DD (years 1800-2100, where the sun position's algorithm holds to 0.01 degree)",
                     ds.get_ref()
                 ),
             ));
