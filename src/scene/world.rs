@@ -57,7 +57,7 @@ pub const MIN_INTENSITY: f64 = 1e-60;
 /// (an emitter in a ceiling, a rectangle in a plane or on a box's face)
 /// wins a tie with it ([`Scene::first_hit_from`], [`Scene::intersect`];
 /// the rules: `world/nearest.rs`).
-const EMITTER_TIE: f64 = 1e-9;
+const COINCIDENT_TIE: f64 = 1e-9;
 
 /// Key of the first finite shape in the fixed order of the nearest-hit
 /// ties (`nearest.rs`): planes come first, keyed by their index.
@@ -1201,7 +1201,7 @@ impl Scene {
         // side its direction points to: no self-hit at t = 0.
         if !self.shs.is_empty() {
             let mut t_max = if emitter {
-                best_t * (1.0 - EMITTER_TIE)
+                best_t * (1.0 - COINCIDENT_TIE)
             } else {
                 best_t
             };

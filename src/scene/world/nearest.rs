@@ -10,18 +10,18 @@
 //! shape's place in the fixed order planes, rectangles, discs, spheres,
 //! boxes, meshes). Then, where two surfaces coincide, the one set onto the
 //! other is met, whatever the rounding of their two hit distances (each
-//! comparison with the relative tolerance [`EMITTER_TIE`]):
+//! comparison with the relative tolerance [`COINCIDENT_TIE`]):
 //!
 //! - a rectangle or disc lying in a plane (a door in a wall given as a
 //!   plane) wins over it: the nearest flat surface is met unless the
 //!   nearest plane is nearer by more than the tolerance, `t_f < t_p (1 +
-//!   EMITTER_TIE)`;
+//!   COINCIDENT_TIE)`;
 //! - an emitter set into a surface (a panel in the ceiling's plane) is met
 //!   where the two coincide: the nearest emitter wins over the flat hit so
 //!   far unless that one is nearer by more than the tolerance, `t_e < t_f
-//!   (1 + EMITTER_TIE)`;
+//!   (1 + COINCIDENT_TIE)`;
 //! - a solid must beat the winning flat hit by more than the tolerance, `t_s
-//!   < t_f (1 - EMITTER_TIE)`: a rectangle or disc lying on a box's or a
+//!   < t_f (1 - COINCIDENT_TIE)`: a rectangle or disc lying on a box's or a
 //!   mesh's face (a rug on the floor of a room box, a door in its wall) is
 //!   met, not the face. (A solid used to win such ties by a few ulps about
 //!   half the time: the rug read 12 % dark, the door 21 %, and a door in a
@@ -33,14 +33,14 @@
 //! after all of this, in index order ([`super::Scene`]).
 //!
 //! **Pruning.** The answer's `t` lies within a factor `1 / (1 -
-//! EMITTER_TIE)` of the nearest hit of any class, so a hit further than
+//! COINCIDENT_TIE)` of the nearest hit of any class, so a hit further than
 //! [`PRUNE`] (relative) beyond the nearest one found so far can change
 //! nothing: the queries test shapes only up to [`Nearest::bound`].
 
-use super::EMITTER_TIE;
+use super::COINCIDENT_TIE;
 
 /// Relative margin beyond the nearest hit found so far within which hits
-/// are still collected (ten times [`EMITTER_TIE`]: every hit further away
+/// are still collected (ten times [`COINCIDENT_TIE`]: every hit further away
 /// loses to the nearest one whatever its class).
 const PRUNE: f64 = 1e-8;
 
@@ -133,17 +133,17 @@ impl Nearest {
     /// The winning hit and whether it is an emitter's; `None` without hits.
     #[inline]
     pub(super) fn resolve(&self) -> Option<(Cand, bool)> {
-        let flat = if self.flat.t < self.plane.t * (1.0 + EMITTER_TIE) {
+        let flat = if self.flat.t < self.plane.t * (1.0 + COINCIDENT_TIE) {
             self.flat
         } else {
             self.plane
         };
-        let (f, emitter) = if self.emitter.t < flat.t * (1.0 + EMITTER_TIE) {
+        let (f, emitter) = if self.emitter.t < flat.t * (1.0 + COINCIDENT_TIE) {
             (self.emitter, true)
         } else {
             (flat, false)
         };
-        let threshold = f.t * (1.0 - EMITTER_TIE);
+        let threshold = f.t * (1.0 - COINCIDENT_TIE);
         if self.solid.t < threshold {
             Some((self.solid, false))
         } else if f.t < f64::INFINITY {
@@ -189,7 +189,7 @@ mod tests {
     fn answer_is_independent_of_the_order_and_follows_the_rules() {
         // (t, key, class: 0 flat, 1 emitter, 2 solid, 3 plane), expected
         // winner key.
-        let tie = 0.5 * EMITTER_TIE;
+        let tie = 0.5 * COINCIDENT_TIE;
         type Hits = Vec<(f64, u32, u8)>;
         let cases: Vec<(Hits, Option<u32>)> = vec![
             (vec![], None),
