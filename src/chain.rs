@@ -195,22 +195,27 @@ pub fn trace_ex<F: FnMut(&Collision)>(
     }
     // A point light on a surface stands on its reflecting side
     // ([`Scene::light_surface`]): a ray into the surface meets it at once.
-    let mut on_surface = scene.light_surface(k_light);
+    // On an edge or a corner a ray reflected there is tested again: a
+    // room's corner can send it into another face at once.
+    let seat = scene.light_surface(k_light);
+    let mut on_surface = seat.is_some();
     while q > 0.0 {
         let next = if from_emitter {
             from_emitter = false;
             scene.first_hit_from(ray.o, ray.d)
-        } else if let Some((s, n)) = on_surface.take() {
-            if ray.d.dot(n) < 0.0 {
-                Some(Hit {
+        } else if let Some(seat) = seat.filter(|_| on_surface) {
+            match seat.meets(ray.d) {
+                Some((s, n)) => Some(Hit {
                     t: 0.0,
                     p: ray.o,
                     n,
                     surface: s,
                     prim: 0,
-                })
-            } else {
-                scene.intersect(&ray, Some((s, 0)))
+                }),
+                None => {
+                    on_surface = false;
+                    scene.intersect(&ray, Some((seat.leaves(ray.d), 0)))
+                }
             }
         } else {
             scene.intersect(&ray, skip)
@@ -232,7 +237,7 @@ pub fn trace_ex<F: FnMut(&Collision)>(
                 // Leaving the pane's plane, the ray meets no flat surface
                 // through its origin (an observer's rule).
                 from_emitter = true;
-                on_surface = None;
+                on_surface = false;
                 continue;
             }
         }

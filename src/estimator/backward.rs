@@ -967,8 +967,8 @@ fn connect(
     // A light on a surface: photons into it meet it at the light (no
     // vertex of a path lies there), the others leave it.
     let leave = match scene.light_surface(k) {
-        Some((_, n)) if dir.dot(n) < 0.0 => return 0.0,
-        Some((s, _)) => Some((s, 0)),
+        Some(seat) if seat.meets(dir).is_some() => return 0.0,
+        Some(seat) => Some((seat.leaves(dir), 0)),
         None => None,
     };
     let Some(y) = scene.intersect(&ray, leave) else {

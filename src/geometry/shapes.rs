@@ -76,6 +76,22 @@ impl Rect {
         let q = p - self.o;
         (self.b1.dot(q), self.b2.dot(q))
     }
+
+    /// For a point of the plane on the rectangle's rim (within
+    /// [`EDGE_REL`] of an edge), the in-plane unit vectors into the shape
+    /// across each edge it lies on (two at a corner); none inside.
+    pub fn rims(&self, p: DVec3) -> Vec<DVec3> {
+        let (u, v) = self.uv(p);
+        let mut out = Vec::new();
+        for (w, b) in [(u, self.b1), (v, self.b2)] {
+            if w.abs() <= EDGE_REL {
+                out.push(b.normalize());
+            } else if (w - 1.0).abs() <= EDGE_REL {
+                out.push(-b.normalize());
+            }
+        }
+        out
+    }
 }
 
 impl Flat for Rect {
@@ -108,6 +124,14 @@ impl Disc {
             plane: Plane::new(c, n),
             r,
         }
+    }
+
+    /// For a point of the plane on the disc's rim (within [`EDGE_REL`] of
+    /// the radius), the in-plane unit vector into the disc; `None` inside.
+    pub fn rim(&self, p: DVec3) -> Option<DVec3> {
+        let q = self.plane.p - p;
+        let q = q - self.plane.n * self.plane.n.dot(q);
+        (q.length_squared() >= self.r * self.r * (1.0 - 2.0 * EDGE_REL)).then(|| q.normalize())
     }
 }
 

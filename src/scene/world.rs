@@ -19,11 +19,13 @@
 //! winding normal of mesh triangles). A surface reflects on the side(s) its
 //! [`Sides`] names; the other side is black. Every surface is opaque.
 
+mod light_seat;
 mod nearest;
 mod occluders;
 mod panes;
 mod shape_tree;
 
+pub use light_seat::LightSeat;
 pub use occluders::{CELL_DARK, CELL_REST, Occluder};
 pub use panes::{Pane, PaneHit, PaneShape};
 
@@ -300,9 +302,9 @@ pub struct Scene {
     light_pick: Option<crate::sampling::alias::AliasTable>,
     /// Total emitted flux \[lm\].
     total_power: f64,
-    /// Per light: the surface a point-like light lies on, if any, and the
-    /// unit normal of the side it belongs to (see [`Scene::light_surface`]).
-    light_surface: Vec<Option<(u32, DVec3)>>,
+    /// Per light: the surfaces a point-like light lies on, if any, with
+    /// the unit normals of the sides it belongs to (see [`Scene::light_surface`]).
+    light_surface: Vec<Option<LightSeat>>,
     /// How direct light is summed over the sources ([`Self::set_direct_lights`]).
     direct_lights: crate::light::array::DirectLights,
     /// The light array over all sources (RIS candidates per pick set), when
@@ -701,7 +703,7 @@ impl Scene {
             .iter()
             .map(|l| {
                 if l.is_point_like() {
-                    self.surface_at(l.position())
+                    self.seat_at(l.position())
                 } else {
                     None
                 }
@@ -858,29 +860,58 @@ impl Scene {
         None
     }
 
+    /// The seat of a light at `p` ([`LightSeat`]): the surface
+    /// [`Self::surface_at`] finds, with the other faces of a box through
+    /// `p` (an edge or a corner) or the rim of a rectangle or disc.
+    fn seat_at(&self, p: DVec3) -> Option<LightSeat> {
+        let (s, n) = self.surface_at(p)?;
+        let surf = &self.surfaces[s as usize];
+        Some(match surf.shape {
+            ShapeRef::Rect(i) => LightSeat::flat(s, n, &self.rects[i as usize].0.rims(p)),
+            ShapeRef::Disc(i) => {
+                let rim = self.discs[i as usize].0.rim(p);
+                LightSeat::flat(s, n, rim.as_slice())
+            }
+            ShapeRef::BoxFace(i, _) => {
+                let (b, s0) = &self.boxes[i as usize];
+                let inward = surf.sides == Sides::Back;
+                let faces: Vec<(u32, DVec3)> = (0..6)
+                    .filter(|&f| b.face_plane(f).side(p) == 0)
+                    .map(|f| {
+                        let n = AaBox::outward_normal(f);
+                        (s0 + f as u32, if inward { -n } else { n })
+                    })
+                    .collect();
+                LightSeat::box_faces(&faces, !inward)
+            }
+            _ => LightSeat::flat(s, n, &[]),
+        })
+    }
+
     /// Whether point `p` lies on a surface (within the shapes' on-surface
     /// tolerance; see [`Self::light_surface`] for the tolerance's use).
     pub fn on_surface(&self, p: DVec3) -> bool {
         self.surface_at(p).is_some()
     }
 
-    /// The surface point-like light `k` lies on, if any, and the unit
-    /// normal of the side the light belongs to. **Rule**: a light exactly on
-    /// a surface belongs to its reflecting side (the geometric normal's side
-    /// when both reflect), as if it stood just in front of it: light it
-    /// emits into the surface meets the surface at once, at the light's
-    /// position, and points behind the surface do not see it. The answer is
-    /// thus continuous as the light approaches the surface from that side.
-    pub fn light_surface(&self, k: usize) -> Option<(u32, DVec3)> {
-        self.light_surface.get(k).copied().flatten()
+    /// The surfaces point-like light `k` stands on, if any ([`LightSeat`]).
+    /// **Rule**: a light exactly on a surface belongs to its reflecting
+    /// side (the geometric normal's side when both reflect), as if it stood
+    /// just in front of it: light it emits into the surface meets the
+    /// surface at once, at the light's position, and points behind the
+    /// surface do not see it. The answer is thus continuous as the light
+    /// approaches the surface from that side; on an edge or a corner (of a
+    /// box, a rectangle or a disc) the seat holds every face through it.
+    pub fn light_surface(&self, k: usize) -> Option<&LightSeat> {
+        self.light_surface.get(k).and_then(Option::as_ref)
     }
 
-    /// Whether `x` lies behind the surface that point-like light `k`
+    /// Whether `x` lies behind the surfaces that point-like light `k`
     /// stands on (see [`Self::light_surface`]): the light cannot reach it.
     #[inline]
     pub fn behind_light_surface(&self, k: usize, x: DVec3) -> bool {
         self.light_surface(k)
-            .is_some_and(|(_, n)| n.dot(x - self.lights[k].position()) < 0.0)
+            .is_some_and(|seat| seat.hides(self.lights[k].position(), x))
     }
 
     /// Whether light `k` is sealed: strictly inside a box or sphere that
