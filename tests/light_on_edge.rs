@@ -85,7 +85,7 @@ fn same_as_just_off(
         &mut |_| true,
     );
     let bound = sidak(points.len());
-    for j in 0..points.len() {
+    for (j, point) in points.iter().enumerate() {
         let se = (r_on.tallies.estimated[j].std_error().powi(2)
             + r_off.tallies.estimated[j].std_error().powi(2))
         .sqrt();
@@ -98,7 +98,7 @@ fn same_as_just_off(
         assert!(
             z.abs() < bound,
             "point {j} {:?}: light on the edge {} vs just off it {} +- {se} (z = {z:.2})",
-            points[j].0,
+            point.0,
             total(&r_on, j),
             total(&r_off, j)
         );
@@ -210,12 +210,12 @@ fn a_lamp_on_a_desks_edge_hides_only_the_desk() {
             rec.direct()[j]
         );
     }
-    for j in lit.len()..pts.len() {
+    for (j, dark) in dark.iter().enumerate() {
         assert_eq!(
-            rec.direct()[j],
+            rec.direct()[lit.len() + j],
             0.0,
             "point {:?} is behind the desk",
-            pts[j].0
+            dark.0
         );
     }
     // The reflected light: the limit from just outside the edge.
@@ -274,12 +274,12 @@ fn a_light_on_a_shelfs_rim_lights_below_beyond_the_rim() {
             rec.direct()[j]
         );
     }
-    for j in lit.len()..pts.len() {
+    for (j, dark) in dark.iter().enumerate() {
         assert_eq!(
-            rec.direct()[j],
+            rec.direct()[lit.len() + j],
             0.0,
             "point {:?} is under the shelf",
-            pts[j].0
+            dark.0
         );
     }
     let e = 1e-5;
