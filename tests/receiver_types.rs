@@ -518,3 +518,88 @@ fn panel_sampled_direct_matches_quadrature() {
         );
     }
 }
+
+/// Direct light kept by RIS (`--direct-lights ris`, automatic from many
+/// sources) at every receiver type, from point sources on all sides (two
+/// below the receivers' normals) and a sphere source below them: the
+/// solid types read `I r(w) / d^2` summed over the points (the closed
+/// forms of `response`, no cosine of the normal) plus the quadrature of the
+/// sphere's cone. The old estimate multiplied the plane's `I cos / d^2` by
+/// the response (the spherical receiver read 8.8 for 12.5 lx from one
+/// light) and never picked a source behind the normal.
+#[test]
+fn ris_direct_light_reaches_solid_receivers_from_every_side() {
+    use lumest::light::array::DirectLights;
+    let points = [
+        (DVec3::new(1.0, 0.0, 2.0), 100.0),
+        (DVec3::new(-0.7, 1.1, 2.6), 60.0),
+        (DVec3::new(0.4, -1.3, 0.2), 80.0),
+        (DVec3::new(-1.5, -0.4, -0.1), 40.0),
+    ];
+    let (c, rad, i) = (DVec3::new(0.2, 0.3, -0.8), 0.25, 50.0);
+    let mut lights: Vec<Light> = points.iter().map(|&(p, i)| Light::Point { p, i }).collect();
+    lights.push(Light::Sphere { c, r: rad, i });
+    let scene = Scene::from_parts(
+        vec![(
+            "floor far below".into(),
+            Plane::new(DVec3::new(0.0, 0.0, -20.0), DVec3::Z),
+            Material::Lambertian { rho: 0.0 },
+        )],
+        lights,
+    )
+    .unwrap()
+    .with_direct_lights(DirectLights::Ris, 4);
+    assert!(scene.light_array().is_some());
+    let l = i / (PI * rad * rad);
+    let mut all = Vec::new();
+    let mut exact = Vec::new();
+    for p in [DVec3::new(0.0, 0.0, 0.8), DVec3::new(0.5, -0.4, 1.1)] {
+        for kind in KINDS {
+            let n = match kind {
+                Some(Solid::Semicylindrical) => DVec3::new(-0.6, 0.8, 0.0),
+                _ => DVec3::Z,
+            };
+            all.push(receiver(p, n, kind));
+            let from_points: f64 = points
+                .iter()
+                .map(|&(s, i)| {
+                    let v = s - p;
+                    let d2 = v.length_squared();
+                    let w = v / d2.sqrt();
+                    let r = match kind {
+                        None => n.dot(w).max(0.0),
+                        _ => response(kind, n, w),
+                    };
+                    i * r / d2
+                })
+                .sum();
+            let from_sphere = cone_quadrature(c, rad, l, p, |w| match kind {
+                None => n.dot(w).max(0.0),
+                _ => response(kind, n, w),
+            });
+            exact.push(from_points + from_sphere);
+        }
+    }
+    let rec = Receivers::from_receivers(&scene, &all).unwrap();
+    let r = lumest::estimator::local::run(
+        &scene,
+        &rec,
+        &common::chains_cfg(1 << 18, 5, 2),
+        &mut |_| true,
+    );
+    let bound = sidak_bound(1e-3, all.len(), Some(r.tallies.batches()));
+    for (j, &e) in exact.iter().enumerate() {
+        let w = &r.tallies.estimated[j];
+        let (got, se) = (r.direct[j] + w.mean(), w.std_error());
+        assert!(
+            0.02 * e > bound * se,
+            "point {j}: error bar {se} too wide for {e}"
+        );
+        let z = (got - e) / se;
+        assert!(
+            z.abs() < bound,
+            "point {j} {:?}: {got} +- {se} vs {e} (z = {z})",
+            all[j].response
+        );
+    }
+}

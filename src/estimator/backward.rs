@@ -717,7 +717,7 @@ fn next_event(
             // One source kept by RIS (target: its unoccluded illuminance
             // at the vertex), `N = W N_k` (see `crate::light::array`).
             // Strategy B's density stays the exact sum over the sources.
-            if let Some(pick) = array.pick(&scene.lights, h.p, h.n, rng) {
+            if let Some(pick) = array.pick(&scene.lights, h.p, Some(h.n), rng) {
                 nee = pick.w * v.nee(pick.k as usize, rng);
             }
             if guide {

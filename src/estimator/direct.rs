@@ -150,7 +150,8 @@ impl LightSet {
         self.lights[self.pick.as_ref().map_or(0, |t| t.sample(u))]
     }
 
-    /// The source of one light sample at `x` (unit normal `n`) and the
+    /// The source of one light sample at `x` (unit normal `n`; `None`: a
+    /// solid receiver, lit from every side) and the
     /// factor `s` its estimate `f / (P_k p)` is multiplied by: 1 when
     /// picked by power (`P_k`), `W P_k` when kept by RIS (so that the
     /// estimate is `W f / p`, see [`crate::light::array`]); `None`: no
@@ -159,7 +160,7 @@ impl LightSet {
         &self,
         scene: &Scene,
         x: DVec3,
-        n: DVec3,
+        n: Option<DVec3>,
         rng: &mut Philox4x32,
     ) -> Option<(u32, f64)> {
         match &self.array {
@@ -261,19 +262,26 @@ fn light_sample(
     if light.is_point_like() {
         // In a RIS set: the closed form and one shadow test (as the exact
         // sum's, see `Receivers::from_receivers`); a delta, never hittable.
+        // A solid receiver: `I(-wi) r(wi) / d^2` (its response replaces
+        // the plane's cosine); else the plane's `E` times the weight.
         let p_k = set.prob[k as usize];
-        let e = light.direct_illuminance(x, rec.n);
         let y = light.position();
+        let v = y - x;
+        let d2 = v.length_squared();
+        let wi = v / d2.sqrt();
+        let f = match rec.response {
+            Response::Solid(kind) => light.intensity(-wi) * kind.response(rec.n, wi) / d2,
+            _ => light.direct_illuminance(x, rec.n) * rec.weight(frame, wi),
+        };
         let seen = || {
             scene.side_mask(y).sees(scene.side_mask(x))
                 && !scene.behind_light_surface(k as usize, x)
                 && (scene.planes_only() || !scene.blocked_by_shapes(y, None, x, 0))
         };
-        if e.is_nan() || e <= 0.0 || !seen() {
+        if f.is_nan() || f <= 0.0 || !seen() {
             return (0.0, p_k, p_k, DVec3::Z, false);
         }
-        let wi = (y - x).normalize();
-        return (e * rec.weight(frame, wi), p_k, p_k, wi, false);
+        return (f, p_k, p_k, wi, false);
     }
     if let Light::Gonio {
         frame: lf,
@@ -451,7 +459,12 @@ pub fn sample(
     }
     let mut total = 0.0;
     if strategy != Strategy::Brdf
-        && let Some((k, scale)) = set.pick_for(scene, rec.p, rec.n, rng)
+        && let Some((k, scale)) = set.pick_for(
+            scene,
+            rec.p,
+            rec.solid_kind().is_none().then_some(rec.n),
+            rng,
+        )
     {
         // With RIS the MIS weights keep the power pick's density `p_l`
         // as a stand-in (they need only sum to 1, see

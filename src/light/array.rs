@@ -187,11 +187,18 @@ impl LightArray {
         self.lights.is_empty()
     }
 
-    /// Keep one source for the receiver at `x` \[m\] with unit normal `n` by
-    /// RIS over `M` power-drawn candidates, drawing `M + 1` uniforms from
-    /// `rng` (always, so streams stay aligned); `None` when no candidate
-    /// has a positive target (the estimate is then 0).
-    pub fn pick(&self, all: &[Light], x: DVec3, n: DVec3, rng: &mut Philox4x32) -> Option<RisPick> {
+    /// Keep one source for the receiver at `x` \[m\] with unit normal `n`
+    /// (`None`: a solid receiver, lit from every side) by RIS over `M`
+    /// power-drawn candidates, drawing `M + 1` uniforms from `rng` (always,
+    /// so streams stay aligned); `None` when no candidate has a positive
+    /// target (the estimate is then 0).
+    pub fn pick(
+        &self,
+        all: &[Light],
+        x: DVec3,
+        n: Option<DVec3>,
+        rng: &mut Philox4x32,
+    ) -> Option<RisPick> {
         self.pick_with(all, x, n, rng, 1.0)
     }
 
@@ -202,7 +209,7 @@ impl LightArray {
         &self,
         all: &[Light],
         x: DVec3,
-        n: DVec3,
+        n: Option<DVec3>,
         rng: &mut Philox4x32,
         bias: f64,
     ) -> Option<RisPick> {
@@ -248,7 +255,9 @@ impl LightArray {
 
 /// The RIS target `p^` \[lx\] of `light` at a receiver at `x` \[m\] with unit
 /// normal `n`: an unoccluded estimate of its direct illuminance, positive
-/// wherever the source can light the receiver.
+/// wherever the source can light the receiver. For a solid receiver (`n`
+/// `None`, lit from every side) every `max(0, cos)` below is 1: the
+/// illuminance on a plane facing the source.
 ///
 /// - point, spot, goniometric point: `I(w) max(0, cos) / d^2`, exact;
 /// - sphere, distant disc: the exact unoccluded illuminance
@@ -263,13 +272,15 @@ impl LightArray {
 ///   opening's radius; the opening may light a receiver that its centre
 ///   does not);
 /// - environment: `int L dw / 4` (the illuminance of a uniform map).
-pub fn target(light: &Light, x: DVec3, n: DVec3) -> f64 {
+pub fn target(light: &Light, x: DVec3, n: Option<DVec3>) -> f64 {
+    // A solid receiver: facing the source (the point, or a ball's centre).
+    let facing = |c: DVec3| n.unwrap_or_else(|| (c - x).normalize_or_zero());
     match light {
         Light::Point { .. } | Light::Spot(_) | Light::Gonio { opening: None, .. } => {
-            light.direct_illuminance(x, n)
+            light.direct_illuminance(x, facing(light.position()))
         }
-        Light::Sphere { .. } => light.direct_illuminance(x, n),
-        Light::Distant(dl) => dl.direct_illuminance(n),
+        Light::Sphere { c, .. } => light.direct_illuminance(x, facing(*c)),
+        Light::Distant(dl) => dl.direct_illuminance(n.unwrap_or(-dl.d)),
         Light::Environment(env) => 0.25 * env.integral(),
         Light::Gonio {
             p,
@@ -278,6 +289,7 @@ pub fn target(light: &Light, x: DVec3, n: DVec3) -> f64 {
         } => {
             let rho = o.bounding_radius();
             let d2 = (*p - x).length_squared();
+            let n = facing(*p);
             let floor =
                 1e-3 * light.power() / (4.0 * PI) * cos_bound(x, n, *p, rho) / d2.max(rho * rho);
             let c = n.dot(*p - x);
@@ -297,7 +309,7 @@ pub fn target(light: &Light, x: DVec3, n: DVec3) -> f64 {
                 return 0.0;
             }
             let omega = (a.area() * cos_y.abs() / (d2 * d2.sqrt())).min(2.0 * PI);
-            a.l0 * omega * cos_bound(x, n, c, a.bounding_radius())
+            a.l0 * omega * n.map_or(1.0, |n| cos_bound(x, n, c, a.bounding_radius()))
         }
     }
 }
@@ -353,7 +365,7 @@ mod tests {
             let n_s = 200_000;
             for _ in 0..n_s {
                 let v = arr
-                    .pick_with(&lights, x, n, &mut rng, bias)
+                    .pick_with(&lights, x, Some(n), &mut rng, bias)
                     .map_or(0.0, |p| lights[p.k as usize].direct_illuminance(x, n) * p.w);
                 s += v;
                 s2 += v * v;
