@@ -648,9 +648,35 @@ fn luminance_at_phong_sub_points_lit_by_sphere_lights_matches_quadrature() {
     // cone is asked for 1e-5 (measured worst 2.3e-6, next to the sphere
     // light 0.4 m in radius seen from 0.46 m: a cone of half-angle 60
     // degrees holding much of the Phong lobe).
+    //
+    // The glossy views' sphere light is sampled per batch instead (a Phong
+    // lobe far sharper than the cone defeats any fixed rule; the exact sum
+    // was also added to the sampled one, twice the light): their mean over
+    // 2000 batches against the reference, z within a Sidak bound, and
+    // precise enough that a 2 % error fails.
     let tol = 1e-5;
+    let batches = 2000u64;
+    let mut sums = vec![(0.0f64, 0.0f64); pairs.len()];
+    let mut out = vec![0.0; pairs.len()];
+    for b in 0..batches {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        rec.sampled_direct(&scene, 5, b, 256, &mut out);
+        for (a, v) in sums.iter_mut().zip(&out) {
+            let m = v / 256.0;
+            a.0 += m;
+            a.1 += m * m;
+        }
+    }
+    let sampled_count = (0..pairs.len())
+        .filter(|&j| rec.direct_set(j).is_some())
+        .count();
+    assert!(sampled_count >= 60, "the glossy views are sampled");
+    let bound = lumest::tally::sidak_bound(1e-3, sampled_count, Some(batches));
     let mut worst: f64 = 0.0;
     let mut nonzero = 0;
+    // Over the sampled receivers: the sum of their z, of a 2 % error's z,
+    // and their count.
+    let mut pooled = (0.0f64, 0.0f64, 0.0f64);
     for (j, p) in pairs.iter().enumerate() {
         let want = first_order(&lights, &occ, p.rec.p, p.rec.n, p.resp, 96);
         let coarse = first_order(&lights, &occ, p.rec.p, p.rec.n, p.resp, 48);
@@ -659,6 +685,30 @@ fn luminance_at_phong_sub_points_lit_by_sphere_lights_matches_quadrature() {
             "receiver {j}: reference not converged ({coarse} vs {want})"
         );
         let got = rec.direct()[j];
+        if rec.direct_set(j).is_some() {
+            // (Point sources, if any, are still summed at set-up.)
+            let b = batches as f64;
+            let mean = got + sums[j].0 / b;
+            let m1 = sums[j].0 / b;
+            let se = ((sums[j].1 / b - m1 * m1) / (b - 1.0)).max(0.0).sqrt();
+            if want > 0.0 {
+                nonzero += 1;
+            }
+            if want > 0.0 && se > 0.0 {
+                pooled.0 += (mean - want) / se;
+                pooled.1 += 0.02 * want / se;
+                pooled.2 += 1.0;
+            }
+            // (A receiver no sampled source reaches: exact, to the rule's
+            // tolerance.)
+            assert!(
+                (mean - want).abs() <= bound * se || (se == 0.0 && close(mean, want, tol)),
+                "receiver {j} at {} n {}: sampled {mean} +- {se} vs reference {want}",
+                p.rec.p,
+                p.rec.n
+            );
+            continue;
+        }
         assert!(
             close(got, want, tol),
             "receiver {j} at {} n {}: lumest {got} vs reference {want}",
@@ -671,8 +721,20 @@ fn luminance_at_phong_sub_points_lit_by_sphere_lights_matches_quadrature() {
         }
     }
     eprintln!(
-        "{} luminance receivers ({nonzero} lit): worst relative difference {worst:.2e} (tolerance {tol:.0e})",
+        "{} luminance receivers ({nonzero} lit): worst relative difference of the exact ones {worst:.2e} (tolerance {tol:.0e})",
         pairs.len()
+    );
+    // Pooled over the sampled receivers (each alone is too noisy for 2 %):
+    // their mean z is 0, and a 2 % error would move it far out.
+    let (zsum, dsum, n) = pooled;
+    let (z_pool, detect) = (zsum / n.sqrt(), dsum / n.sqrt());
+    assert!(
+        z_pool.abs() < 3.3,
+        "pooled z {z_pool:.2} over {n} sampled receivers"
+    );
+    assert!(
+        detect > 2.0 * 3.3,
+        "a 2 % error moves the pooled z by {detect:.2} only"
     );
     assert!(nonzero > 200, "{nonzero} lit receivers");
     assert_every_light_matters(&lights, &occ, &pairs, 48);

@@ -117,3 +117,77 @@ fn sphere_lights_are_validated() {
         assert!(err.contains(line) && err.contains(field), "{tail}: {err}");
     }
 }
+
+/// Views of a glossy (Phong) floor under a sphere light, the floor the
+/// scene's only surface (planes only, where the sphere's direct light has a
+/// closed form at illuminance points): the luminance is the first order
+/// alone, against the reference's quadrature over the sphere's cone
+/// (`common::direct`, sharing no code with the estimators). The old build
+/// summed the sphere's light at the views at set-up and sampled it per
+/// batch as well: twice the luminance (289 for 144 cd/m^2).
+#[test]
+fn glossy_views_of_a_sphere_light_count_it_once() {
+    use common::direct::{Occluder, RefLight, RefResponse, first_order};
+    use lumest::estimator::{ViewTarget, view_target};
+    let (kd, ks, ne) = (0.05, 0.9, 10.0);
+    let (c, radius, i) = (DVec3::new(0.0, 0.0, 1.0), 0.2, 100.0);
+    let scene = Scene::from_parts(
+        vec![(
+            "glossy floor".into(),
+            Plane::new(DVec3::ZERO, DVec3::Z),
+            Material::Phong { kd, ks, n: ne },
+        )],
+        vec![Light::Sphere { c, r: radius, i }],
+    )
+    .unwrap();
+    let mut rec = Vec::new();
+    let mut want = Vec::new();
+    for (o, d) in [
+        (DVec3::new(0.5, 0.0, 1.0), DVec3::new(-0.25, 0.0, -1.0)),
+        (DVec3::new(0.5, 0.0, 1.0), DVec3::new(-0.3, 0.05, -1.0)),
+        (DVec3::new(1.0, 0.3, 1.2), DVec3::new(-0.6, -0.2, -1.2)),
+        (DVec3::new(-0.8, 0.4, 0.6), DVec3::new(0.3, -0.1, -0.5)),
+    ] {
+        let d = d.normalize();
+        let ViewTarget::Front(r) = view_target(&scene, o, d) else {
+            panic!("the view from {o} misses the floor")
+        };
+        let resp = RefResponse::Phong {
+            kd,
+            ks,
+            n: ne,
+            wo: -d,
+        };
+        let occ = [Occluder::Plane {
+            p: DVec3::ZERO,
+            n: DVec3::Z,
+        }];
+        want.push(first_order(
+            &[RefLight::Sphere { c, r: radius, i }],
+            &occ,
+            r.p,
+            r.n,
+            resp,
+            64,
+        ));
+        rec.push(r);
+    }
+    let receivers = Receivers::from_receivers(&scene, &rec).unwrap();
+    let r = run(
+        &scene,
+        &receivers,
+        &common::chains_cfg(1 << 17, 9, 2),
+        &mut |_| true,
+    );
+    let bound = sidak_bound(1e-3, rec.len(), Some(r.tallies.batches()));
+    for (j, &e) in want.iter().enumerate() {
+        let w = &r.tallies.estimated[j];
+        let (got, se) = (r.direct[j] + w.mean(), w.std_error());
+        assert!(e > 0.0 && 0.02 * e > bound * se, "view {j}: {e} +- {se}");
+        let z = (got - e) / se;
+        assert!(
+            z.abs() < bound,
+            "view {j}: {got} +- {se} vs {e} (z = {z:.2})"
+        );
+    }
+}

@@ -573,12 +573,11 @@ impl Receivers {
                         ),
                     });
                 }
-                let extended = matches!(l, Light::Area(_))
-                    || matches!(l, Light::Distant(dl) if !dl.collimated());
-                // A solid receiver has closed forms for points and the
-                // collimated sun only; the rest is sampled with its response.
-                let solid_sampled = rec.solid_kind().is_some() && non_point(&k);
-                if !exact[k] || (extended && rec.constant_weight().is_none()) || solid_sampled {
+                // A receiver whose response varies with the direction (a
+                // glossy view, a solid receiver) has closed forms for points
+                // and the collimated sun only: every other source is in its
+                // sampled set (`sets_of[1]`, below), never summed here too.
+                if !exact[k] || (rec.constant_weight().is_none() && non_point(&k)) {
                     continue; // sampled, see below
                 }
                 // Mirror images of the light in glass panes (point-like
