@@ -839,3 +839,49 @@ fn views_see_a_luminous_shape_as_its_luminance() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A flat luminous opening flush with the ceiling it is set into (a
+/// recessed downlight placed at ceiling height): a view from the room sees
+/// the opening's luminance `I / (A |w_z|)`, not the ceiling behind it (the
+/// old build compared the opening's entry with the ceiling's hit strictly
+/// and, meeting both at the same distance, dropped the opening: a render of
+/// such a ceiling showed no luminaire); from above the ceiling, whose back
+/// hides it, nothing.
+#[test]
+fn views_see_an_opening_flush_with_its_ceiling() {
+    use lumest::estimator::emitted_luminance;
+    let dir = std::env::temp_dir().join(format!("lumest-flush-views-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("flat.ies"), isotropic_ies(0.3, 0.6, 0.0)).unwrap();
+    let src = "[[surface]]\nname = \"floor\"\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+         material = { type = \"lambertian\", reflectance = 0.5 }\n\n\
+         [[surface]]\nname = \"ceiling\"\ntype = \"plane\"\npoint = [0, 0, 3]\nnormal = [0, 0, -1]\n\
+         material = { type = \"lambertian\", reflectance = 0.7 }\n\n\
+         [[light]]\ntype = \"ies\"\nfile = \"flat.ies\"\nposition = [0, 0, 3]\nopening = true\n";
+    let s = parse(src, &dir.join("scene.toml")).unwrap();
+    let (a, b) = (0.3, 0.15);
+    let c = DVec3::new(0.0, 0.0, 3.0);
+    for o in [
+        DVec3::new(0.01, 0.02, 1.0),
+        DVec3::new(-1.0, 0.0, 1.27),
+        DVec3::new(0.7, -0.4, 2.1),
+    ] {
+        let d = (c + DVec3::new(0.05, -0.03, 0.0) - o).normalize();
+        let t = s.first_hit_from(o, d).expect("the ceiling").t;
+        let want = I0 / (4.0 * a * b * d.z.abs());
+        let got = emitted_luminance(&s, o, d, t);
+        assert!(
+            (got - want).abs() <= 1e-9 * want,
+            "view from {o}: {got} cd/m^2, not {want}"
+        );
+    }
+    let o = DVec3::new(0.3, 0.2, 4.0);
+    let d = (c - o).normalize();
+    let t = s.first_hit_from(o, d).expect("the ceiling's back").t;
+    assert_eq!(
+        emitted_luminance(&s, o, d, t),
+        0.0,
+        "from above the ceiling"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

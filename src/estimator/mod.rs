@@ -306,7 +306,9 @@ pub fn exact_direct(scene: &Scene, k: usize) -> bool {
 /// Emitted luminance [cd/m^2] seen along the ray `o + t d` (unit `d`) from
 /// an observer at `o`: that of the sphere lights and the luminous shapes
 /// of luminaires ([`Light::shape_luminance`]) it enters before `t_max`
-/// \[m\] (they do not block what lies behind them), plus that of an area
+/// \[m\] (they do not block what lies behind them; a shape entered at
+/// `t_max`, within the relative `COINCIDENT_TIE`, counts where the ray
+/// meets a surface's reflecting side there), plus that of an area
 /// source whose emitting side is the first surface it meets (within
 /// `t_max`).
 pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
@@ -316,11 +318,19 @@ pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
         .iter()
         .filter(|l| l.hit(o, d, t_max).is_some())
         .fold(0.0, |a, l| a + l.luminance());
+    let hit = scene.first_hit_from(o, d);
+    // A luminous opening flush with the ceiling it is set into is entered
+    // where the ceiling is met: seen from the ceiling's reflecting side it
+    // wins that tie, as emitters in a surface do (from behind, the ceiling
+    // hides it).
+    let t_shape = match &hit {
+        Some(h) if h.n.dot(d) < 0.0 => t_max * (1.0 + crate::scene::world::COINCIDENT_TIE),
+        _ => t_max,
+    };
     let shapes = scene
         .lights
         .iter()
-        .fold(0.0, |a, l| a + l.shape_luminance(o, d, t_max));
-    let hit = scene.first_hit_from(o, d);
+        .fold(0.0, |a, l| a + l.shape_luminance(o, d, t_shape));
     // A ray that leaves the scene sees the lights at infinity.
     let sky = if hit.is_none() {
         scene

@@ -58,8 +58,10 @@ pub const MIN_INTENSITY: f64 = 1e-60;
 /// Relative tolerance within which the hit of a surface set onto another
 /// (an emitter in a ceiling, a rectangle in a plane or on a box's face)
 /// wins a tie with it ([`Scene::first_hit_from`], [`Scene::intersect`];
-/// the rules: `world/nearest.rs`).
-const COINCIDENT_TIE: f64 = 1e-9;
+/// the rules: `world/nearest.rs`); also a luminaire's luminous opening
+/// set into a ceiling against the ceiling
+/// ([`crate::estimator::emitted_luminance`]).
+pub const COINCIDENT_TIE: f64 = 1e-9;
 
 /// Key of the first finite shape in the fixed order of the nearest-hit
 /// ties (`nearest.rs`): planes come first, keyed by their index.
