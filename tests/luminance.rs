@@ -100,3 +100,159 @@ fn views_that_miss_or_meet_a_back_side_see_nothing() {
         t => panic!("expected the ceiling, got {t:?}"),
     }
 }
+
+/// An observer standing exactly on a surface belongs to its reflecting
+/// side (as a light does): looking into the surface it sees the surface at
+/// its feet, as an observer a hair in front of it would; the old build
+/// looked through planes, rectangles and a room's walls (a view from the
+/// inside of a wall looking out read the sky), and into a solid's back.
+#[test]
+fn an_observer_on_a_surface_looking_into_it_sees_it() {
+    let src = r#"
+[[surface]]
+name = "floor"
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+name = "room"
+type = "box"
+min = [-5, -5, -1]
+max = [5, 5, 3]
+normals = "inward"
+material = { type = "lambertian", reflectance = 0.6 }
+
+[[surface]]
+name = "block"
+type = "box"
+min = [1, 1, 0]
+max = [2, 2, 1]
+normals = "outward"
+material = { type = "lambertian", reflectance = 0.4 }
+
+[[surface]]
+name = "shelf"
+type = "rectangle"
+corner = [-2, -2, 1.5]
+edge1 = [1, 0, 0]
+edge2 = [0, 1, 0]
+material = { type = "lambertian", reflectance = 0.7 }
+
+[[light]]
+type = "point"
+position = [0, 0, 2]
+intensity = 100
+"#;
+    let scene = lumest::scene::parse(src, std::path::Path::new("eyes.toml")).unwrap();
+    let lift = 1e-7;
+    for (o, d, n, what) in [
+        (
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(0.3, 0.0, -1.0),
+            DVec3::Z,
+            "the floor",
+        ),
+        (
+            DVec3::new(1.5, 1.5, 1.0),
+            -DVec3::Z,
+            DVec3::Z,
+            "the block's top",
+        ),
+        (
+            DVec3::new(1.0, 1.5, 0.5),
+            DVec3::X,
+            -DVec3::X,
+            "the block's side",
+        ),
+        (
+            DVec3::new(-5.0, 0.0, 1.0),
+            -DVec3::X,
+            DVec3::X,
+            "the room's wall",
+        ),
+        (
+            DVec3::new(-1.5, -1.5, 1.5),
+            -DVec3::Z,
+            DVec3::Z,
+            "the shelf",
+        ),
+    ] {
+        let d = d.normalize();
+        let on = view_target(&scene, o, d);
+        let ViewTarget::Front(r) = on else {
+            panic!("{what}: an observer on it looking in sees {on:?}")
+        };
+        assert!(
+            (r.p - o).length() < 1e-12 && (r.n - n).length() < 1e-12,
+            "{what}: sub-point {} normal {}",
+            r.p,
+            r.n
+        );
+        // The same as from a hair in front of it.
+        let ViewTarget::Front(f) = view_target(&scene, o + n * lift, d) else {
+            panic!("{what}: from in front")
+        };
+        assert!((f.p - r.p).length() < 1e-6, "{what}: {} vs {}", f.p, r.p);
+    }
+    // Looking out of the surface: what lies beyond, as before.
+    match view_target(&scene, DVec3::ZERO, DVec3::Z) {
+        ViewTarget::Front(r) => assert!((r.p - DVec3::new(0.0, 0.0, 3.0)).length() < 1e-12),
+        t => panic!("expected the ceiling, got {t:?}"),
+    }
+}
+
+/// A view straight at a point light set into the ceiling meets the ceiling
+/// at the light's own position, where the light's flux into the ceiling is
+/// a delta and its direct term 0/0: the luminance there is its neighbours'
+/// limit (the old build refused the whole run: "point lies on or inside
+/// light ...: its illuminance is not finite", which a render with the
+/// light on its axis met).
+#[test]
+fn a_view_of_a_light_in_the_ceiling_reads_its_neighbours_limit() {
+    let src = r#"
+[[surface]]
+name = "floor"
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+name = "ceiling"
+type = "plane"
+point = [0, 0, 3]
+normal = [0, 0, -1]
+material = { type = "lambertian", reflectance = 0.7 }
+
+[[light]]
+type = "point"
+position = [0, 0, 3]
+intensity = 100
+"#;
+    let scene = lumest::scene::parse(src, std::path::Path::new("axis.toml")).unwrap();
+    let mut rec = Vec::new();
+    for o in [DVec3::new(0.0, 0.0, 1.0), DVec3::new(1e-6, 0.0, 1.0)] {
+        let ViewTarget::Front(r) = view_target(&scene, o, DVec3::Z) else {
+            panic!("the ceiling")
+        };
+        rec.push(r);
+    }
+    let receivers = Receivers::from_receivers(&scene, &rec).expect("a finite answer");
+    assert_eq!(receivers.direct(), [0.0, 0.0], "in the light's own plane");
+    let r = run(&scene, &receivers, &chains_cfg(1 << 16, 4, 2), &mut |_| {
+        true
+    });
+    let (a, b) = (&r.tallies.estimated[0], &r.tallies.estimated[1]);
+    assert!(a.mean().is_finite() && a.mean() > 0.0 && a.std_error() < 0.01 * a.mean());
+    // The same chains score both: their difference is far inside the error.
+    assert!(
+        (a.mean() - b.mean()).abs() < 0.1 * a.std_error(),
+        "{} +- {} vs {} +- {}",
+        a.mean(),
+        a.std_error(),
+        b.mean(),
+        b.std_error()
+    );
+}

@@ -676,7 +676,7 @@ impl Job {
         let mut emitted = Vec::new();
         let views = views_t.map(|t| {
             for (&(o, d), &line) in t.views.iter().zip(&t.lines) {
-                let t_max = scene.first_hit_from(o, d).map_or(f64::INFINITY, |h| h.t);
+                let t_max = scene.observer_hit(o, d).map_or(f64::INFINITY, |h| h.t);
                 // A view through glass would see the scene behind the pane
                 // dimmed and the mirror image in it: not supported yet.
                 if let Some(ph) = scene.next_pane(&crate::geometry::Ray { o, d }, t_max) {

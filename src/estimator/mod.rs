@@ -318,7 +318,7 @@ pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
         .iter()
         .filter(|l| l.hit(o, d, t_max).is_some())
         .fold(0.0, |a, l| a + l.luminance());
-    let hit = scene.first_hit_from(o, d);
+    let hit = scene.observer_hit(o, d);
     // A luminous opening flush with the ceiling it is set into is entered
     // where the ceiling is met: seen from the ceiling's reflecting side it
     // wins that tie, as emitters in a surface do (from behind, the ceiling
@@ -353,16 +353,38 @@ pub fn emitted_luminance(scene: &Scene, o: DVec3, d: DVec3, t_max: f64) -> f64 {
     spheres + shapes + area + sky
 }
 
-/// Trace the view ray from observer `o` \[m\] looking along unit `d` to its sub-point.
+/// How far \[m, per metre of the largest coordinate, at least 1 m\] a
+/// view's sub-point that falls on a point-like light moves along the
+/// surface ([`view_target`]): well beyond the light's own tolerance
+/// ([`Light::contains`], 1e-12), far below any scene detail.
+const SUB_POINT_SHIFT: f64 = 1e-9;
+
+/// Trace the view ray from observer `o` \[m\] looking along unit `d` to its
+/// sub-point ([`Scene::observer_hit`]: an observer standing on a surface
+/// and looking into it sees the surface at its feet).
 pub fn view_target(scene: &Scene, o: DVec3, d: DVec3) -> ViewTarget {
-    match scene.first_hit_from(o, d) {
+    match scene.observer_hit(o, d) {
         None => ViewTarget::Miss,
         Some(h) if d.dot(h.n) >= 0.0 => ViewTarget::Back { p: h.p },
         Some(h) => {
             let material = scene.surfaces[h.surface as usize].material;
-            let wo = Frame::from_normal(h.n).to_local(-d);
+            let frame = Frame::from_normal(h.n);
+            let wo = frame.to_local(-d);
+            // A sub-point on a point-like light (a downlight set into the
+            // ceiling, seen straight on): the light's flux into the surface
+            // meets it there, a delta with no luminance of its own, and the
+            // direct term is 0/0; the luminance there is its neighbours'
+            // limit, so the sub-point moves a hair along the surface.
+            let mut p = h.p;
+            if scene
+                .lights
+                .iter()
+                .any(|l| l.is_point_like() && l.contains(p))
+            {
+                p += frame.to_world(DVec3::X) * (SUB_POINT_SHIFT * p.abs().max_element().max(1.0));
+            }
             ViewTarget::Front(Receiver {
-                p: h.p,
+                p,
                 n: h.n,
                 response: Response::Luminance { material, wo },
             })

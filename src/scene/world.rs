@@ -1154,6 +1154,24 @@ impl Scene {
         self.nearest(&Ray { o, d }, Start::Observer, f64::INFINITY)
     }
 
+    /// The first surface an eye at `o` (a view's observer, a camera) sees
+    /// along unit `d`. An eye standing exactly on a surface belongs to its
+    /// reflecting side, as a light does ([`LightSeat`]): looking into that
+    /// surface it sees it at its feet (`t = 0`, the reflecting side);
+    /// otherwise [`Self::first_hit_from`].
+    pub fn observer_hit(&self, o: DVec3, d: DVec3) -> Option<Hit> {
+        if let Some((surface, n)) = self.seat_at(o).and_then(|seat| seat.meets(d)) {
+            return Some(Hit {
+                t: 0.0,
+                p: o,
+                n,
+                surface,
+                prim: 0,
+            });
+        }
+        self.first_hit_from(o, d)
+    }
+
     /// [`Self::intersect`] for a ray that matters only before `t_max` \[m\]:
     /// the same hit where it lies nearer than `t_max`, else `None`. Shapes
     /// beyond `t_max` are not tested (a backward path's segment within a
