@@ -439,3 +439,58 @@ fn shard_options_are_checked() {
     );
     assert!(!Path::new(&p).exists());
 }
+
+/// Two scenes that differ only inside a mesh file (one vertex moved, the
+/// same counts and bounds): their shards are different runs. The old build
+/// named a mesh in the scene's hash by its counts and bounds alone and
+/// merged them into a result neither scene gives.
+#[test]
+fn shards_of_scenes_whose_meshes_differ_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut parts = Vec::new();
+    for (k, z) in [(0u64, "0.6"), (1, "0.65")] {
+        let sub = d.join(format!("s{k}"));
+        std::fs::create_dir(&sub).unwrap();
+        // A tent over a 2 x 2 m square, apex 0.8 m: one vertex on its front
+        // slope differs in height (the bounds and counts are the same).
+        let obj = format!(
+            "v -1 -1 0.5\nv 1 -1 0.5\nv 1 1 0.5\nv -1 1 0.5\nv 0 0 0.8\nv 0 -0.5 {z}\n\
+             f 1 2 6\nf 2 5 6\nf 6 5 1\nf 2 3 5\nf 3 4 5\nf 4 1 5\n"
+        );
+        std::fs::write(sub.join("tent.obj"), obj).unwrap();
+        std::fs::write(
+            sub.join("t.toml"),
+            "[[surface]]\nname = \"floor\"\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+             material = { type = \"lambertian\", reflectance = 0.5 }\n\n\
+             [[surface]]\nname = \"tent\"\ntype = \"mesh\"\nfile = \"tent.obj\"\n\
+             material = { type = \"lambertian\", reflectance = 0.5 }\n\n\
+             [[light]]\ntype = \"point\"\nposition = [0, 0, 3]\nintensity = 100\n",
+        )
+        .unwrap();
+        std::fs::write(
+            sub.join("p.csv"),
+            "x,y,z,nx,ny,nz\n0,0,0.65,0,0,1\n2,0,0,0,0,1\n",
+        )
+        .unwrap();
+        let p = d.join(format!("part{k}")).to_string_lossy().into_owned();
+        let o = lumest(&[
+            "illuminance",
+            "--scene",
+            sub.join("t.toml").to_str().unwrap(),
+            "--points",
+            sub.join("p.csv").to_str().unwrap(),
+            "--chains",
+            "4000",
+            "--shard",
+            &format!("{k}/2"),
+            "--out",
+            &p,
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        parts.push(p);
+    }
+    let e = merge_err(&[&parts[0], &parts[1]], &d.join("r.csv"));
+    assert!(e.contains("different runs") && e.contains("scenes"), "{e}");
+}

@@ -125,9 +125,27 @@ pub struct Mesh {
     closed: std::sync::OnceLock<bool>,
 }
 
+/// The mesh's summary, with a hash of every vertex and triangle: the
+/// compiled scene's `Debug` text names a run in its state files (shards,
+/// checkpoints), so two meshes that differ in one vertex must print apart.
 impl std::fmt::Debug for Mesh {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut bytes = Vec::with_capacity(24 * self.vertices.len() + 12 * self.triangles.len());
+        for v in &self.vertices {
+            for c in v.to_array() {
+                bytes.extend_from_slice(&c.to_bits().to_le_bytes());
+            }
+        }
+        for t in &self.triangles {
+            for i in t {
+                bytes.extend_from_slice(&i.to_le_bytes());
+            }
+        }
         f.debug_struct("Mesh")
+            .field(
+                "content",
+                &format_args!("{:016x}", crate::tally::shard::fnv1a(&bytes)),
+            )
             .field("vertices", &self.vertices.len())
             .field("triangles", &self.triangles.len())
             .field("dropped", &self.dropped)
