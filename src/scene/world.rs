@@ -1363,10 +1363,16 @@ impl Scene {
             }
             Prim::Mesh(i) => {
                 let (m, s) = &self.meshes[i as usize];
+                // A ray leaving a surface does not meet a mesh within
+                // `MESH_REL` of the mesh's size: a triangle lying on that
+                // surface (a rug on the floor, a panel written front and
+                // back) would otherwise meet it again at t ~ 1e-17, on
+                // whichever side rounding picks.
+                let near = MESH_REL * (m.bounds().1 - m.bounds().0).length();
                 let (t_min, skip) = match start {
-                    Start::On(x, p) if x == *s => (0.0, Some(p)),
-                    Start::Observer => (MESH_REL * (m.bounds().1 - m.bounds().0).length(), None),
-                    _ => (0.0, None),
+                    Start::On(x, p) if x == *s => (near, Some(p)),
+                    Start::On(u32::MAX, _) => (0.0, None),
+                    Start::On(..) | Start::Observer => (near, None),
                 };
                 if let Some((t, _, tri)) = m.first_hit(ray.o, ray.d, t_min, acc.bound, skip) {
                     acc.solid(cand(t, *s, tri));
