@@ -210,11 +210,11 @@ pub fn trace_ex<F: FnMut(&Collision)>(
                     p: ray.o,
                     n,
                     surface: s,
-                    prim: 0,
+                    prim: seat.prim(),
                 }),
                 None => {
                     on_surface = false;
-                    scene.intersect(&ray, Some((seat.leaves(ray.d), 0)))
+                    scene.intersect(&ray, Some((seat.leaves(ray.d), seat.prim())))
                 }
             }
         } else {

@@ -544,6 +544,29 @@ impl Mesh {
         Some((t, (p[1] - p[0]).cross(p[2] - p[0]).normalize(), tri))
     }
 
+    /// A triangle that point `p` lies on, within `tol` \[m\] of its plane
+    /// and inside its edges (widened by `tol`); the first in order. A
+    /// linear search after a bounds test: for set-up (a light or an eye on
+    /// the mesh), not for paths.
+    pub fn triangle_at(&self, p: DVec3, tol: f64) -> Option<u32> {
+        let pad = DVec3::splat(tol);
+        if (self.lo - pad).cmpgt(p).any() || p.cmpgt(self.hi + pad).any() {
+            return None;
+        }
+        (0..self.triangles.len() as u32).find(|&k| {
+            let [a, b, c] = self.corners(k);
+            let n = (b - a).cross(c - a);
+            let len = n.length();
+            if len <= 0.0 || (p - a).dot(n).abs() > tol * len {
+                return false;
+            }
+            // Inside every edge, each widened by `tol`.
+            [(a, b), (b, c), (c, a)]
+                .iter()
+                .all(|&(u, v)| n.cross(v - u).dot(p - u) >= -tol * len * (v - u).length())
+        })
+    }
+
     /// The signed crossings of the ray `o + t d` (unit `d`), `t > t_min`,
     /// with the mesh: +1 for each triangle it leaves through the front of
     /// (the side the counter-clockwise winding faces), -1 for each it

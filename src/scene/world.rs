@@ -859,7 +859,24 @@ impl Scene {
                 return Some(side(s0 + f as u32, AaBox::outward_normal(f)));
             }
         }
-        None
+        self.mesh_triangle_at(p).map(|(s, tri)| {
+            let m = &self
+                .meshes
+                .iter()
+                .find(|(_, ms)| *ms == s)
+                .expect("a mesh")
+                .0;
+            side(s, m.normal(tri))
+        })
+    }
+
+    /// The mesh surface and triangle that `p` lies on (within `MESH_REL`
+    /// of the mesh's size), if any.
+    fn mesh_triangle_at(&self, p: DVec3) -> Option<(u32, u32)> {
+        self.meshes.iter().find_map(|(m, s)| {
+            let tol = MESH_REL * (m.bounds().1 - m.bounds().0).length();
+            m.triangle_at(p, tol).map(|tri| (*s, tri))
+        })
     }
 
     /// The seat of a light at `p` ([`LightSeat`]): the surface
@@ -885,6 +902,10 @@ impl Scene {
                     })
                     .collect();
                 LightSeat::box_faces(&faces, !inward)
+            }
+            ShapeRef::Mesh(_) => {
+                let tri = self.mesh_triangle_at(p).map_or(0, |(_, tri)| tri);
+                LightSeat::flat(s, n, &[]).on_triangle(tri)
             }
             _ => LightSeat::flat(s, n, &[]),
         })
@@ -1160,13 +1181,15 @@ impl Scene {
     /// surface it sees it at its feet (`t = 0`, the reflecting side);
     /// otherwise [`Self::first_hit_from`].
     pub fn observer_hit(&self, o: DVec3, d: DVec3) -> Option<Hit> {
-        if let Some((surface, n)) = self.seat_at(o).and_then(|seat| seat.meets(d)) {
+        if let Some(seat) = self.seat_at(o)
+            && let Some((surface, n)) = seat.meets(d)
+        {
             return Some(Hit {
                 t: 0.0,
                 p: o,
                 n,
                 surface,
-                prim: 0,
+                prim: seat.prim(),
             });
         }
         self.first_hit_from(o, d)

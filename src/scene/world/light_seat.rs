@@ -46,6 +46,8 @@ enum Joint {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightSeat {
     joint: Joint,
+    /// The primitive of a one-surface seat (a mesh's triangle; 0 otherwise).
+    prim: u32,
     faces: [(u32, DVec3); 3],
     n_faces: usize,
     rims: [DVec3; 2],
@@ -62,6 +64,7 @@ impl LightSeat {
         r[..n_rims].copy_from_slice(&rims[..n_rims]);
         Self {
             joint: Joint::One,
+            prim: 0,
             faces: [(s, n); 3],
             n_faces: 1,
             rims: r,
@@ -80,6 +83,7 @@ impl LightSeat {
         let mut f = [faces[0]; 3];
         f[..faces.len()].copy_from_slice(faces);
         Self {
+            prim: 0,
             joint: match (faces.len(), solid) {
                 (1, _) => Joint::One,
                 (_, true) => Joint::Solid,
@@ -90,6 +94,16 @@ impl LightSeat {
             rims: [DVec3::ZERO; 2],
             n_rims: 0,
         }
+    }
+
+    /// The seat on triangle `tri` of a mesh (see [`Self::flat`]).
+    pub fn on_triangle(self, tri: u32) -> Self {
+        Self { prim: tri, ..self }
+    }
+
+    /// The primitive a face met or left is: a mesh's triangle, else 0.
+    pub fn prim(&self) -> u32 {
+        self.prim
     }
 
     /// The faces: `(surface, unit normal of the light's side)`.
