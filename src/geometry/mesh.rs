@@ -95,6 +95,31 @@ fn beyond_limit(vertices: &[DVec3]) -> Option<(usize, DVec3)> {
         .map(|(i, v)| (i, *v))
 }
 
+/// One vertex for each position: `o`/`g` groups (and files that repeat a
+/// vertex per face) give each group its own copy of the vertices it shares
+/// with the next, which would leave a closed surface open at the seams
+/// (and a point inside it unflagged). Positions are compared bit for bit
+/// (`-0` as `0`); the first copy keeps its place.
+fn weld(vertices: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let mut first = std::collections::HashMap::with_capacity(vertices.len());
+    let mut kept = Vec::with_capacity(vertices.len());
+    let remap: Vec<u32> = vertices
+        .iter()
+        .map(|v| {
+            let key = (v + DVec3::ZERO).to_array().map(f64::to_bits);
+            *first.entry(key).or_insert_with(|| {
+                kept.push(*v + DVec3::ZERO);
+                kept.len() as u32 - 1
+            })
+        })
+        .collect();
+    let triangles = triangles
+        .into_iter()
+        .map(|t| t.map(|i| remap[i as usize]))
+        .collect();
+    (kept, triangles)
+}
+
 fn file_error(file: &str, message: impl Into<String>) -> MeshError {
     MeshError::File {
         file: file.to_string(),
@@ -299,6 +324,7 @@ impl Mesh {
                 ),
             ));
         }
+        let (vertices, triangles) = weld(vertices, triangles);
         Self::build(&file, vertices, triangles)
     }
 
@@ -1301,6 +1327,63 @@ mod tests {
         let p = dir.path().join(name);
         std::fs::write(&p, text).unwrap();
         p
+    }
+
+    /// A closed cube split into `g` groups and `o` objects, and one that
+    /// repeats its vertices for every face, loads closed: tobj numbers each
+    /// group's vertices apart, and without welding the seams left the mesh
+    /// open (a point inside it was not flagged; a reviewer's case).
+    #[test]
+    fn groups_and_repeated_vertices_are_welded_closed() {
+        let dir = tempfile::tempdir().unwrap();
+        let v = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n";
+        let faces = [
+            "f 1 3 2", "f 2 3 4", "f 5 6 7", "f 6 8 7", "f 1 2 5", "f 2 6 5", "f 3 7 4", "f 4 7 8",
+            "f 1 5 3", "f 3 5 7", "f 2 4 6", "f 4 8 6",
+        ];
+        let plain = format!("{v}{}\n", faces.join("\n"));
+        let groups = format!(
+            "{v}g top\n{}\ng rest\n{}\n",
+            faces[..2].join("\n"),
+            faces[2..].join("\n")
+        );
+        let objects = format!(
+            "{v}o a\n{}\no b\n{}\n",
+            faces[..5].join("\n"),
+            faces[5..].join("\n")
+        );
+        // Every face with its own three vertices (and -0 for 0 in one).
+        let corners: Vec<[f64; 3]> = v
+            .lines()
+            .map(|l| {
+                let c: Vec<f64> = l[2..].split(' ').map(|x| x.parse().unwrap()).collect();
+                [c[0], c[1], c[2]]
+            })
+            .collect();
+        let mut unwelded = String::new();
+        for (k, f) in faces.iter().enumerate() {
+            for i in f[2..].split(' ') {
+                let c = corners[i.parse::<usize>().unwrap() - 1];
+                let x = if k == 0 && c[0] == 0.0 {
+                    "-0".to_string()
+                } else {
+                    c[0].to_string()
+                };
+                unwelded.push_str(&format!("v {x} {} {}\n", c[1], c[2]));
+            }
+            unwelded.push_str(&format!("f {} {} {}\n", 3 * k + 1, 3 * k + 2, 3 * k + 3));
+        }
+        for (name, text) in [
+            ("plain", plain),
+            ("groups", groups),
+            ("objects", objects),
+            ("unwelded", unwelded),
+        ] {
+            let m = Mesh::load_obj(&write(&dir, &format!("{name}.obj"), &text)).unwrap();
+            assert_eq!(m.vertices().len(), 8, "{name}");
+            assert_eq!(m.triangle_count(), 12, "{name}");
+            assert!(m.is_closed(), "{name} is not closed");
+        }
     }
 
     /// A concave face (an L of area 3 at z = 1): ear clipping covers it
