@@ -399,6 +399,31 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     };
     let connect_rays = 2 + nee_rays;
     let mut rays = 0;
+    // Light that a point-like source on a surface sends into it, reflected
+    // at the source's position ([`seat_intensity`]), reaches the receiver
+    // at once: order 1, where the source lies within the first segment's
+    // reach (a near part's radius never holds a source: the chains score
+    // that light).
+    for k in 0..scene.lights.len() {
+        let Some(seat) = scene.light_surface(k) else {
+            continue;
+        };
+        let y = scene.lights[k].position();
+        let v = rec.p - y;
+        let d2 = v.length_squared();
+        if !(d2 > 0.0 && d2.sqrt() < first_max) || seat.hides(y, rec.p) {
+            continue;
+        }
+        let w = v / d2.sqrt();
+        let (value, _) = rec.transfer(frame, -w);
+        if value > 0.0 && scene.visible(y, None, rec.p) {
+            let i = seat_intensity(scene, k, seat, w, rng);
+            if i > 0.0 {
+                add(1, value * i / d2);
+            }
+        }
+        rays += 1;
+    }
     // Light-guided connections start photons at a light's centre; area
     // sources and luminous openings have no such centre, so scenes with
     // them are traced unguided.
@@ -413,15 +438,23 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         // The receiver's transfer towards world direction `w`: its response
         // times `cos` (the integrand of `E = int L cos dw`, or of the
         // luminance), and the density of its own first direction there.
-        let v = connect(scene, rec.p, None, first_max, rng, |w: DVec3| {
-            let (value, pdf) = rec.transfer(frame, w);
-            match grazing {
-                Some(t) if matches!(rec.response, Response::Illuminance) => {
-                    (value, t.pdf(frame.to_local(w)))
+        let v = connect(
+            scene,
+            rec.p,
+            None,
+            first_max,
+            pool.is_none(),
+            rng,
+            |w: DVec3| {
+                let (value, pdf) = rec.transfer(frame, w);
+                match grazing {
+                    Some(t) if matches!(rec.response, Response::Illuminance) => {
+                        (value, t.pdf(frame.to_local(w)))
+                    }
+                    _ => (value, pdf),
                 }
-                _ => (value, pdf),
-            }
-        });
+            },
+        );
         if v > 0.0 {
             add(1, v);
         }
@@ -480,7 +513,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         let m = &scene.surfaces[h.surface as usize].material;
         let f_frame = Frame::from_normal(h.n);
         let wo = f_frame.to_local(-d);
-        let (nee, p_b) = next_event(scene, &h, m, &f_frame, wo, guide, rng);
+        let (nee, p_b) = next_event(scene, &h, m, &f_frame, wo, guide, pool.is_none(), rng);
         rays += nee_rays;
         if nee > 0.0 {
             // Strategy A's share of the balance heuristic (1 without guiding).
@@ -528,14 +561,22 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         let from = Some((h.surface, h.prim));
         if guide {
             let b = beta;
-            let v = connect(scene, h.p, from, seg_max, rng, |w: DVec3| {
-                let wl = f_frame.to_local(w);
-                if wl.z <= 0.0 {
-                    (0.0, 0.0)
-                } else {
-                    (b * m.eval(wl, wo) * wl.z, m.pdf(wo, wl))
-                }
-            });
+            let v = connect(
+                scene,
+                h.p,
+                from,
+                seg_max,
+                pool.is_none(),
+                rng,
+                |w: DVec3| {
+                    let wl = f_frame.to_local(w);
+                    if wl.z <= 0.0 {
+                        (0.0, 0.0)
+                    } else {
+                        (b * m.eval(wl, wo) * wl.z, m.pdf(wo, wl))
+                    }
+                },
+            );
             if v > 0.0 {
                 add(order + 1, v);
             }
@@ -691,6 +732,7 @@ fn next_event(
     f_frame: &Frame,
     wo: DVec3,
     guide: bool,
+    deposit: bool,
     rng: &mut Philox4x32,
 ) -> (f64, f64) {
     let v = VertexLight {
@@ -699,6 +741,7 @@ fn next_event(
         m,
         f_frame,
         wo,
+        deposit,
         hm: scene.side_mask(h.p),
         from: Some((h.surface, h.prim)),
         seen: std::cell::Cell::new(None),
@@ -730,6 +773,63 @@ fn next_event(
     (nee, p_b)
 }
 
+/// An estimate of the intensity \[cd\] towards unit `w` of the light that
+/// point-like light `k`, standing on the surfaces of `seat`, sends into
+/// them: it meets them at the light's own position
+/// ([`crate::scene::world::LightSeat`]) and is reflected there, a point
+/// source of `I_r(w) = int I(w_i) f(w_i, w) cos(w) dw_i` over the
+/// directions that meet a face (on a room's edge, reflected light can meet
+/// the next face at once: those bounces are walked too, with Russian
+/// roulette). One emission direction drawn from the light's photon
+/// density, so the estimate is unbiased. 0 where `w` meets the seat.
+/// The chains find this light as collisions at the light's position; a
+/// backward path cannot hit that point, so next-event estimation adds it.
+fn seat_intensity(
+    scene: &Scene,
+    k: usize,
+    seat: &crate::scene::world::LightSeat,
+    w: DVec3,
+    rng: &mut Philox4x32,
+) -> f64 {
+    const MAX_BOUNCES: usize = 64;
+    let l = &scene.lights[k];
+    if seat.meets(w).is_some() {
+        return 0.0;
+    }
+    let d = l.photon(rng.next_2d(), rng.next_f64());
+    let pdf = l.photon_pdf(d);
+    if pdf <= 0.0 {
+        return 0.0;
+    }
+    let mut weight = l.intensity(d) / pdf;
+    let threshold = 0.25 * weight;
+    let mut d = d;
+    let mut total = 0.0;
+    for _ in 0..MAX_BOUNCES {
+        let Some((s, n)) = seat.meets(d) else {
+            break;
+        };
+        let m = &scene.surfaces[s as usize].material;
+        let frame = Frame::from_normal(n);
+        let wi = frame.to_local(-d);
+        let wo = frame.to_local(w);
+        if wo.z > 0.0 {
+            total += weight * m.eval(wi, wo) * wo.z;
+        }
+        let smp = m.sample(wi, rng.next_2d());
+        if smp.pdf <= 0.0 || smp.w.z <= 0.0 {
+            break;
+        }
+        weight *= m.eval(wi, smp.w) * smp.w.z / smp.pdf;
+        let Some(survivor) = roulette(weight, threshold, rng) else {
+            break;
+        };
+        weight = survivor;
+        d = frame.to_world(smp.w);
+    }
+    total
+}
+
 /// A surface vertex lit by next-event estimation (see [`next_event`]).
 struct VertexLight<'a> {
     scene: &'a Scene,
@@ -737,6 +837,10 @@ struct VertexLight<'a> {
     m: &'a Material,
     f_frame: &'a Frame,
     wo: DVec3,
+    /// Whether a light on a surface adds what it sends into the surface,
+    /// reflected at its position ([`seat_intensity`]): not where the
+    /// chains' pool brings that light (a near part's paths).
+    deposit: bool,
     /// The vertex's side mask.
     hm: crate::geometry::SideMask,
     from: Option<(u32, u32)>,
@@ -803,6 +907,7 @@ impl VertexLight<'_> {
             f_frame,
             wo,
             from,
+            deposit,
             ..
         } = *self;
         let l = &scene.lights[k];
@@ -891,7 +996,16 @@ impl VertexLight<'_> {
             Light::Point { .. } | Light::Gonio { .. } | Light::Spot(_) => {
                 // (The shadow test only for light that arrives: a source
                 // that sends nothing this way, the back of the vertex.)
-                let e = l.direct_illuminance(h.p, h.n);
+                let mut e = l.direct_illuminance(h.p, h.n);
+                // A light on a surface: and what it sends into the surface,
+                // reflected there ([`seat_intensity`]).
+                if deposit && let Some(seat) = scene.light_surface(k) {
+                    let cos_x = h.n.dot(to_c) / dist;
+                    if cos_x > 0.0 && dist > 0.0 {
+                        let i = seat_intensity(scene, k, seat, -to_c / dist, rng);
+                        e += i * cos_x / (dist * dist);
+                    }
+                }
                 if e > 0.0 && self.center_seen(k) {
                     return m.eval(f_frame.to_local(to_c / dist), wo) * e;
                 }
@@ -942,6 +1056,7 @@ fn connect(
     x: DVec3,
     from: Option<(u32, u32)>,
     max_t: f64,
+    deposit: bool,
     rng: &mut Philox4x32,
     transfer: impl Fn(DVec3) -> (f64, f64),
 ) -> f64 {
@@ -994,7 +1109,16 @@ fn connect(
     }
     let f_frame = Frame::from_normal(y.n);
     let m = &scene.surfaces[y.surface as usize].material;
-    let (nee, p_b) = next_event(scene, &y, m, &f_frame, f_frame.to_local(-w), true, rng);
+    let (nee, p_b) = next_event(
+        scene,
+        &y,
+        m,
+        &f_frame,
+        f_frame.to_local(-w),
+        true,
+        deposit,
+        rng,
+    );
     if nee <= 0.0 || p_b <= 0.0 {
         return 0.0;
     }
