@@ -725,6 +725,7 @@ fn join_pool<F: FnMut(u32, f64)>(
 /// of one per source. Strategy B's density `p_B` is still summed over all
 /// sources (one centre-visibility test each: side masks in a scene of
 /// planes); it is only needed with light-guided connections.
+#[allow(clippy::too_many_arguments)]
 fn next_event(
     scene: &Scene,
     h: &Hit,
