@@ -425,15 +425,11 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         rays += 1;
     }
     // Light-guided connections start photons at a light's centre; area
-    // sources and luminous openings have no such centre, so scenes with
-    // them are traced unguided.
-    let guide = cfg.chain.guide
-        && !scene.lights.is_empty()
-        && scene.total_power() > 0.0
-        && !scene
-            .lights
-            .iter()
-            .any(|l| matches!(l, Light::Area(_)) || l.emits_from_opening());
+    // sources and luminous openings have no such centre: picked, they give
+    // no photon ([`connect`]), as lights at infinity do, and the density
+    // of the photons leaves them out ([`VertexLight::guide_density`]), so
+    // the combination stays unbiased and the other lights stay guided.
+    let guide = cfg.chain.guide && !scene.lights.is_empty() && scene.total_power() > 0.0;
     if guide {
         // The receiver's transfer towards world direction `w`: its response
         // times `cos` (the integrand of `E = int L cos dw`, or of the
@@ -1063,11 +1059,11 @@ fn connect(
 ) -> f64 {
     let k = scene.pick_light_index(rng.next_f64());
     let light = &scene.lights[k];
-    // A light at infinity has no centre to send photons from: picked, it
-    // gives no sample (its share is left out of `p_B` too, see
-    // [`next_event`], so the combination stays unbiased; its light comes
-    // by next-event estimation).
-    if light.is_directional() {
+    // A light at infinity, an area source or a luminous opening has no
+    // centre to send photons from: picked, it gives no sample (its share
+    // is left out of `p_B` too, see [`next_event`], so the combination
+    // stays unbiased; its light comes by next-event estimation).
+    if light.is_directional() || matches!(light, Light::Area(_)) || light.emits_from_opening() {
         return 0.0;
     }
     // Isotropic from points and spheres; a goniometric light's photons
