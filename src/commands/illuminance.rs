@@ -308,9 +308,11 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
         }
         if counts.contains_key("near") {
             sparse += "; `near`: a surface lies closer to those points than a tenth of their \
-             distance to the nearest light while the near/far split is off there, so the \
-             plain local estimate can miss a large part of E with a small error bar (use \
-             --near-radius auto, the default)";
+             distance to the nearest light (in a scene lit from infinity alone, of the median \
+             distance of the surfaces around them) while the near/far split is off there, so \
+             the plain local estimate can miss a large part of E with a small error bar (use \
+             --near-radius auto, the default; scenes with the sun, a sky, an environment map \
+             or glass run without the split: use --estimator backward for such points)";
         }
         format!(
             "statistical checks FAILED or points flagged ({}); see the _flag column{sparse}",

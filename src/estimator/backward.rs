@@ -612,9 +612,12 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
 /// leaves half of that halo to the path and reads 23 % low, `2 d` 44 %
 /// (4 pool picks a vertex then; now up to 16, [`Pool::picks`]).
 fn split_radius(scene: &Scene, x: DVec3, r: f64) -> f64 {
+    // (Lights at infinity pile up nowhere: without others, the path
+    // carries all.)
     let d = scene
         .lights
         .iter()
+        .filter(|l| !l.is_directional())
         .map(|l| (l.position() - x).length())
         .fold(f64::INFINITY, f64::min);
     r.max(0.5 * d)
