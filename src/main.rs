@@ -62,6 +62,14 @@ fn main() -> ExitCode {
         Command::UgrTable(a) => ugr_table::ugr_table_command(a),
     };
     match res {
+        // An interrupted run wrote what it had: not a success for a script
+        // (`lumest ... && publish`), the shell's code for a signal.
+        Ok(()) if lumest::io::interrupt::interrupted() => {
+            eprintln!(
+                "lumest: exiting with status 130: the run was interrupted, its outputs hold the batches done"
+            );
+            ExitCode::from(130)
+        }
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("lumest: error: {e:#}");

@@ -60,7 +60,8 @@ fn an_interrupted_run_resumes_to_the_identical_result() {
     );
     let o = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
+    // Interrupted: the results so far are written, the status says so.
+    assert_eq!(o.status.code(), Some(130), "{err}");
     assert!(
         err.contains("interrupted by a signal") && err.contains("--resume"),
         "{err}"
@@ -158,4 +159,16 @@ fn a_checkpoint_never_goes_over_an_input_or_an_output() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && e.contains("same file"), "{e}");
     assert!(!out.exists() && !plot.exists());
+    // The checkpoint a run resumes from is an input: `--out` never replaces
+    // it (the old build wrote the CSV over it).
+    let ck = dir.path().join("run.ckpt");
+    std::fs::write(&ck, "not read before the check").unwrap();
+    let ck_s = ck.to_str().unwrap();
+    let mut a = args(ck_s, "1");
+    a[4] = pts_s;
+    a.extend(["--resume", ck_s]);
+    let o = lumest(&a);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("--out"), "{e}");
+    assert_eq!(std::fs::read(&ck).unwrap(), b"not read before the check");
 }

@@ -1248,11 +1248,15 @@ pub(crate) fn measure_full(
             result.tallies.batches(),
             result.chains
         );
-        if let Some(p) = &ckpt_path {
-            eprintln!(
+        match &ckpt_path {
+            Some(p) if super::run_state::last_checkpoint_written() => eprintln!(
                 "lumest: checkpoint written to {p}: run the same command with `--resume {p}` to finish \
                  the run (the result is the uninterrupted run's, bit for bit)"
-            );
+            ),
+            Some(p) => eprintln!(
+                "lumest: no checkpoint was written to {p} (see above): the run cannot be resumed"
+            ),
+            None => {}
         }
     }
     // Every output is staged before any is renamed into place: all or none.
@@ -1449,6 +1453,11 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
         outputs.push(("--report", Path::new(f)));
     }
     check_outputs(&inputs, &outputs)?;
+    // The checkpoint a run resumes from is an input of its outputs (a
+    // later checkpoint may replace it: that is how a run goes on).
+    if let Some(r) = &a.run.resume {
+        check_outputs(&[Path::new(r)], &outputs)?;
+    }
     if let Some(d) = &a.isolux_dir {
         anyhow::ensure!(
             Path::new(d).is_dir(),
@@ -1499,6 +1508,9 @@ pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
     }
     // (The run checks the checkpoint against the outputs it knows; the
     // plot is this command's own.)
+    if let Some(r) = &a.run.resume {
+        check_outputs(&[Path::new(r)], &outputs)?;
+    }
     if let Some(ck) = &a.run.checkpoint {
         outputs.push(("--checkpoint", Path::new(ck)));
     }

@@ -118,10 +118,21 @@ impl<'a> Checkpointer<'a> {
             wall: p.elapsed,
             tallies: p.tallies.clone(),
         };
-        if let Err(e) = write_atomic_with(&self.path, |w| c.write(w)) {
+        let written = write_atomic_with(&self.path, |w| c.write(w));
+        if let Err(e) = &written {
             eprintln!("lumest: could not write the checkpoint {}: {e}", self.path);
         }
+        LAST_WRITTEN.store(written.is_ok(), std::sync::atomic::Ordering::SeqCst);
     }
+}
+
+/// Whether the last checkpoint this process tried to write was written
+/// (false before any): an interrupted run tells how to resume only then.
+static LAST_WRITTEN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// See [`LAST_WRITTEN`].
+pub fn last_checkpoint_written() -> bool {
+    LAST_WRITTEN.load(std::sync::atomic::Ordering::SeqCst)
 }
 
 /// Read the checkpoint at `path` for a run of `job` on `scene` with `cfg`:
