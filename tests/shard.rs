@@ -494,3 +494,28 @@ fn shards_of_scenes_whose_meshes_differ_are_refused() {
     let e = merge_err(&[&parts[0], &parts[1]], &d.join("r.csv"));
     assert!(e.contains("different runs") && e.contains("scenes"), "{e}");
 }
+
+/// A state names the build that wrote it (its git commit, `+dirty` with
+/// changed tracked files, `unknown` outside a checkout): shards and
+/// checkpoints of different builds, whose numbers need not agree bit for
+/// bit, are different runs. The old build named only the crate's version,
+/// and merged shards of two commits that changed the numbers.
+#[test]
+fn states_name_their_build() {
+    let dir = tempfile::tempdir().unwrap();
+    let part = shard(dir.path(), "p0", 0, 2, "1", "sobolev.toml");
+    let bytes = std::fs::read(&part).unwrap();
+    let end = bytes.windows(2).position(|w| w == b"\n\n").unwrap();
+    let header = String::from_utf8(bytes[..end].to_vec()).unwrap();
+    let config = header.lines().find(|l| l.starts_with("config = ")).unwrap();
+    let id = config
+        .split(" build ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .unwrap_or_else(|| panic!("no build in {config}"));
+    let commit = id.strip_suffix("+dirty").unwrap_or(id);
+    assert!(
+        id == "unknown" || (commit.len() == 40 && commit.chars().all(|c| c.is_ascii_hexdigit())),
+        "{id}"
+    );
+}

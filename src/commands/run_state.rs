@@ -22,8 +22,9 @@ pub fn table_hash(headers: &[String], rows: &[Vec<String>]) -> u64 {
 
 /// The identity of a `--chains` run of `job` on `scene` with batches of
 /// `bs` chains: the hash of the compiled scene (so every file it read
-/// counts), of the points and views, and every setting that changes the
-/// numbers (not the threads, the shard, the resume state or how the batch
+/// counts), of the points and views, the build (its git commit, `build.rs`:
+/// another build's numbers need not agree bit for bit), and every setting
+/// that changes the numbers (not the threads, the shard, the resume state or how the batch
 /// size was chosen, which is compared as a number).
 pub fn identity(
     scene: &Scene,
@@ -58,8 +59,9 @@ pub fn identity(
         scene: fnv1a(format!("{scene:?}").as_bytes()),
         points,
         config: format!(
-            "lumest {} estimator {estimator:?} {settings:?}",
-            env!("CARGO_PKG_VERSION")
+            "lumest {} build {} estimator {estimator:?} {settings:?}",
+            env!("CARGO_PKG_VERSION"),
+            env!("LUMEST_BUILD")
         ),
     }
 }
