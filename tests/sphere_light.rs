@@ -110,6 +110,12 @@ fn sphere_lights_are_validated() {
             "position",
         ),
         ("radius = 0.1\nintensity = 1.0\n", ":7:", "center"),
+        // Below a nanometre I / (pi r^2) overflows (1e-300 m read NaN).
+        (
+            "center = [0.0, 0.0, 0.5]\nradius = 1e-300\nintensity = 1.0\n",
+            ":10:",
+            "at least 1e-9 m",
+        ),
     ] {
         let err = lumest::scene::parse(&format!("{base}{tail}"), path)
             .unwrap_err()

@@ -354,6 +354,10 @@ fn sides(
         })
 }
 
+/// The smallest radius \[m\] of a sphere, disc or sphere light: a
+/// nanometre, far below any luminaire and far above where `r^2` underflows.
+const MIN_RADIUS: f64 = 1e-9;
+
 fn positive(v: &Spanned<f64>, field: &str, ctx: &SourceCtx) -> Result<f64, SceneError> {
     let x = *v.get_ref();
     if field == "radius" && x.is_finite() && x > MAX_COORD {
@@ -363,6 +367,17 @@ fn positive(v: &Spanned<f64>, field: &str, ctx: &SourceCtx) -> Result<f64, Scene
             field,
             format!(
                 "must lie within {MAX_COORD:e} m, got {}",
+                crate::io::format_number(x)
+            ),
+        ))
+    } else if field == "radius" && x.is_finite() && x > 0.0 && x < MIN_RADIUS {
+        // A sphere light's luminance is I / (pi r^2): below about 1e-154 m
+        // it overflows (a reviewer's 1e-300 m sphere read NaN, flagged ok).
+        Err(ctx.invalid(
+            v.span(),
+            field,
+            format!(
+                "must be at least {MIN_RADIUS:e} m, got {} (a smaller source is a point: `type = \"point\"`)",
                 crate::io::format_number(x)
             ),
         ))
@@ -847,17 +862,7 @@ fn light(
             let cs = ctx.required(&d.center, l.span(), "center")?;
             let c = ctx.finite_vec(cs, "center")?;
             let rs = ctx.required(&d.radius, l.span(), "radius")?;
-            let r = *rs.get_ref();
-            if !(r.is_finite() && r > 0.0 && r <= MAX_COORD) {
-                return Err(ctx.invalid(
-                    rs.span(),
-                    "radius",
-                    format!(
-                        "must be finite, > 0 and within {MAX_COORD:e} m, got {}",
-                        crate::io::format_number(r)
-                    ),
-                ));
-            }
+            let r = positive(rs, "radius", ctx)?;
             if let Some(k) = planes
                 .iter()
                 .position(|pl| pl.signed_distance(c).abs() <= r)
