@@ -15,6 +15,20 @@ use lumest::reference::Sobolev;
 use lumest::run::RunConfig;
 use lumest::tally::sidak_bound;
 
+/// Points on the floor (plane 1, facing up) or the ceiling at height 1
+/// (plane 2, facing down) at distance `r` along x.
+fn plane_points(at: &[(u8, f64)]) -> Vec<(DVec3, DVec3)> {
+    at.iter()
+        .map(|&(plane, r)| {
+            if plane == 1 {
+                (DVec3::new(r, 0.0, 0.0), DVec3::Z)
+            } else {
+                (DVec3::new(r, 0.0, 1.0), -DVec3::Z)
+            }
+        })
+        .collect()
+}
+
 fn guided(on: bool, paths: u64) -> RunConfig {
     RunConfig {
         chain: ChainParams {
@@ -32,16 +46,7 @@ fn guided_backward_paths_agree_with_the_exact_solution_next_to_the_source() {
     let case = sobolev_case(&s, 2, 1.0);
     // Under the source, near it, on the far plane above it and further out.
     let at = [(1u8, 0.0), (1, 0.03), (1, 0.3), (2, 0.0), (2, 2.0)];
-    let pts: Vec<(DVec3, DVec3)> = at
-        .iter()
-        .map(|&(plane, r)| {
-            if plane == 1 {
-                (DVec3::new(r, 0.0, 0.0), DVec3::Z)
-            } else {
-                (DVec3::new(r, 0.0, 1.0), -DVec3::Z)
-            }
-        })
-        .collect();
+    let pts = plane_points(&at);
     let rec = Receivers::new(&case.scene, &pts).unwrap();
     let paths = 8192;
     let on = lumest::backward::run(&case.scene, &rec, &guided(true, paths), &mut |_| true);
@@ -324,16 +329,7 @@ fn an_area_light_elsewhere_leaves_the_point_source_guided() {
                radius = 0.01\nflux = 1e-6\n";
     let scene = lumest::scene::parse(src, std::path::Path::new("s9.toml")).unwrap();
     let at = [(1u8, 0.0), (1, 0.3), (1, 1.0), (2, 0.0), (2, 1.0)];
-    let pts: Vec<(DVec3, DVec3)> = at
-        .iter()
-        .map(|&(plane, r)| {
-            if plane == 1 {
-                (DVec3::new(r, 0.0, 0.0), DVec3::Z)
-            } else {
-                (DVec3::new(r, 0.0, 1.0), -DVec3::Z)
-            }
-        })
-        .collect();
+    let pts = plane_points(&at);
     let rec = Receivers::new(&scene, &pts).unwrap();
     let paths = 8192;
     let on = lumest::backward::run(&scene, &rec, &guided(true, paths), &mut |_| true);

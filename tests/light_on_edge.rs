@@ -46,6 +46,24 @@ fn direct(p: DVec3, x: DVec3, n: DVec3) -> f64 {
     I * (n.dot(v) / d2.sqrt()).max(0.0) / d2
 }
 
+/// The light at `p` in scene `s`: its direct light at each of `lit` is
+/// `I cos / d^2` (to 1e-9), at each of `dark` 0.
+fn direct_lit_and_dark(s: &Scene, p: DVec3, lit: &[(DVec3, DVec3)], dark: &[(DVec3, DVec3)]) {
+    let pts: Vec<_> = lit.iter().chain(dark.iter()).copied().collect();
+    let rec = Receivers::new(s, &pts).unwrap();
+    for (j, &(x, n)) in lit.iter().enumerate() {
+        let e = direct(p, x, n);
+        assert!(
+            e > 0.0 && (rec.direct()[j] - e).abs() <= 1e-9 * e,
+            "lit point {x}: direct {} vs I cos/d^2 = {e}",
+            rec.direct()[j]
+        );
+    }
+    for (j, &(x, _)) in dark.iter().enumerate() {
+        assert_eq!(rec.direct()[lit.len() + j], 0.0, "point {x} is hidden");
+    }
+}
+
 fn total(r: &RunResult, j: usize) -> f64 {
     r.direct[j] + r.tallies.estimated[j].mean()
 }
@@ -200,24 +218,7 @@ fn a_lamp_on_a_desks_edge_hides_only_the_desk() {
         (DVec3::new(1.8, 2.5, 0.0), DVec3::Z),
         (DVec3::new(2.0, 2.2, 0.3), -DVec3::Y),
     ];
-    let pts: Vec<_> = lit.iter().chain(dark.iter()).copied().collect();
-    let rec = Receivers::new(&s, &pts).unwrap();
-    for (j, &(x, n)) in lit.iter().enumerate() {
-        let e = direct(p, x, n);
-        assert!(
-            e > 0.0 && (rec.direct()[j] - e).abs() <= 1e-9 * e,
-            "lit point {x}: direct {} vs I cos/d^2 = {e}",
-            rec.direct()[j]
-        );
-    }
-    for (j, dark) in dark.iter().enumerate() {
-        assert_eq!(
-            rec.direct()[lit.len() + j],
-            0.0,
-            "point {:?} is behind the desk",
-            dark.0
-        );
-    }
+    direct_lit_and_dark(&s, p, &lit, &dark);
     // The reflected light: the limit from just outside the edge.
     let e = 1e-7;
     same_as_just_off(DESK, p, p + DVec3::new(0.0, -e, e), &lit, 2);
@@ -264,24 +265,7 @@ fn a_light_on_a_shelfs_rim_lights_below_beyond_the_rim() {
         (DVec3::new(0.0, 0.0, 1.0), DVec3::X),
         (DVec3::new(0.1, 0.2, 0.0), DVec3::Z),
     ];
-    let pts: Vec<_> = lit.iter().chain(dark.iter()).copied().collect();
-    let rec = Receivers::new(&s, &pts).unwrap();
-    for (j, &(x, n)) in lit.iter().enumerate() {
-        let e = direct(p, x, n);
-        assert!(
-            e > 0.0 && (rec.direct()[j] - e).abs() <= 1e-9 * e,
-            "lit point {x}: direct {} vs I cos/d^2 = {e}",
-            rec.direct()[j]
-        );
-    }
-    for (j, dark) in dark.iter().enumerate() {
-        assert_eq!(
-            rec.direct()[lit.len() + j],
-            0.0,
-            "point {:?} is under the shelf",
-            dark.0
-        );
-    }
+    direct_lit_and_dark(&s, p, &lit, &dark);
     let e = 1e-5;
     // Just above the rim (along the shelf's normal: the limit a light on
     // a surface is defined by; from beyond the rim it would be another).
