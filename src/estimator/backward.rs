@@ -403,8 +403,8 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     // at the source's position ([`seat_intensity`]), reaches the receiver
     // at once: order 1, where the source lies within the first segment's
     // reach (a near part's radius never holds a source: the chains score
-    // that light).
-    for k in 0..scene.lights.len() {
+    // that light, and its paths skip the loop).
+    for k in 0..scene.lights.len() * usize::from(pool.is_none()) {
         let Some(seat) = scene.light_surface(k) else {
             continue;
         };
