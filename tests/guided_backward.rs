@@ -331,7 +331,7 @@ fn an_area_light_elsewhere_leaves_the_point_source_guided() {
     let at = [(1u8, 0.0), (1, 0.3), (1, 1.0), (2, 0.0), (2, 1.0)];
     let pts = plane_points(&at);
     let rec = Receivers::new(&scene, &pts).unwrap();
-    let paths = 8192;
+    let paths = 32768;
     let on = lumest::backward::run(&scene, &rec, &guided(true, paths), &mut |_| true);
     let off = lumest::backward::run(&scene, &rec, &guided(false, paths), &mut |_| true);
     let bound = sidak_bound(1e-3, at.len(), None);
@@ -342,6 +342,11 @@ fn an_area_light_elsewhere_leaves_the_point_source_guided() {
         assert!(
             zj.abs() < bound,
             "plane {plane} r = {r}: |z| = {zj:.2} > {bound:.2}"
+        );
+        let se = on.tallies.estimated[j].std_error();
+        assert!(
+            0.02 * exact > bound * se,
+            "plane {plane} r = {r}: {se} too wide for 2 %"
         );
         let (se_on, se_off) = (
             on.tallies.estimated[j].std_error(),

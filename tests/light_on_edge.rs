@@ -78,7 +78,7 @@ fn same_as_just_off(
     points: &[(DVec3, DVec3)],
     faces_on: usize,
 ) {
-    let cfg = |seed| common::chains_cfg(200_000, seed, 2);
+    let cfg = |seed| common::chains_cfg(400_000, seed, 2);
     let s_on = scene(surfaces, on);
     assert_eq!(
         s_on.light_surface(0).map(|s| s.faces().len()),
@@ -109,7 +109,7 @@ fn same_as_just_off(
         .sqrt();
         let reflected = r_off.tallies.estimated[j].mean();
         assert!(
-            reflected > 0.0 && 0.2 * reflected > bound * se,
+            reflected > 0.0 && 0.02 * reflected > bound * se,
             "point {j}: reflected {reflected} +- {se}, too imprecise"
         );
         let z = (total(&r_on, j) - total(&r_off, j)) / se;
