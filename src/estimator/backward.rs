@@ -404,10 +404,10 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     // at once: order 1, where the source lies within the first segment's
     // reach (a near part's radius never holds a source: the chains score
     // that light, and its paths skip the loop).
-    for k in 0..scene.lights.len() * usize::from(pool.is_none()) {
-        let Some(seat) = scene.light_surface(k) else {
-            continue;
-        };
+    let seated = (0..scene.lights.len())
+        .filter(|_| pool.is_none())
+        .filter_map(|k| scene.light_surface(k).map(|seat| (k, seat)));
+    for (k, seat) in seated {
         let y = scene.lights[k].position();
         let v = rec.p - y;
         let d2 = v.length_squared();

@@ -822,15 +822,17 @@ impl Scene {
     }
 
     /// The surface that point `p` lies on (within the shapes' on-surface
-    /// tolerance; flat shapes, spheres and boxes), with the unit normal of
-    /// its reflecting side (the geometric normal when both sides reflect).
-    fn surface_at(&self, p: DVec3) -> Option<(u32, DVec3)> {
+    /// tolerance; flat shapes, spheres, boxes and meshes, within `MESH_REL`
+    /// of a mesh's size), with the unit normal of its reflecting side (the
+    /// geometric normal when both sides reflect) and the primitive (a
+    /// mesh's triangle; 0 otherwise).
+    fn surface_at(&self, p: DVec3) -> Option<(u32, DVec3, u32)> {
         let side = |s: u32, ng: DVec3| {
             let n = match self.surfaces[s as usize].sides {
                 Sides::Back => -ng,
                 Sides::Front | Sides::Both => ng,
             };
-            (s, n)
+            (s, n, 0)
         };
         for (i, pl) in self.planes.iter().enumerate() {
             if pl.side(p) == 0 {
@@ -859,23 +861,12 @@ impl Scene {
                 return Some(side(s0 + f as u32, AaBox::outward_normal(f)));
             }
         }
-        self.mesh_triangle_at(p).map(|(s, tri)| {
-            let m = &self
-                .meshes
-                .iter()
-                .find(|(_, ms)| *ms == s)
-                .expect("a mesh")
-                .0;
-            side(s, m.normal(tri))
-        })
-    }
-
-    /// The mesh surface and triangle that `p` lies on (within `MESH_REL`
-    /// of the mesh's size), if any.
-    fn mesh_triangle_at(&self, p: DVec3) -> Option<(u32, u32)> {
         self.meshes.iter().find_map(|(m, s)| {
             let tol = MESH_REL * (m.bounds().1 - m.bounds().0).length();
-            m.triangle_at(p, tol).map(|tri| (*s, tri))
+            m.triangle_at(p, tol).map(|tri| {
+                let (s, n, _) = side(*s, m.normal(tri));
+                (s, n, tri)
+            })
         })
     }
 
@@ -883,7 +874,7 @@ impl Scene {
     /// [`Self::surface_at`] finds, with the other faces of a box through
     /// `p` (an edge or a corner) or the rim of a rectangle or disc.
     fn seat_at(&self, p: DVec3) -> Option<LightSeat> {
-        let (s, n) = self.surface_at(p)?;
+        let (s, n, prim) = self.surface_at(p)?;
         let surf = &self.surfaces[s as usize];
         Some(match surf.shape {
             ShapeRef::Rect(i) => LightSeat::flat(s, n, &self.rects[i as usize].0.rims(p)),
@@ -903,10 +894,7 @@ impl Scene {
                     .collect();
                 LightSeat::box_faces(&faces, !inward)
             }
-            ShapeRef::Mesh(_) => {
-                let tri = self.mesh_triangle_at(p).map_or(0, |(_, tri)| tri);
-                LightSeat::flat(s, n, &[]).on_triangle(tri)
-            }
+            ShapeRef::Mesh(_) => LightSeat::flat(s, n, &[]).on_triangle(prim),
             _ => LightSeat::flat(s, n, &[]),
         })
     }
