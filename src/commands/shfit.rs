@@ -78,7 +78,7 @@ pub fn volume_centroid(mesh: &Mesh) -> DVec3 {
 fn radii(mesh: &Mesh, center: DVec3, dirs: &[DVec3]) -> anyhow::Result<Vec<f64>> {
     dirs.iter()
         .map(|&d| {
-            mesh.first_hit(center, d, 0.0, f64::INFINITY, None)
+            mesh.first_hit(center, d, 0.0, f64::INFINITY, None, None)
                 .map(|h| h.0)
                 .ok_or_else(|| {
                     anyhow::anyhow!(

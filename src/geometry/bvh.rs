@@ -92,6 +92,10 @@ struct Node {
     count: u32,
 }
 
+/// Relative tolerance within which two triangles' hits tie in
+/// [`TriangleBvh::first_hit`] (the scene's own, `COINCIDENT_TIE`).
+pub const FACING_TIE: f64 = 1e-9;
+
 /// A ray prepared for the watertight triangle test and the box test.
 #[derive(Clone, Copy, Debug)]
 pub struct RayQuery {
@@ -479,30 +483,64 @@ impl TriangleBvh {
     }
 
     /// Nearest hit with `t` in `(t_min, t_max)`, skipping triangle `skip`:
-    /// `(t, input index, corners [m])`.
+    /// `(t, input index, corners [m])`. With `facing = Some((d, front))`
+    /// (`d` the ray's direction), of triangles met within a relative
+    /// [`FACING_TIE`] of each other the one whose winding side `front`
+    /// (`d . ng < 0`; `false`: the back) faces the ray is returned: two
+    /// coincident triangles of opposite winding (a "double-sided" face as
+    /// exporters write it) have hit distances a few ulps apart, and the
+    /// ray must meet the one that reflects towards it.
     pub fn first_hit(
         &self,
         q: &RayQuery,
         t_min: f64,
         t_max: f64,
         skip: Option<u32>,
+        facing: Option<(DVec3, bool)>,
     ) -> Option<(f64, u32, [DVec3; 3])> {
         let skip = skip.unwrap_or(u32::MAX);
         let ids = self.tree.ids();
-        let mut best = None;
-        let best_t = self.tree.nearest(q, t_min, t_max, |pos, best_t| {
+        let faces = |p: &[DVec3; 3]| {
+            facing.is_none_or(|(d, front)| {
+                let dn = d.dot((p[1] - p[0]).cross(p[2] - p[0]));
+                if front { dn < 0.0 } else { dn > 0.0 }
+            })
+        };
+        // (position, t, faces the ray)
+        let mut best: Option<(usize, f64, bool)> = None;
+        self.tree.nearest(q, t_min, t_max, |pos, bound| {
             if ids[pos] != skip
                 && let Some(t) = q.triangle(&self.tris[pos])
                 && t > t_min
-                && t < best_t
+                && t < bound
+                && t < t_max
             {
-                best = Some(pos);
-                t
-            } else {
-                best_t
+                let take = match best {
+                    None => true,
+                    Some((_, bt, bf)) => {
+                        if t < bt * (1.0 - FACING_TIE) {
+                            true
+                        } else {
+                            // A tie (`t` within the tolerance beyond is all
+                            // the bound lets through): the facing one, then
+                            // the nearer.
+                            let f = faces(&self.tris[pos]);
+                            (f && !bf) || (f == bf && t < bt)
+                        }
+                    }
+                };
+                if take {
+                    best = Some((pos, t, faces(&self.tris[pos])));
+                }
+            }
+            match best {
+                // Keep looking just beyond a hit that shows its back.
+                Some((_, bt, false)) => bound.min(bt * (1.0 + FACING_TIE)),
+                Some((_, bt, true)) => bt,
+                None => bound,
             }
         });
-        best.map(|pos| (best_t, ids[pos], self.tris[pos]))
+        best.map(|(pos, t, _)| (t, ids[pos], self.tris[pos]))
     }
 
     /// Call `f(t, corners)` for every triangle the ray meets with `t` in
@@ -715,7 +753,7 @@ mod tests {
         let tris = vec![[DVec3::ZERO, DVec3::X, DVec3::Y]; 5000];
         let bvh = TriangleBvh::build(&tris);
         let q = RayQuery::new(DVec3::new(0.2, 0.2, 1.0), -DVec3::Z);
-        let (t, id, _) = bvh.first_hit(&q, 0.0, f64::INFINITY, None).unwrap();
+        let (t, id, _) = bvh.first_hit(&q, 0.0, f64::INFINITY, None, None).unwrap();
         assert_eq!(t, 1.0);
         assert!(id < 5000);
         assert!(bvh.any_hit(&q, 0.0, 1.5, Some(id)));

@@ -557,6 +557,11 @@ impl Mesh {
     /// Nearest hit of the ray `o + t d` (unit `d`) with `t` \[m\] in
     /// `(t_min, t_max)`, skipping triangle `skip`: `(t, unit geometric
     /// normal by CCW winding, not flipped toward the ray, triangle index)`.
+    /// With `front = Some(f)`, a triangle whose winding side `f` (`true`:
+    /// the front) faces the ray wins a near tie with one that shows the
+    /// other side ([`super::bvh::TriangleBvh::first_hit`]): a one-sided
+    /// mesh's "double-sided" faces, written as two coincident triangles of
+    /// opposite winding, reflect from both sides.
     pub fn first_hit(
         &self,
         o: DVec3,
@@ -564,9 +569,12 @@ impl Mesh {
         t_min: f64,
         t_max: f64,
         skip: Option<u32>,
+        front: Option<bool>,
     ) -> Option<(f64, DVec3, u32)> {
         let q = RayQuery::new(o, d);
-        let (t, tri, p) = self.bvh.first_hit(&q, t_min, t_max, skip)?;
+        let (t, tri, p) = self
+            .bvh
+            .first_hit(&q, t_min, t_max, skip, front.map(|f| (d, f)))?;
         Some((t, (p[1] - p[0]).cross(p[2] - p[0]).normalize(), tri))
     }
 
@@ -966,7 +974,7 @@ mod tests {
             };
             let skip = (i % 5 == 0).then(|| (rng.next_u32() as usize % m.triangle_count()) as u32);
             let brute = brute_first(m, o, d, t0, t1, skip);
-            let bvh = m.first_hit(o, d, t0, t1, skip);
+            let bvh = m.first_hit(o, d, t0, t1, skip, None);
             assert_eq!(brute.map(|b| b.0), bvh.map(|b| b.0), "ray {i}: o {o} d {d}");
             if let (Some(b), Some(h)) = (brute, bvh) {
                 // Equal distances from two triangles happen only at shared edges.
@@ -1055,29 +1063,37 @@ mod tests {
             let n = m.normal(k);
             // Leaving inward from a point on triangle k: the next hit is
             // elsewhere, never k itself.
-            let (t, nn, j) = m.first_hit(x, -n, 0.0, f64::INFINITY, Some(k)).unwrap();
+            let (t, nn, j) = m
+                .first_hit(x, -n, 0.0, f64::INFINITY, Some(k), None)
+                .unwrap();
             assert_ne!(j, k);
             assert!(t > 1e-3, "t = {t}");
             assert_eq!(nn, m.normal(j));
             // Leaving outward from a star-shaped closed surface: nothing.
-            assert!(m.first_hit(x, n, 0.0, f64::INFINITY, Some(k)).is_none());
+            assert!(
+                m.first_hit(x, n, 0.0, f64::INFINITY, Some(k), None)
+                    .is_none()
+            );
             assert!(!m.occluded(x, n, 0.0, f64::INFINITY, Some(k)));
             // t_max just before / after the hit.
-            assert!(m.first_hit(x, -n, 0.0, t * 0.999, Some(k)).is_none());
+            assert!(m.first_hit(x, -n, 0.0, t * 0.999, Some(k), None).is_none());
             assert!(!m.occluded(x, -n, 0.0, t * 0.999, Some(k)));
             assert!(m.occluded(x, -n, 0.0, t * 1.001, Some(k)));
-            assert_eq!(m.first_hit(x, -n, 0.0, t * 1.001, Some(k)).unwrap().2, j);
+            assert_eq!(
+                m.first_hit(x, -n, 0.0, t * 1.001, Some(k), None).unwrap().2,
+                j
+            );
             // t_min beyond the first hit: the next one (or none), never an earlier one.
-            if let Some((t2, _, j2)) = m.first_hit(x, -n, t * 1.001, f64::INFINITY, Some(k)) {
+            if let Some((t2, _, j2)) = m.first_hit(x, -n, t * 1.001, f64::INFINITY, Some(k), None) {
                 assert!(t2 > t * 1.001 && j2 != j);
             }
             // From the far side, the hit on k is found unless skipped.
             let y = x - 0.5 * t * n;
-            let (s, _, i) = m.first_hit(y, n, 0.0, f64::INFINITY, None).unwrap();
+            let (s, _, i) = m.first_hit(y, n, 0.0, f64::INFINITY, None, None).unwrap();
             if i == k {
                 assert!((s - 0.5 * t).abs() < 1e-9);
                 assert!(
-                    m.first_hit(y, n, 0.0, f64::INFINITY, Some(k))
+                    m.first_hit(y, n, 0.0, f64::INFINITY, Some(k), None)
                         .is_none_or(|h| h.2 != k)
                 );
             }
@@ -1110,7 +1126,7 @@ mod tests {
                     continue; // grazing the silhouette or reaching the far side
                 }
                 let dist = (p - o).length();
-                let hit = m.first_hit(o, d, 0.0, f64::INFINITY, None);
+                let hit = m.first_hit(o, d, 0.0, f64::INFINITY, None, None);
                 assert!(hit.is_some(), "leak: o {o} towards {p}");
                 let (t, _, _) = hit.unwrap();
                 assert!(
@@ -1159,7 +1175,7 @@ mod tests {
             DVec3::new(0.0, 1.0, -0.5),
         ] {
             let (t, _, _) = c
-                .first_hit(DVec3::ZERO, d.normalize(), 0.0, f64::INFINITY, None)
+                .first_hit(DVec3::ZERO, d.normalize(), 0.0, f64::INFINITY, None, None)
                 .unwrap();
             assert!((t - d.length() / d.abs().max_element()).abs() < 1e-15);
             n += 1;
@@ -1200,7 +1216,7 @@ mod tests {
             .collect();
         let reference: Vec<_> = rays
             .iter()
-            .map(|&(o, d)| base.first_hit(o, d, 0.0, f64::INFINITY, None))
+            .map(|&(o, d)| base.first_hit(o, d, 0.0, f64::INFINITY, None, None))
             .collect();
         let r = rotation();
         for scale in [1e-3, 1.0, 1e4] {
@@ -1211,7 +1227,7 @@ mod tests {
             assert!((hi - lo).max_element() < 3.0 * scale);
             for (i, (&(o, d), &want)) in rays.iter().zip(&reference).enumerate() {
                 let (o2, d2) = (shift + scale * (r * o), r * d);
-                let got = m.first_hit(o2, d2, 0.0, f64::INFINITY, None);
+                let got = m.first_hit(o2, d2, 0.0, f64::INFINITY, None, None);
                 match (want, got) {
                     (None, None) => {}
                     (Some((t, n, k)), Some((t2, n2, k2))) => {
@@ -1470,6 +1486,7 @@ f 9
                 0.0,
                 f64::INFINITY,
                 None,
+                None,
             )
             .unwrap();
         assert_eq!((t, n), (1.0, -DVec3::Z));
@@ -1618,7 +1635,7 @@ f 9
             })
             .collect();
         let first =
-            |&(o, d): &(DVec3, DVec3)| m.first_hit(o, d, 0.0, f64::INFINITY, None).is_some();
+            |&(o, d): &(DVec3, DVec3)| m.first_hit(o, d, 0.0, f64::INFINITY, None, None).is_some();
         let any = |&(o, d): &(DVec3, DVec3)| m.occluded(o, d, 0.0, f64::INFINITY, None);
         for (name, rays) in [("inside", &inside), ("outside", &outside)] {
             let w = std::time::Instant::now();

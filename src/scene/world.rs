@@ -108,6 +108,28 @@ impl Sides {
             }
         }
     }
+
+    /// Whether light arriving along `d` at a point with geometric normal
+    /// `ng` meets a reflecting side (not the black one).
+    #[inline]
+    pub fn lit(self, ng: DVec3, d: DVec3) -> bool {
+        match self {
+            Sides::Front => d.dot(ng) < 0.0,
+            Sides::Back => d.dot(ng) > 0.0,
+            Sides::Both => true,
+        }
+    }
+
+    /// The winding a one-sided mesh reflects on: `Some(true)` the front
+    /// (`d . ng < 0`), `Some(false)` the back, `None` both.
+    #[inline]
+    pub fn front(self) -> Option<bool> {
+        match self {
+            Sides::Front => Some(true),
+            Sides::Back => Some(false),
+            Sides::Both => None,
+        }
+    }
 }
 
 /// The shape of a surface: an index into the scene's list of that kind.
@@ -1225,6 +1247,7 @@ impl Scene {
                     key: i as u32,
                     surface: s,
                     prim: 0,
+                    lit: self.surfaces[s as usize].sides.lit(pl.n, ray.d),
                 };
                 acc.plane(c);
             }
@@ -1327,11 +1350,12 @@ impl Scene {
         let on = |s: u32| matches!(start, Start::On(x, _) if x == s);
         let observer = matches!(start, Start::Observer);
         let emits = |s: u32| self.surfaces[s as usize].emitter.is_some();
-        let cand = |t, surface, prim| Cand {
+        let cand = |t, surface: u32, prim, ng: DVec3| Cand {
             t,
             key,
             surface,
             prim,
+            lit: self.surfaces[surface as usize].sides.lit(ng, ray.d),
         };
         match p {
             Prim::Rect(i) => {
@@ -1340,7 +1364,7 @@ impl Scene {
                     return;
                 }
                 if let Some(t) = r.intersect(ray, acc.bound) {
-                    acc.flat(cand(t, *s, 0), emits(*s));
+                    acc.flat(cand(t, *s, 0, r.plane.n), emits(*s));
                 }
             }
             Prim::Disc(i) => {
@@ -1349,14 +1373,14 @@ impl Scene {
                     return;
                 }
                 if let Some(t) = dc.intersect(ray, acc.bound) {
-                    acc.flat(cand(t, *s, 0), emits(*s));
+                    acc.flat(cand(t, *s, 0, dc.plane.n), emits(*s));
                 }
             }
             Prim::Sphere(i) => {
                 let (sp, s) = &self.spheres[i as usize];
                 let leaving = on(*s) || (observer && sp.classify(ray.o) == Inside::On);
                 if let Some(t) = sp.intersect(ray, acc.bound, leaving) {
-                    acc.solid(cand(t, *s, 0));
+                    acc.solid(cand(t, *s, 0, ray.o + t * ray.d - sp.c));
                 }
             }
             Prim::Box(i) => {
@@ -1369,7 +1393,7 @@ impl Scene {
                     _ => None,
                 };
                 if let Some((t, f)) = b.intersect(ray, acc.bound, leaving) {
-                    acc.solid(cand(t, s0 + f as u32, 0));
+                    acc.solid(cand(t, s0 + f as u32, 0, AaBox::outward_normal(f)));
                 }
             }
             Prim::Mesh(i) => {
@@ -1385,8 +1409,10 @@ impl Scene {
                     Start::On(u32::MAX, _) => (0.0, None),
                     Start::On(..) | Start::Observer => (near, None),
                 };
-                if let Some((t, _, tri)) = m.first_hit(ray.o, ray.d, t_min, acc.bound, skip) {
-                    acc.solid(cand(t, *s, tri));
+                let front = self.surfaces[*s as usize].sides.front();
+                if let Some((t, ng, tri)) = m.first_hit(ray.o, ray.d, t_min, acc.bound, skip, front)
+                {
+                    acc.solid(cand(t, *s, tri, ng));
                 }
             }
             // Tested after the others, in index order (see `nearest`).

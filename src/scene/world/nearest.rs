@@ -27,6 +27,20 @@
 //!   half the time: the rug read 12 % dark, the door 21 %, and a door in a
 //!   wall plane lost every tie to the plane, 0 lx.)
 //!
+//! **Facing.** Two surfaces can coincide back to back (a thin panel given
+//! as two one-sided rectangles, or as two triangles of opposite winding, as
+//! exporters write "double-sided" faces): the ray must meet the one whose
+//! reflecting side faces it, not its black back. So every hit records
+//! whether the side the ray arrives at reflects ([`Cand::lit`],
+//! [`super::Sides::lit`]): in a class, equal `t` goes first to the lit hit
+//! (then to the smaller key). (The first listed of two such rectangles used
+//! to win every tie: behind it, 0 lx of reflected light.) Within one mesh,
+//! the triangle facing the ray wins near ties
+//! ([`crate::geometry::mesh::Mesh::first_hit`]). Across classes the rules
+//! above stand, black side or not: a surface set onto another covers it (a
+//! panel luminaire facing into the ceiling hides the ceiling behind its
+//! black back).
+//!
 //! (The loops this replaced applied the same thresholds in list order; they
 //! agree except where two emitters, or an emitter and two other flat
 //! surfaces, lie within 1e-9 of each other along the ray.) SH objects come
@@ -52,6 +66,9 @@ pub(super) struct Cand {
     pub(super) key: u32,
     pub(super) surface: u32,
     pub(super) prim: u32,
+    /// Whether the side of the surface the ray arrives at reflects (or
+    /// emits): see the module docs, "Facing".
+    pub(super) lit: bool,
 }
 
 const NONE: Cand = Cand {
@@ -59,13 +76,19 @@ const NONE: Cand = Cand {
     key: u32::MAX,
     surface: u32::MAX,
     prim: 0,
+    lit: false,
 };
 
 impl Cand {
-    /// Whether `self` is nearer than `other`, ties to the smaller key.
+    /// Whether `self` is nearer than `other`; equal `t` to the lit one, then
+    /// to the smaller key (a total order: the answer does not depend on the
+    /// order of the offers).
     #[inline(always)]
     fn before(&self, other: &Cand) -> bool {
-        self.t < other.t || (self.t == other.t && self.key < other.key)
+        self.t < other.t
+            || (self.t == other.t
+                && (self.lit, std::cmp::Reverse(self.key))
+                    > (other.lit, std::cmp::Reverse(other.key)))
     }
 }
 
@@ -164,6 +187,7 @@ mod tests {
             key,
             surface: key,
             prim: 0,
+            lit: true,
         }
     }
 
@@ -233,6 +257,47 @@ mod tests {
                         1 => acc.flat(c(t, key), true),
                         2 => acc.solid(c(t, key)),
                         _ => acc.plane(c(t, key)),
+                    }
+                }
+                let got = acc.resolve().map(|(h, _)| h.key);
+                assert_eq!(got, want, "{hits:?} in order {p:?}");
+            }
+        }
+    }
+
+    /// Of hits at equal `t` in a class, the one whose reflecting side faces
+    /// the ray; across classes the rules above; in every order.
+    #[test]
+    fn a_lit_side_wins_a_tie_in_its_class() {
+        let tie = 0.5 * COINCIDENT_TIE;
+        // (t, key, class as above, lit), expected winner key.
+        type Hits = Vec<(f64, u32, u8, bool)>;
+        let cases: Vec<(Hits, Option<u32>)> = vec![
+            // Equal t in a class: the lit one, whatever the keys.
+            (vec![(1.0, 4, 0, false), (1.0, 7, 0, true)], Some(7)),
+            (vec![(1.0, 20, 2, false), (1.0, 21, 2, true)], Some(21)),
+            (vec![(1.0, 1, 3, false), (1.0, 0, 3, true)], Some(0)),
+            // Unequal t in a class: the nearer, lit or not.
+            (vec![(1.0, 4, 0, false), (1.0 + tie, 7, 0, true)], Some(4)),
+            // Across classes the rules stand: the surface set onto the
+            // other covers it, black side or not.
+            (vec![(1.0, 0, 3, true), (1.0 + tie, 5, 0, false)], Some(5)),
+            (vec![(1.0, 2, 0, false), (1.0 - tie, 20, 2, true)], Some(2)),
+            (vec![(1.0, 2, 0, true), (1.0, 9, 1, false)], Some(9)),
+            // Both black: the rules as before.
+            (vec![(1.0, 0, 3, false), (1.0 + tie, 5, 0, false)], Some(5)),
+        ];
+        for (hits, want) in cases {
+            for p in permutations(hits.len()) {
+                let mut acc = Nearest::new();
+                for &i in &p {
+                    let (t, key, class, lit) = hits[i];
+                    let h = Cand { lit, ..c(t, key) };
+                    match class {
+                        0 => acc.flat(h, false),
+                        1 => acc.flat(h, true),
+                        2 => acc.solid(h),
+                        _ => acc.plane(h),
                     }
                 }
                 let got = acc.resolve().map(|(h, _)| h.key);
