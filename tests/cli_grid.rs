@@ -241,3 +241,36 @@ fn grid_writes_points_and_illuminance_writes_figures() {
     assert!(!out.status.success());
     assert!(err.contains("plain.csv:3: field `area`"), "{err}");
 }
+
+/// `lumest grid --out` onto a file the scene names (a mesh) is refused and
+/// leaves it as it was: the scene's own file was the only one checked, and
+/// `--out pendant.ies` replaced the luminaire with the points.
+#[test]
+fn grid_never_writes_over_a_file_the_scene_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = "v 1 1 0\nv 2 1 0\nv 1 2 0\nv 1 1 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    std::fs::write(dir.path().join("m.obj"), obj).unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "{SCENE}\n[[surface]]\ntype = \"mesh\"\nname = \"block\"\nfile = \"m.obj\"\n\
+             material = {{ type = \"lambertian\", reflectance = 0.5 }}\n"
+        ),
+    )
+    .unwrap();
+    let out = lumest()
+        .args(["grid", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.path().join("m.obj"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(err.contains("would overwrite the input"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("m.obj")).unwrap(),
+        obj
+    );
+}

@@ -73,7 +73,12 @@ pub fn describe(g: &Grid) -> String {
 
 /// Run `lumest grid`.
 pub fn grid(a: &GridArgs) -> anyhow::Result<()> {
-    check_outputs(&[a.scene.as_path()], &[("--out", Path::new(&a.out))])?;
+    // The scene and every file it names (photometric files, meshes, SH
+    // coefficients): `--out pendant.ies` used to replace the luminaire.
+    let referenced = crate::scene::referenced_files(&a.scene);
+    let mut inputs = vec![a.scene.as_path()];
+    inputs.extend(referenced.iter().map(|p| p.as_path()));
+    check_outputs(&inputs, &[("--out", Path::new(&a.out))])?;
     // The scene must compile: a grid on a scene that does not is no use.
     crate::scene::load(&a.scene)?;
     let mut grids = crate::grid::load(&a.scene)?;

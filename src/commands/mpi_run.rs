@@ -27,10 +27,10 @@ pub fn run(a: &IlluminanceArgs) -> anyhow::Result<()> {
     // so that a refused output stops every rank rather than leaving them
     // waiting in the gather.
     let check = if rank == 0 {
-        super::outputs::check_outputs(
-            &[a.scene.as_path(), std::path::Path::new(&a.points)],
-            &[("--out", std::path::Path::new(&a.out))],
-        )
+        let referenced = crate::scene::referenced_files(&a.scene);
+        let mut inputs = vec![a.scene.as_path(), std::path::Path::new(&a.points)];
+        inputs.extend(referenced.iter().map(|p| p.as_path()));
+        super::outputs::check_outputs(&inputs, &[("--out", std::path::Path::new(&a.out))])
     } else {
         Ok(())
     };
