@@ -214,6 +214,10 @@ fn scene_cases() -> Vec<Case> {
         scene_rep("flux negative", "intensity = 100.0", "flux = -5.0", Error("field `flux`")),
         scene_rep("position with two numbers", "position = [0, 0, 2.5]", "position = [0, 2.5]", Error("s.toml:")),
         scene_rep("position with four numbers", "position = [0, 0, 2.5]", "position = [0, 0, 2.5, 1]", Error("s.toml:")),
+        // A decimal comma (`1,2` for 1.2) in an observer's or a grid's vector:
+        // these were plain arrays, which dropped the extra number.
+        scene_add("observer eye with four numbers (a decimal comma)", "[[observer]]\neye = [0.6, 1.4, 1,2]\nview = [1, 0, 0]\n", Error("invalid length 4, expected an array of 3 numbers")),
+        scene_add("grid corner with four numbers (a decimal comma)", "[[grid]]\nname = \"g\"\ncorner = [-1, -1, 0,75]\nedge1 = [2, 0, 0]\nedge2 = [0, 2, 0]\n", Error("invalid length 4, expected an array of 3 numbers")),
         scene_rep("position as a string", "position = [0, 0, 2.5]", "position = \"0 0 2.5\"", Error("s.toml:")),
         scene_rep("position with a nan", "position = [0, 0, 2.5]", "position = [0, nan, 2.5]", Error("field `position`: every component must be finite")),
         scene_rep("position 1e13 m", "position = [0, 0, 2.5]", "position = [1e13, 0, 2.5]", Error("field `position`: every component must lie within")),
@@ -266,7 +270,8 @@ fn scene_cases() -> Vec<Case> {
         surface("glass pane out of the way", "rectangle", "corner = [10, 10, 3]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nmaterial = { type = \"glass\", transmittance = 0.8 }", Accept("E_avg")),
         surface("plane: normal zero", "plane", &format!("point = [0, 0, 0]\nnormal = [0, 0, 0]\n{LAMB}"), Error("field `normal`: direction must have a non-zero length")),
         surface("plane: normal with nan", "plane", &format!("point = [0, 0, 0]\nnormal = [nan, 0, 1]\n{LAMB}"), Error("field `normal`")),
-        surface("plane: normal 1e-320 (denormal)", "plane", &format!("point = [0, 0, 0]\nnormal = [0, 0, 1e-320]\n{LAMB}"), Error("field `normal`: direction must have a non-zero length")),
+        // (Any non-zero length is a direction: scaled before it is normalised.)
+        surface("plane: normal 1e-320 (denormal)", "plane", &format!("point = [0, 0, 0]\nnormal = [0, 0, 1e-320]\n{LAMB}"), Accept("E_avg")),
         surface("plane: point missing", "plane", &format!("normal = [0, 0, 1]\n{LAMB}"), Error("field `point`: missing field")),
         surface("plane: normal missing", "plane", &format!("point = [0, 0, 0]\n{LAMB}"), Error("field `normal`: missing field")),
         surface("plane: with a radius", "plane", &format!("point = [0, 0, 0]\nnormal = [0, 0, 1]\nradius = 1\n{LAMB}"), Error("field `radius`: not allowed")),
@@ -284,7 +289,8 @@ fn scene_cases() -> Vec<Case> {
         surface("rectangle: with a radius", "rectangle", &format!("corner = [0, 0, 1]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nradius = 2\n{LAMB}"), Error("field `radius`: not allowed")),
         surface("rectangle: corner inf", "rectangle", &format!("corner = [inf, 0, 1]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\n{LAMB}"), Error("field `corner`")),
         surface("rectangle: 1e-12 m wide", "rectangle", &format!("corner = [0, 0, 1]\nedge1 = [1e-12, 0, 0]\nedge2 = [0, 1, 0]\n{LAMB}"), Accept("E_avg")),
-        surface("rectangle: edges 1e11 m", "rectangle", &format!("corner = [0, 0, 1]\nedge1 = [1e11, 0, 0]\nedge2 = [0, 1e11, 0]\n{LAMB}"), Flag("enclosed")),
+        surface("rectangle: edges 1e11 m", "rectangle", &format!("corner = [0, 0, 1]\nedge1 = [1e11, 0, 0]\nedge2 = [0, 1e11, 0]\n{LAMB}"), Error("field `edge1`: every component must lie within +-1e8")),
+        surface("rectangle: 2e8 m from the origin", "rectangle", &format!("corner = [2e8, 0, 1]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\n{LAMB}"), Error("field `corner`: every component must lie within +-1e8")),
         // Disc.
         surface("disc: radius 0", "disc", &format!("center = [0, 0, 1]\nnormal = [0, 0, 1]\nradius = 0\n{LAMB}"), Error("field `radius`")),
         surface("disc: radius negative", "disc", &format!("center = [0, 0, 1]\nnormal = [0, 0, 1]\nradius = -1\n{LAMB}"), Error("field `radius`")),
@@ -580,10 +586,22 @@ fn points_cases() -> Vec<Case> {
             "id,x,y,z,nx,ny,nz\na,0,0,0.75,0,0,0\n",
             Error("p.csv:2"),
         ),
+        // Any non-zero length is a direction, whose square may leave the
+        // range of f64 (1e200 read "zero length", 1e-160 "not finite").
+        points(
+            "normal 1e200",
+            "id,x,y,z,nx,ny,nz\na,0,0,0.75,0,0,1e200\n",
+            Accept("E_avg"),
+        ),
+        points(
+            "normal 1e-160",
+            "id,x,y,z,nx,ny,nz\na,0,0,0.75,0,0,1e-160\n",
+            Accept("E_avg"),
+        ),
         points(
             "normal 1e-320 (denormal)",
             "id,x,y,z,nx,ny,nz\na,0,0,0.75,0,0,1e-320\n",
-            Error("p.csv:2: field `nx,ny,nz`: the normal has zero length"),
+            Accept("E_avg"),
         ),
         points(
             "error on line 5 after a comment and a blank line",
@@ -1356,6 +1374,18 @@ fn cli_cases() -> Vec<Case> {
             "--fan-at zero normal",
             "--fan-at 0,0,0,0,0,0 --fan 10,10",
             Error("--fan-at: the normal has zero length"),
+        ),
+        // A normal of 1e200 gave a zero vector (its square overflowed):
+        // every view horizontal, L = 0, flagged ok.
+        lum(
+            "--fan-at normal 1e200",
+            "--fan-at 0,0,0.5,0,0,1e200 --fan 30,90",
+            Accept("12 rows written"),
+        ),
+        lum(
+            "--fan-at point 1e300",
+            "--fan-at 0,0,1e300,0,0,1 --fan 30,90",
+            Error("--fan-at: the point must lie within"),
         ),
         lum(
             "--fan-at nan",

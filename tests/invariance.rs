@@ -1,6 +1,8 @@
 //! The engine knows no preferred axis, scale or number of lights: a rotated,
 //! shifted and rescaled Sobolev scene with two lights (flux-specified), read
-//! from a scene file, must match the exact solution by superposition.
+//! from a scene file, must match the exact solution by superposition; also
+//! shifted to 0.9 times the largest accepted coordinate (at 3e10 m, within
+//! the bound before, the direct light was lost).
 
 use glam::DVec3;
 use lumest::estimator::Receivers;
@@ -15,11 +17,18 @@ fn rotated_scaled_two_light_scene_matches_superposed_exact_solution() {
     let mut worst: f64 = 0.0;
     let mut m = 0;
     let mut batches = u64::MAX;
-    for (k, scale) in [1e-3, 1.0, 1e4].into_iter().enumerate() {
+    let far = DVec3::new(0.9, -0.6, 0.3) * lumest::scene::MAX_COORD;
+    let cases = [
+        (1e-3, DVec3::ZERO),
+        (1.0, DVec3::ZERO),
+        (1e4, DVec3::ZERO),
+        (1.0, far),
+    ];
+    for (k, (scale, shift)) in cases.into_iter().enumerate() {
         // Plane 1 through `o` with normal `u`; plane 2 at distance H = 1 * scale.
         let u = DVec3::new(0.3, -0.5, 0.8).normalize();
         let e1 = u.any_orthonormal_vector();
-        let o = DVec3::new(2.0, -1.0, 0.5) * scale;
+        let o = DVec3::new(2.0, -1.0, 0.5) * scale + shift;
         let (h1, h) = (0.4 * scale, 1.0 * scale);
         let (i1, i2) = (1.0, 2.5);
         let l1 = o + u * h1;

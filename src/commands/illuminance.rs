@@ -1528,14 +1528,15 @@ pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
             "--fan {steps}: {nt} x {np} = {} views; at most {MAX_VIEWS} (take larger steps)",
             nt * np
         );
-        let n = glam::DVec3::new(v[3], v[4], v[5]);
-        anyhow::ensure!(n.length() > 0.0, "--fan-at: the normal has zero length");
-        let table = fan_views(
-            glam::DVec3::new(v[0], v[1], v[2]),
-            n.normalize(),
-            st[0],
-            st[1],
+        let at = glam::DVec3::new(v[0], v[1], v[2]);
+        anyhow::ensure!(
+            at.abs().max_element() <= crate::scene::MAX_COORD,
+            "--fan-at: the point must lie within +-{:e} m",
+            crate::scene::MAX_COORD
         );
+        let n = crate::geometry::unit_direction(glam::DVec3::new(v[3], v[4], v[5]))
+            .ok_or_else(|| anyhow::anyhow!("--fan-at: the normal has zero length"))?;
+        let table = fan_views(at, n, st[0], st[1]);
         let (job, result) = measure_with(
             &a.scene,
             points,

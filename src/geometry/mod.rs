@@ -139,6 +139,28 @@ impl SideMask {
     }
 }
 
+/// The unit vector along `v` \[any unit\], or `None` where `v` is zero or
+/// not finite. Lengths whose square leaves the `f64` range (1e-170, 1e200)
+/// are scaled by the largest component first, so they give their direction
+/// rather than a zero or NaN vector; others are normalised as they are
+/// (`v.normalize()`, the same bits).
+pub fn unit_direction(v: DVec3) -> Option<DVec3> {
+    if !v.is_finite() {
+        return None;
+    }
+    let len = v.length();
+    let u = if (1e-150..1e150).contains(&len) {
+        v.normalize()
+    } else {
+        let m = v.abs().max_element();
+        if m == 0.0 {
+            return None;
+        }
+        (v / m).normalize()
+    };
+    u.is_finite().then_some(u)
+}
+
 /// Whether the closed segment from `a` to `b` meets the box `[lo, hi]`
 /// (the slab test over `t` in `[0, 1]`).
 pub fn segment_meets_box(a: DVec3, b: DVec3, lo: DVec3, hi: DVec3) -> bool {
@@ -161,6 +183,22 @@ pub fn segment_meets_box(a: DVec3, b: DVec3, lo: DVec3, hi: DVec3) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Any non-zero finite length gives its direction, with the bits of
+    /// `normalize` in the ordinary range; zero and non-finite give `None`.
+    #[test]
+    fn unit_direction_of_any_length() {
+        let d = DVec3::new(0.3, -1.2, 0.7);
+        assert_eq!(unit_direction(d), Some(d.normalize()));
+        for s in [1e-300, 1e-170, 1e160, 1e300] {
+            let u = unit_direction(d * s).unwrap();
+            assert!((u - d.normalize()).length() < 1e-15, "{s}: {u}");
+        }
+        assert_eq!(unit_direction(DVec3::new(0.0, 0.0, 1e-320)), Some(DVec3::Z));
+        assert_eq!(unit_direction(DVec3::ZERO), None);
+        assert_eq!(unit_direction(DVec3::new(f64::INFINITY, 0.0, 0.0)), None);
+        assert_eq!(unit_direction(DVec3::new(f64::NAN, 0.0, 1.0)), None);
+    }
 
     #[test]
     fn plane_intersection_and_sides() {

@@ -45,8 +45,8 @@ pub fn scene_observers(path: &Path) -> Result<ViewTable, SceneError> {
     };
     for (k, o) in desc.observer.iter().enumerate() {
         let o = o.get_ref();
-        let eye = DVec3::from_array(*o.eye.get_ref());
-        let view = DVec3::from_array(*o.view.get_ref());
+        let eye = DVec3::from_array(o.eye.get_ref().0);
+        let view = DVec3::from_array(o.view.get_ref().0);
         if !eye.is_finite() {
             return Err(invalid(o.eye.span(), "eye", "must be finite [m]"));
         }

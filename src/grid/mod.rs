@@ -234,7 +234,7 @@ fn compile(scene: &SceneDesc, g: &GridDesc, ctx: &SourceCtx) -> Result<Grid, Sce
     // columns), not the grid's normal.
     match (&g.facing, receiver.as_str()) {
         (Some(f), "semicylindrical") => {
-            let d = DVec3::from_array(*f.get_ref());
+            let d = DVec3::from_array(f.get_ref().0);
             let h = DVec3::new(d.x, d.y, 0.0);
             if !(d.is_finite() && h.length() > 0.0 && d.z.abs() <= 1e-9 * d.length()) {
                 return Err(invalid(

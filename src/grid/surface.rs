@@ -71,14 +71,14 @@ impl Patch {
 /// A rectangle from `corner`, `edge1`, `edge2` (perpendicular, non-zero),
 /// facing `edge1 x edge2`.
 fn rectangle(
-    corner: &Spanned<[f64; 3]>,
-    e1: &Spanned<[f64; 3]>,
-    e2: &Spanned<[f64; 3]>,
+    corner: &Spanned<crate::scene::desc::Vec3>,
+    e1: &Spanned<crate::scene::desc::Vec3>,
+    e2: &Spanned<crate::scene::desc::Vec3>,
     flip: bool,
     ctx: &SourceCtx,
 ) -> Result<Patch, SceneError> {
-    let c = DVec3::from(*corner.get_ref());
-    let (u, v) = (DVec3::from(*e1.get_ref()), DVec3::from(*e2.get_ref()));
+    let c = DVec3::from(corner.get_ref().0);
+    let (u, v) = (DVec3::from(e1.get_ref().0), DVec3::from(e2.get_ref().0));
     for (w, s, f) in [(c, corner, "corner"), (u, e1, "edge1"), (v, e2, "edge2")] {
         if !w.is_finite() {
             return Err(invalid(ctx, s.span(), f, "must be finite"));
@@ -173,10 +173,8 @@ pub(super) fn patch_of_surface(
     if let Some(s) = found.first() {
         return match s.kind.get_ref().as_str() {
             "rectangle" => {
-                // A surface's vectors as the grid's plain arrays.
                 let field = |v: &Option<Spanned<crate::scene::desc::Vec3>>, f: &str| {
-                    v.as_ref()
-                        .map(|x| Spanned::new(x.span(), x.get_ref().0))
+                    v.clone()
                         .ok_or_else(|| err(format!("rectangle `{wanted}` has no `{f}`")))
                 };
                 let flip = s.sides.as_ref().is_some_and(|x| x.get_ref() == "back");

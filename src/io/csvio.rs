@@ -313,25 +313,23 @@ fn rays_of(
                     line,
                     field: name.to_string(),
                     message: format!(
-                        "must lie within +-{:e} m (lengths are squared, and scores taken to the \
-                         fourth power), got {}",
+                        "must lie within +-{:e} m (the geometry is resolved to 1e-11 of the \
+                         coordinates; re-centre the scene and points), got {}",
                         crate::scene::MAX_COORD,
                         format_number(v[k])
                     ),
                 });
             }
         }
-        let d = DVec3::new(v[3], v[4], v[5]);
-        let len = d.length();
-        if !(len > 0.0 && len.is_finite()) {
+        let Some(d) = crate::geometry::unit_direction(DVec3::new(v[3], v[4], v[5])) else {
             return Err(InputError::Field {
                 file: display_name(path),
                 line,
                 field: names[3..].join(","),
                 message: format!("the {what_dir} has zero length"),
             });
-        }
-        rays.push((DVec3::new(v[0], v[1], v[2]), d / len));
+        };
+        rays.push((DVec3::new(v[0], v[1], v[2]), d));
     }
     if rays.is_empty() {
         return Err(InputError::File {

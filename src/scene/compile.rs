@@ -88,7 +88,8 @@ impl SourceCtx<'_> {
                 v.span(),
                 field,
                 format!(
-                    "every component must lie within +-{MAX_COORD:e} m, got {}",
+                    "every component must lie within +-{MAX_COORD:e} (the geometry is resolved to \
+                     1e-11 of the coordinates; re-centre the scene), got {}",
                     triple(a)
                 ),
             ));
@@ -98,11 +99,8 @@ impl SourceCtx<'_> {
 
     fn unit_vec(&self, v: &Spanned<Vec3>, field: &str) -> Result<DVec3, SceneError> {
         let d = self.finite_vec(v, field)?;
-        let n = d.normalize_or_zero();
-        if n == DVec3::ZERO || !n.is_finite() {
-            return Err(self.invalid(v.span(), field, "direction must have a non-zero length"));
-        }
-        Ok(n)
+        crate::geometry::unit_direction(d)
+            .ok_or_else(|| self.invalid(v.span(), field, "direction must have a non-zero length"))
     }
 
     fn nonneg(&self, v: &Spanned<f64>, field: &str) -> Result<f64, SceneError> {

@@ -58,9 +58,9 @@ pub struct ObserverDesc {
     /// A name, written to the `name` column; default `observer N`.
     pub name: Option<Spanned<String>>,
     /// Eye position \[m\].
-    pub eye: Spanned<[f64; 3]>,
+    pub eye: Spanned<Vec3>,
     /// Line of sight (any length > 0, not vertical).
-    pub view: Spanned<[f64; 3]>,
+    pub view: Spanned<Vec3>,
 }
 
 /// One `[[portal]]` table: a parallelogram whose normal `edge1 x edge2`
@@ -296,11 +296,11 @@ pub struct GridDesc {
     /// face (`x_min` .. `z_max`); exclusive with `corner`.
     pub surface: Option<Spanned<String>>,
     /// Corner of the grid's rectangle \[m\].
-    pub corner: Option<Spanned<[f64; 3]>>,
+    pub corner: Option<Spanned<Vec3>>,
     /// First edge \[m\] (a road field: along the road, between two luminaires).
-    pub edge1: Option<Spanned<[f64; 3]>>,
+    pub edge1: Option<Spanned<Vec3>>,
     /// Second edge \[m\], perpendicular to `edge1`; the points face `edge1 x edge2`.
-    pub edge2: Option<Spanned<[f64; 3]>>,
+    pub edge2: Option<Spanned<Vec3>>,
     /// Shift of the points along the grid's normal \[m\]; default 0.
     pub offset: Option<Spanned<f64>>,
     /// Largest cell side \[m\]; default: the EN 12464-1 rule.
@@ -313,7 +313,7 @@ pub struct GridDesc {
     pub receiver: Option<Spanned<String>>,
     /// Horizontal facing direction of `semicylindrical` points (required
     /// for them, refused otherwise); written to the normal columns.
-    pub facing: Option<Spanned<[f64; 3]>>,
+    pub facing: Option<Spanned<Vec3>>,
     /// Required maintained average illuminance \[lx\].
     pub em: Option<Spanned<f64>>,
     /// Required uniformity `U0 = E_min / E_avg` (dimensionless).

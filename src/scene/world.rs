@@ -42,9 +42,16 @@ use glam::DVec3;
 use nearest::{Cand, Nearest};
 use shape_tree::ShapeTree;
 
-/// Largest accepted coordinate magnitude \[m\]: squares of lengths and of
-/// scores (the variance of the variance takes fourth powers) stay finite.
-pub const MAX_COORD: f64 = 1e12;
+/// Largest accepted coordinate magnitude \[m\] (also of a vector's
+/// components). Where a point lies on a surface is decided to
+/// `ON_PLANE_REL` (1e-11, `geometry`) of the coordinates' magnitude,
+/// 2 mm here, so the geometry of a room is resolved anywhere within it (a
+/// site's UTM coordinates fit); at 1e12 m, the bound before, a floor point
+/// 1 m below a ceiling counted as on the ceiling (0 lx, flagged ok), and
+/// at 3e10 m the direct light was lost. (Squares of lengths and fourth
+/// powers of scores stay finite far beyond.) Re-centre a scene given in
+/// larger coordinates.
+pub const MAX_COORD: f64 = 1e8;
 
 /// Largest accepted intensity \[cd\] (or luminance [cd/m^2]): results scale
 /// exactly with it, and beyond it the fourth powers of scores in the
