@@ -431,6 +431,65 @@ fn sh_fit_writes_coefficients_and_reports_the_fit() {
     );
 }
 
+/// A mesh that is not star-shaped about the centre (a ball with a second
+/// ball beside it, in one OBJ) is refused: the fit kept the first hit of
+/// each ray, dropped the second ball and reported a small error measured
+/// on the same first hits. A degree whose least-squares arrays exceed 4 GB
+/// is refused before they are allocated (--degree 100 aborted at 50 GB).
+#[test]
+fn sh_fit_refuses_what_r_theta_phi_cannot_describe() {
+    let dir = tempfile::tempdir().unwrap();
+    let ball = star_blob(20, 40, |_: f64, _: f64| 1.0).unwrap();
+    let mut text = String::new();
+    for shift in [0.0, 3.0] {
+        for v in ball.vertices() {
+            text += &format!("v {} {} {}\n", v.x + shift, v.y, v.z);
+        }
+    }
+    let n = ball.vertices().len();
+    for k in 0..2 {
+        for tri in ball.triangles() {
+            let ids = tri.map(|i| i as usize + 1 + k * n);
+            text += &format!("f {} {} {}\n", ids[0], ids[1], ids[2]);
+        }
+    }
+    let obj = dir.path().join("two.obj");
+    std::fs::write(&obj, text).unwrap();
+    let out = dir.path().join("c.csv");
+    let fit = |obj: &Path, degree: &str| {
+        lumest()
+            .args([
+                "sh-fit",
+                obj.to_str().unwrap(),
+                "--degree",
+                degree,
+                "--center",
+                "0,0,0",
+            ])
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    let o = fit(&obj, "4");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("not star-shaped"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    // One ball alone fits; at degree 100 it is refused by its size.
+    let one = dir.path().join("one.obj");
+    ball.write_obj(&one).unwrap();
+    assert!(fit(&one, "4").status.success());
+    let o = fit(&one, "100");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("GB for the least-squares fit"),
+        "{err}"
+    );
+}
+
 #[test]
 fn overflowing_light_power_is_a_clear_error() {
     let e = parse(

@@ -54,6 +54,9 @@ pub struct ShFitArgs {
 /// Most sample directions `--samples` may ask for.
 pub const MAX_SAMPLES: usize = 2_000_000;
 
+/// Most bytes the least-squares fit may take (see [`sh_fit`]): 4 GB.
+const MAX_FIT_BYTES: f64 = 4e9;
+
 /// Volume centroid of a closed mesh (divergence theorem); the bounding-box
 /// centre when the enclosed volume is (nearly) zero.
 pub fn volume_centroid(mesh: &Mesh) -> DVec3 {
@@ -73,19 +76,38 @@ pub fn volume_centroid(mesh: &Mesh) -> DVec3 {
     }
 }
 
-/// Distance from `center` to the mesh along each unit direction (the first
-/// hit; errors if a ray misses: the mesh is not closed around the centre).
+/// Distance from `center` to the mesh along each unit direction: its one
+/// hit. Errors if a ray misses (the mesh is not closed around the centre)
+/// or meets the mesh again beyond its first hit (it is not star-shaped
+/// about the centre: `r(theta, phi)` would keep the nearer surface and drop
+/// the rest, a ring around a ball or the far arm of a U, and the fit error
+/// measured on the same first hits would not show it).
 fn radii(mesh: &Mesh, center: DVec3, dirs: &[DVec3]) -> anyhow::Result<Vec<f64>> {
     dirs.iter()
         .map(|&d| {
-            mesh.first_hit(center, d, 0.0, f64::INFINITY, None, None)
-                .map(|h| h.0)
+            let (t, _, tri) = mesh
+                .first_hit(center, d, 0.0, f64::INFINITY, None, None)
                 .ok_or_else(|| {
                     anyhow::anyhow!(
                         "the ray from the centre {center} along {d} misses the mesh: \
                          it is not closed around the centre (give --center)"
                     )
-                })
+                })?;
+            // Beyond the first hit by more than rounding (a ray through a
+            // shared edge meets both triangles at the same distance).
+            if let Some((t2, _, _)) =
+                mesh.first_hit(center, d, t * (1.0 + 1e-9), f64::INFINITY, Some(tri), None)
+            {
+                anyhow::bail!(
+                    "the ray from the centre {center} along {d} meets the mesh at {} m and again \
+                     at {} m: the mesh is not star-shaped about the centre, and r(theta, phi) \
+                     would drop its farther parts (give a --center from which every ray meets \
+                     it once, or fit the parts separately)",
+                    crate::io::format_number(t),
+                    crate::io::format_number(t2)
+                );
+            }
+            Ok(t)
         })
         .collect()
 }
@@ -139,6 +161,18 @@ pub fn sh_fit(a: &ShFitArgs) -> anyhow::Result<()> {
     anyhow::ensure!(
         samples >= n_coef,
         "--samples must be at least (L + 1)^2 = {n_coef}"
+    );
+    // The least-squares fit holds the dense design matrix, its copy and
+    // the SVD's factor of the same size: three samples x coefficients
+    // arrays (--degree 100 took 50 GB and aborted).
+    let bytes = 3.0 * 8.0 * samples as f64 * n_coef as f64;
+    anyhow::ensure!(
+        bytes <= MAX_FIT_BYTES,
+        "--degree {} with {samples} samples needs about {:.1} GB for the least-squares fit \
+         (at most {:.0} GB): take a lower degree or fewer --samples (at least (L + 1)^2 = {n_coef})",
+        a.degree,
+        bytes / 1e9,
+        MAX_FIT_BYTES / 1e9
     );
     let dirs = spiral(samples);
     let r = radii(&mesh, center, &dirs)?;
@@ -286,7 +320,12 @@ fn compare(mesh: Mesh, sh: ShSurface, center: DVec3, r: f64, t: f64, threads: us
         let se = (a.tallies.estimated[j].std_error().powi(2)
             + b.tallies.estimated[j].std_error().powi(2))
         .sqrt();
-        dmax = zcheck::max_abs(dmax, (ea - eb) / ea.abs().max(1e-300));
+        // Relative to the larger of the two (both 0: no difference; the
+        // mesh's 0 against the fit's light used to print 2.8e299).
+        let scale = ea.abs().max(eb.abs());
+        if scale > 0.0 {
+            dmax = zcheck::max_abs(dmax, (ea - eb) / scale);
+        }
         zmax = zcheck::max_abs(zmax, zcheck::z_score(ea, se, eb));
     }
     println!(
