@@ -636,7 +636,7 @@ fn points_cases() -> Vec<Case> {
         points(
             "point facing the wall it is on",
             "id,x,y,z,nx,ny,nz\na,2,0,1,1,0,0\n",
-            Accept("E_avg 0.0000"),
+            Flag("enclosed"),
         ),
         points(
             "point in a corner",

@@ -227,3 +227,92 @@ fn a_light_partly_inside_a_closed_mesh_lights_it() {
         "point light above: enclosed {enclosed}, E {e}"
     );
 }
+
+/// A point on a room's boundary with its normal out of the room (the
+/// floor's facing down, a wall's facing out, the ceiling's facing up), or
+/// on a solid facing into it, or on a plane facing its black side, where
+/// no light is on that side, is enclosed: its probes leave the surface and
+/// meet nothing, so it read 0 lx flagged `ok` and a grid holding one
+/// reported U0 = 0, "not met". A point on a one-sided rectangle's black
+/// side (under a shelf) or on a sphere whose two sides reflect is not.
+#[test]
+fn points_on_a_surface_facing_its_black_side_are_flagged() {
+    let scene = parse(
+        &format!(
+            "{ROOM}[[surface]]\nname = \"shelf\"\ntype = \"rectangle\"\ncorner = [3, 0.5, 1.5]\n\
+             edge1 = [0.5, 0, 0]\nedge2 = [0, 0.5, 0]\n\
+             material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+             [[surface]]\nname = \"bubble\"\ntype = \"sphere\"\ncenter = [2.7, 2.2, 0.5]\nradius = 0.2\n\
+             sides = \"both\"\nmaterial = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+             [[surface]]\nname = \"ball\"\ntype = \"sphere\"\ncenter = [0.5, 0.5, 2.5]\nradius = 0.2\n\
+             material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+             [[surface]]\nname = \"outer\"\ntype = \"plane\"\npoint = [0, 0, -1]\nnormal = [0, 0, 1]\n\
+             material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+             [[light]]\ntype = \"point\"\nposition = [3.0, 1.5, 2.5]\nintensity = 200.0\n"
+        ),
+        Path::new("room.toml"),
+    )
+    .unwrap();
+    let points = [
+        (DVec3::new(3.0, 0.5, 0.0), -DVec3::Z),  // floor, facing down
+        (DVec3::new(0.0, 2.0, 1.5), -DVec3::X),  // wall, facing out
+        (DVec3::new(3.0, 2.0, 3.0), DVec3::Z),   // ceiling, facing up
+        (DVec3::new(1.5, 1.5, 0.75), -DVec3::Z), // desk top, facing in
+        (DVec3::new(0.5, 0.5, 2.3), DVec3::Z),   // ball's bottom, facing in
+        (DVec3::new(1.0, 1.0, -1.0), -DVec3::Z), // plane's black side, no light
+        (DVec3::new(3.0, 0.5, 0.0), DVec3::Z),   // floor, facing up: fine
+        (DVec3::new(3.2, 0.7, 1.5), -DVec3::Z),  // under the shelf: fine
+        (DVec3::new(2.7, 2.2, 0.7), -DVec3::Z),  // both-sided bubble's top, in: fine
+        (DVec3::new(0.0, 2.0, 1.5), DVec3::X),   // wall, facing in: fine
+    ];
+    let rec = Receivers::new(&scene, &points).unwrap();
+    let enclosed: Vec<bool> = (0..points.len()).map(|j| rec.enclosed(j)).collect();
+    assert_eq!(
+        enclosed,
+        [
+            true, true, true, true, true, true, false, false, false, false
+        ]
+    );
+}
+
+/// ... and points that do get light are not flagged: a facade point facing
+/// out under the sun, a point on a wall two rooms share (facing the other
+/// room), the floor along a cabinet's foot (its bottom face's black side),
+/// a point on a plane's black side with a light there; but the floor under
+/// the cabinet is inside it (it read 0 lx, ok: half its probes met the
+/// walls the cabinet stands against).
+#[test]
+fn points_on_a_black_side_that_light_reaches_are_not_flagged() {
+    let lamb = "material = { type = \"lambertian\", reflectance = 0.5 }";
+    let scene = parse(
+        &format!(
+            "[[surface]]\nname = \"a\"\ntype = \"box\"\nmin = [0, 0, 0]\nmax = [6, 4, 3]\n{lamb}\n\
+             [[surface]]\nname = \"b\"\ntype = \"box\"\nmin = [6, 0, 0]\nmax = [10, 4, 3]\n{lamb}\n\
+             [[surface]]\nname = \"cabinet\"\ntype = \"box\"\nmin = [0, 0, 0]\nmax = [1, 0.6, 1.2]\n\
+             normals = \"outward\"\n{lamb}\n\
+             [[surface]]\nname = \"under\"\ntype = \"plane\"\npoint = [0, 0, -2]\nnormal = [0, 0, -1]\n{lamb}\n\
+             [[light]]\ntype = \"point\"\nposition = [3, 2, 2.5]\nintensity = 100\n\
+             [[light]]\ntype = \"point\"\nposition = [8, 2, 2.5]\nintensity = 100\n\
+             [[light]]\ntype = \"distant\"\ndirection = [-0.6, 0.3, -0.7]\nilluminance = 1000\n"
+        ),
+        Path::new("rooms.toml"),
+    )
+    .unwrap();
+    let points = [
+        (DVec3::new(0.0, 2.0, 1.5), -DVec3::X), // facade, under the sun
+        (DVec3::new(3.0, 2.0, 3.0), DVec3::Z),  // roof, under the sun
+        (DVec3::new(6.0, 2.0, 1.5), -DVec3::X), // shared wall, into room a
+        (DVec3::new(6.0, 2.0, 1.5), DVec3::X),  // shared wall, into room b
+        (DVec3::new(1.0, 0.3, 0.0), DVec3::Z),  // floor at the cabinet's foot
+        (DVec3::new(1.0, 0.6, 0.0), DVec3::Z),  // ... at its corner
+        (DVec3::new(20.0, 20.0, -2.0), DVec3::Z), // plane's black side, lights there
+        (DVec3::new(0.5, 0.3, 1.2), -DVec3::Z), // cabinet top facing in: enclosed
+        (DVec3::new(0.5, 0.3, 0.0), DVec3::Z),  // floor under the cabinet: enclosed
+    ];
+    let rec = Receivers::new(&scene, &points).unwrap();
+    let enclosed: Vec<bool> = (0..points.len()).map(|j| rec.enclosed(j)).collect();
+    assert_eq!(
+        enclosed,
+        [false, false, false, false, false, false, false, true, true]
+    );
+}

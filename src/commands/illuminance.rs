@@ -302,9 +302,9 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
         }
         if counts.contains_key("enclosed") {
             sparse += "; `enclosed`: those points see the back of a surface in most directions \
-             (inside a solid, behind a wall, outside a closed room) or lie inside a closed mesh \
-             that holds no light: check their position and normal; they are left out of the \
-             grid figures";
+             (inside a solid, behind a wall, outside a closed room), lie inside a closed mesh \
+             that holds no light or face the black side of the surface they lie on: check their \
+             position and normal; they are left out of the grid figures";
         }
         if counts.contains_key("near") {
             sparse += "; `near`: a surface lies closer to those points than a tenth of their \

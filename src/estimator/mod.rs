@@ -945,7 +945,14 @@ impl Receivers {
                     Response::Luminance { .. } => return (0.0, false),
                 };
                 let walled_in = || lightless.iter().any(|&k| scene.inside_mesh(k, rec.p));
-                (r, enclosed || walled_in())
+                // On a room's floor facing down (out of the room): the
+                // probes leave the floor and meet nothing, yet the point
+                // is outside the room.
+                let facing_out = || {
+                    matches!(rec.response, Response::Illuminance)
+                        && scene.faces_black_side(rec.p, frame.n)
+                };
+                (r, enclosed || walled_in() || facing_out())
             })
             .unzip();
         let need_r = receivers

@@ -899,6 +899,113 @@ impl Scene {
         })
     }
 
+    /// Whether a receiver at `p` with unit normal `n` lies on the boundary
+    /// of a region no light can reach and faces into it: on an infinite
+    /// plane, a box's face or a sphere, with `n` on that surface's black
+    /// side, where the region on that side holds no light (a room box's
+    /// floor point facing down, out of a room whose lights are all inside
+    /// and with no sky; a point on a solid facing into it). Such a receiver
+    /// is *enclosed*, like one just beyond the surface, whose probes meet
+    /// the black side; its own probes leave the surface and may meet
+    /// nothing. A point facing into a solid box from inside one of its
+    /// faces is flagged whatever else passes through it (the floor under a
+    /// cabinet). Not flagged: a point where another surface through it
+    /// reflects on `n`'s side (a wall two rooms share, the floor along a
+    /// cabinet's foot), a facade point under a sky or near a light outside,
+    /// and points on rectangles and discs (open sheets: under a shelf) or
+    /// meshes (left to the probes). Lights whose extent the test cannot
+    /// place (area sources, sphere lights crossing the surface) count as
+    /// reaching the region.
+    pub fn faces_black_side(&self, p: DVec3, n: DVec3) -> bool {
+        // The surfaces through `p`: (surface, geometric normal) ...
+        let mut through: Vec<(u32, DVec3)> = Vec::new();
+        for (i, pl) in self.planes.iter().enumerate() {
+            if pl.side(p) == 0 {
+                through.push((self.plane_surface[i], pl.n));
+            }
+        }
+        for (r, s) in &self.rects {
+            if r.plane.side(p) == 0 && r.contains_planar(p) {
+                through.push((*s, r.plane.n));
+            }
+        }
+        for (d, s) in &self.discs {
+            if d.plane.side(p) == 0 && d.contains_planar(p) {
+                through.push((*s, d.plane.n));
+            }
+        }
+        for (sp, s) in &self.spheres {
+            if sp.classify(p) == Inside::On {
+                through.push((*s, (p - sp.c).normalize()));
+            }
+        }
+        for (b, s0) in &self.boxes {
+            if b.classify(p) == Inside::On {
+                for f in (0..6).filter(|&f| b.face_plane(f).side(p) == 0) {
+                    through.push((s0 + f as u32, AaBox::outward_normal(f)));
+                }
+            }
+        }
+        // Whether light can be in the region beyond a black side.
+        let reaches = |inside: &dyn Fn(DVec3) -> bool, infinite: bool| {
+            self.lights.iter().any(|l| match l {
+                _ if l.is_directional() => infinite,
+                _ if l.is_point_like() => inside(l.position()),
+                _ => true,
+            })
+        };
+        let lit = |&(s, ng): &(u32, DVec3)| self.surfaces[s as usize].sides.lit(ng, -n);
+        // Facing into a solid from inside one of its faces (not on an
+        // edge) or into a sphere: inside it, whatever else passes through
+        // `p` (a point on the floor under a cabinet standing on it).
+        for (b, s0) in &self.boxes {
+            if b.classify(p) == Inside::On {
+                let mut faces = (0..6).filter(|&f| b.face_plane(f).side(p) == 0);
+                if let (Some(f), None) = (faces.next(), faces.next()) {
+                    let ng = AaBox::outward_normal(f);
+                    if n.dot(ng) < 0.0
+                        && !lit(&(s0 + f as u32, ng))
+                        && !reaches(&|q| b.classify(q) == Inside::In, false)
+                    {
+                        return true;
+                    }
+                }
+            }
+        }
+        // ... else a point where any surface through it reflects on `n`'s
+        // side is a legitimate one.
+        if through.is_empty() || through.iter().any(lit) {
+            return false;
+        }
+        through
+            .iter()
+            .any(|&(s, ng)| match self.surfaces[s as usize].shape {
+                ShapeRef::Plane(i) => {
+                    let pl = &self.planes[i as usize];
+                    let side = if n.dot(ng) > 0.0 { 1 } else { -1 };
+                    !reaches(&|q| pl.side(q) == side, true)
+                }
+                ShapeRef::BoxFace(i, _) => {
+                    let b = &self.boxes[i as usize].0;
+                    // Out of the box where `n` leaves it, else into it.
+                    if n.dot(ng) > 0.0 {
+                        !reaches(&|q| b.classify(q) == Inside::Out, true)
+                    } else {
+                        !reaches(&|q| b.classify(q) == Inside::In, false)
+                    }
+                }
+                ShapeRef::Sphere(i) => {
+                    let sp = &self.spheres[i as usize].0;
+                    if n.dot(ng) > 0.0 {
+                        !reaches(&|q| sp.classify(q) == Inside::Out, true)
+                    } else {
+                        !reaches(&|q| sp.classify(q) == Inside::In, false)
+                    }
+                }
+                _ => false,
+            })
+    }
+
     /// The seat of a light at `p` ([`LightSeat`]): the surface
     /// [`Self::surface_at`] finds, with the other faces of a box through
     /// `p` (an edge or a corner) or the rim of a rectangle or disc.
