@@ -274,3 +274,45 @@ fn grid_never_writes_over_a_file_the_scene_names() {
         obj
     );
 }
+
+/// A semicylindrical grid gets its isolux plot: its normal columns hold
+/// the facing direction, which was taken for the plane's normal ("the
+/// points do not lie in one plane", no plot).
+#[test]
+fn semicylindrical_grids_get_an_isolux_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "{SCENE}\n[[grid]]\nname = \"faces\"\nsurface = \"room.z_min\"\noffset = 1.5\n\
+             spacing = 0.5\nreceiver = \"semicylindrical\"\nfacing = [1, 1, 0]\n"
+        ),
+    )
+    .unwrap();
+    let points = dir.path().join("p.csv");
+    lumest()
+        .args(["grid", "--name", "faces", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&points)
+        .assert()
+        .success();
+    let iso = dir.path().join("iso");
+    std::fs::create_dir(&iso).unwrap();
+    let out = lumest()
+        .args(["illuminance", "--chains", "4096", "--scene"])
+        .arg(&scene)
+        .arg("--points")
+        .arg(&points)
+        .arg("--out")
+        .arg(dir.path().join("e.csv"))
+        .arg("--isolux-dir")
+        .arg(&iso)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("no isolux plot"), "{err}");
+    assert!(iso.join("isolux_1_faces.svg").exists(), "{err}");
+}

@@ -93,7 +93,13 @@ fn grid_plot(
     let t = job.points.as_ref().ok_or("no points")?;
     let p: Vec<_> = g.rows.iter().map(|&j| t.points[j].0).collect();
     let n: Vec<_> = g.rows.iter().map(|&j| t.points[j].1).collect();
-    let lat = lattice(&p, &n, &g.weights)?;
+    // Points with their normals (planar receivers), else on the plane they
+    // span (a cylindrical or semicylindrical grid's normal columns hold
+    // its axis or facing: "not in one plane" before).
+    let lat = lattice(&p, &n, &g.weights).or_else(|e| {
+        let m = crate::grid::lattice::plane_normal(&p).ok_or(e)?;
+        lattice(&p, &vec![m; p.len()], &g.weights)
+    })?;
     let values: Vec<f64> = g
         .rows
         .iter()

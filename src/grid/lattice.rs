@@ -58,6 +58,26 @@ impl Lattice {
     }
 }
 
+/// The unit normal of the plane through points `p` \[m\] (from the
+/// farthest point from the first and the one farthest off that line), or
+/// `None` when they lie on one line. Cylindrical and semicylindrical
+/// receivers carry their axis or facing in the normal columns, not their
+/// grid's normal.
+pub fn plane_normal(p: &[DVec3]) -> Option<DVec3> {
+    let p0 = *p.first()?;
+    let far = |f: &dyn Fn(DVec3) -> f64| {
+        p.iter()
+            .copied()
+            .max_by(|a, b| f(*a - p0).total_cmp(&f(*b - p0)))
+    };
+    let q1 = far(&|d| d.length_squared())?;
+    let u = q1 - p0;
+    let q2 = far(&|d| u.cross(d).length_squared())?;
+    let n = u.cross(q2 - p0);
+    // Off the line by more than rounding of the extent.
+    (n.length() > 1e-9 * u.length_squared()).then(|| n.normalize())
+}
+
 /// The lattice of points `p` with normals `n` and cell areas `area` [m^2]
 /// (used only for a lattice line that is alone); an error says why the
 /// points are no flat rectilinear lattice.
@@ -168,6 +188,21 @@ fn distinct(x: impl Iterator<Item = f64>, tol: f64) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The plane through points, whatever their normal columns say; `None`
+    /// on a line.
+    #[test]
+    fn plane_normal_of_points() {
+        let p: Vec<DVec3> = (0..6)
+            .map(|k| DVec3::new((k % 3) as f64, (k / 3) as f64, 1.5))
+            .collect();
+        assert_eq!(plane_normal(&p).map(|n| n.z.abs()), Some(1.0));
+        let tilted: Vec<DVec3> = p.iter().map(|q| DVec3::new(q.x, q.y, q.x)).collect();
+        let n = plane_normal(&tilted).unwrap();
+        assert!((n.dot(DVec3::new(1.0, 0.0, -1.0).normalize()).abs() - 1.0).abs() < 1e-12);
+        let line: Vec<DVec3> = (0..4).map(|k| DVec3::X * k as f64).collect();
+        assert_eq!(plane_normal(&line), None);
+    }
 
     /// A 3 x 2 floor grid at z = 0.75 (cells 0.5 m x 1 m): world axes x, y,
     /// nodes in file order, cell bounds half a spacing out.

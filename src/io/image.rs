@@ -495,20 +495,51 @@ pub fn tick_label(x: f64) -> String {
     if x == 0.0 {
         return "0".into();
     }
-    let trim = |s: String| -> String {
-        if s.contains('.') {
-            s.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else {
-            s
-        }
-    };
     if (1e-3..1e5).contains(&a) {
         let decimals = (2 - a.log10().floor() as i32).clamp(0, 6) as usize;
-        trim(format!("{x:.decimals$}"))
+        trim_zeros(format!("{x:.decimals$}"))
     } else {
         let s = format!("{x:.2e}");
         let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
-        format!("{}e{e}", trim(m.to_string()))
+        format!("{}e{e}", trim_zeros(m.to_string()))
+    }
+}
+
+/// Text of a value on a scale whose marks lie `res` apart (isolux levels,
+/// colour-bar ticks): [`tick_label`]'s style, with as many digits as it
+/// takes to tell marks `res` apart. (Three significant digits labelled the
+/// 199.5 lx isoline "200" and the bar's ticks from 198.6 to 199.8 "199".)
+pub fn label_to(x: f64, res: f64) -> String {
+    if !(res > 0.0 && res.is_finite()) || x == 0.0 || !x.is_finite() {
+        return tick_label(x);
+    }
+    let a = x.abs();
+    if (1e-3..1e5).contains(&a) {
+        // Decimals of a 1-2-5 step (the first power of ten that makes it
+        // whole), else enough for its first digit.
+        let need = (0..=12)
+            .find(|&d| {
+                let s = res * 10f64.powi(d);
+                (s - s.round()).abs() <= 1e-6 * s
+            })
+            .unwrap_or_else(|| (-res.log10()).ceil().max(0.0) as i32);
+        let sig = 2 - a.log10().floor() as i32;
+        let decimals = need.max(sig).clamp(0, 12) as usize;
+        trim_zeros(format!("{x:.decimals$}"))
+    } else {
+        let digits = ((a / res).log10().ceil() as i32).clamp(2, 15) as usize;
+        let s = format!("{x:.digits$e}");
+        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+        format!("{}e{e}", trim_zeros(m.to_string()))
+    }
+}
+
+/// `s` without the trailing zeros of its decimals (and a bare point).
+fn trim_zeros(s: String) -> String {
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
     }
 }
 
@@ -656,10 +687,16 @@ impl ScaleBar {
         let gap = (GLYPH_H + 3) * s;
         let y_of = |v: f64| bottom - (scale.fraction(v) * span as f64).round() as i64;
         let mut ticks: Vec<(i64, String)> = Vec::new();
-        for v in scale.ticks((span / (2 * gap)).clamp(2, 8) as usize) {
+        let values = scale.ticks((span / (2 * gap)).clamp(2, 8) as usize);
+        // Labels with the digits that tell neighbouring ticks apart.
+        let res = values
+            .windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .fold(f64::INFINITY, f64::min);
+        for v in values {
             let y = y_of(v);
             if ticks.last().is_none_or(|&(py, _)| py - y >= gap) {
-                ticks.push((y, tick_label(v)));
+                ticks.push((y, label_to(v, res)));
             }
         }
         ScaleBar {
@@ -1151,6 +1188,29 @@ mod tests {
         assert!(LuminanceImage::new(0, 0, vec![]).is_err());
         // All tiny negatives with nothing positive: no round-off excuse.
         assert!(LuminanceImage::new(1, 1, vec![-1e-30]).is_err());
+    }
+
+    #[test]
+    fn labels_tell_apart_marks_a_step_apart() {
+        // Isolux levels 0.5 lx apart near 200 lx; a bar from 198.5 to 199.9.
+        assert_eq!(label_to(199.5, 0.5), "199.5");
+        assert_eq!(label_to(199.0, 0.5), "199");
+        assert_eq!(label_to(200.0, 0.25), "200");
+        assert_eq!(label_to(199.75, 0.25), "199.75");
+        let bar: Vec<String> = (0..8)
+            .map(|k| label_to(198.6 + 0.2 * k as f64, 1.43 / 50.0))
+            .collect();
+        assert_eq!(
+            bar,
+            [
+                "198.6", "198.8", "199", "199.2", "199.4", "199.6", "199.8", "200"
+            ]
+        );
+        // Daylight near 1e5 lx, levels 100 lx apart; small values as before.
+        assert_eq!(label_to(100_500.0, 100.0), "1.005e5");
+        assert_eq!(label_to(99_900.0, 100.0), "99900");
+        assert_eq!(label_to(0.3, 0.1), "0.3");
+        assert_eq!(label_to(1234.0, 200.0), "1234");
     }
 
     #[test]

@@ -278,14 +278,20 @@ impl IsoluxPlot {
         // Isolux lines, each level labelled once on its longest line.
         let label_style = TextStyle::from(("sans-serif", 12).into_font())
             .pos(Pos::new(HPos::Center, VPos::Center));
-        for (level, lines) in self.contours() {
+        let contours = self.contours();
+        // The levels' spacing: labels carry the digits that tell them apart.
+        let step = contours
+            .windows(2)
+            .map(|w| w[1].0 - w[0].0)
+            .fold(f64::INFINITY, f64::min);
+        for (level, lines) in contours {
             let style = BLACK.stroke_width(if fine { 2 } else { 1 });
             chart
                 .draw_series(lines.iter().map(|l| PathElement::new(l.clone(), style)))
                 .map_err(err)?;
             if let Some(l) = lines.iter().max_by_key(|l| l.len()) {
                 let at = l[l.len() / 2];
-                let text = super::image::tick_label(level);
+                let text = super::image::label_to(level, step);
                 // On a white box, readable on any colour.
                 let half = 4 * text.len() as i32 + 3;
                 chart
@@ -335,7 +341,7 @@ impl IsoluxPlot {
             .disable_mesh()
             .disable_x_axis()
             .y_desc("E [lx]")
-            .y_label_formatter(&|v| super::image::tick_label(*v))
+            .y_label_formatter(&|v| super::image::label_to(*v, (scale.max - scale.min) / 50.0))
             .label_style(("sans-serif", 13))
             .draw()
             .map_err(err)?;

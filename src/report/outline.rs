@@ -61,7 +61,8 @@ pub fn outlines(desc: &SceneDesc, lattice: &Lattice) -> Vec<Outline> {
             continue;
         }
         let hull = convex_hull(&pts);
-        let inward = s.normals.as_ref().is_some_and(|n| n.get_ref() == "inward");
+        // (A box's normals are inward unless it says otherwise.)
+        let inward = s.normals.as_ref().is_none_or(|n| n.get_ref() == "inward");
         out.push(Outline {
             closed: hull.len() > 2,
             heavy: s.kind.get_ref() == "box" && inward,
@@ -71,18 +72,26 @@ pub fn outlines(desc: &SceneDesc, lattice: &Lattice) -> Vec<Outline> {
     out
 }
 
-/// The luminaires' positions (`position`, `center` or `corner`) in
-/// `lattice`'s plane coordinates \[m\].
+/// The luminaires' positions (`position`, `center`, or a rectangle's
+/// centre: `corner` plus half of each edge) in `lattice`'s plane
+/// coordinates \[m\].
 pub fn luminaires(desc: &SceneDesc, lattice: &Lattice) -> Vec<(f64, f64)> {
+    let v = |p: &Option<toml::Spanned<crate::scene::desc::Vec3>>| {
+        p.as_ref().map(|p| DVec3::from(p.get_ref().0))
+    };
     desc.light
         .iter()
         .filter_map(|l| {
             let l = l.get_ref();
-            l.position
-                .as_ref()
-                .or(l.center.as_ref())
-                .or(l.corner.as_ref())
-                .map(|p| lattice.coords(DVec3::from(p.get_ref().0)))
+            let rect = || {
+                let half =
+                    0.5 * (v(&l.edge1).unwrap_or_default() + v(&l.edge2).unwrap_or_default());
+                v(&l.corner).map(|c| c + half)
+            };
+            v(&l.position)
+                .or(v(&l.center))
+                .or_else(rect)
+                .map(|p| lattice.coords(p))
         })
         .collect()
 }
@@ -172,5 +181,28 @@ mod tests {
         assert!(o.iter().any(|o| o.points.len() == 48));
         assert!(o.iter().any(|o| o.points == vec![(3.0, 2.4), (3.0, 3.9)]));
         assert_eq!(luminaires(&desc, &lat).len(), 6);
+    }
+
+    /// A rectangle light is marked at its centre (it was at its corner),
+    /// and a box without `normals` (inward by default) is drawn heavy.
+    #[test]
+    fn rectangle_lights_at_their_centre_and_default_rooms_heavy() {
+        let desc: SceneDesc = toml::from_str(
+            "[[surface]]\ntype = \"box\"\nmin = [0, 0, 0]\nmax = [4, 3, 2.5]\n\
+             material = { type = \"lambertian\", reflectance = 0.5 }\n\
+             [[light]]\ntype = \"rectangle\"\ncorner = [1.7, 2.1, 2.5]\nedge1 = [0.6, 0, 0]\n\
+             edge2 = [0, -1.2, 0]\nluminance = 1000\n",
+        )
+        .unwrap();
+        let p: Vec<DVec3> = (0..4)
+            .map(|k| DVec3::new((k % 2) as f64, (k / 2) as f64, 0.8))
+            .collect();
+        let lat = crate::grid::lattice::lattice(&p, &[DVec3::Z; 4], &[1.0; 4]).unwrap();
+        let (x, y) = luminaires(&desc, &lat)[0];
+        assert!(
+            (x - 2.0).abs() < 1e-12 && (y - 1.5).abs() < 1e-12,
+            "({x}, {y})"
+        );
+        assert!(outlines(&desc, &lat).iter().any(|o| o.heavy));
     }
 }
