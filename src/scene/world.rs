@@ -373,6 +373,13 @@ enum Start {
 impl Start {
     /// A ray leaving `from` (a collision's surface and primitive), or from
     /// the air (`None`: no surface is skipped).
+    /// Whether the ray starts on a surface (a collision, or an observer
+    /// that may stand on one), not in the air.
+    #[inline(always)]
+    fn on_surface(self) -> bool {
+        !matches!(self, Start::On(u32::MAX, _))
+    }
+
     fn leaving(from: Option<(u32, u32)>) -> Self {
         match from {
             Some((s, p)) => Start::On(s, p),
@@ -1345,14 +1352,14 @@ impl Scene {
     /// the answer is the unbounded search's.
     fn nearest(&self, ray: &Ray, start: Start, t_max: f64) -> Option<Hit> {
         let on = |s: u32| matches!(start, Start::On(x, _) if x == s);
-        let observer = matches!(start, Start::Observer);
+        let on_surface = start.on_surface();
         // Every hit is collected; which one wins follows the rules of
         // `nearest.rs`, whatever the order of the tests.
         let mut acc = Nearest::new();
         acc.bound = t_max * (1.0 + 1e-6);
         for (i, pl) in self.planes.iter().enumerate() {
             let s = self.plane_surface[i];
-            if on(s) || (observer && pl.side(ray.o) == 0) {
+            if on(s) || (on_surface && pl.side(ray.o) == 0) {
                 continue;
             }
             if let Some(t) = pl.intersect(ray, acc.bound) {
@@ -1462,7 +1469,11 @@ impl Scene {
     #[inline(always)]
     fn offer(&self, p: Prim, key: u32, ray: &Ray, start: Start, acc: &mut Nearest) {
         let on = |s: u32| matches!(start, Start::On(x, _) if x == s);
-        let observer = matches!(start, Start::Observer);
+        // A ray starting on a surface does not meet the flat shapes, planes,
+        // spheres and box faces that pass through its start (a rectangle
+        // set onto another, two back to back): only rounding would put
+        // such a hit at t ~ 1e-17, on either side.
+        let on_surface = start.on_surface();
         let emits = |s: u32| self.surfaces[s as usize].emitter.is_some();
         let cand = |t, surface: u32, prim, ng: DVec3| Cand {
             t,
@@ -1474,25 +1485,25 @@ impl Scene {
         match p {
             Prim::Rect(i) => {
                 let (r, s) = &self.rects[i as usize];
-                if on(*s) || (observer && r.plane.side(ray.o) == 0) {
-                    return;
-                }
-                if let Some(t) = r.intersect(ray, acc.bound) {
+                if !on(*s)
+                    && let Some(t) = r.intersect(ray, acc.bound)
+                    && !(on_surface && r.plane.side(ray.o) == 0)
+                {
                     acc.flat(cand(t, *s, 0, r.plane.n), emits(*s));
                 }
             }
             Prim::Disc(i) => {
                 let (dc, s) = &self.discs[i as usize];
-                if on(*s) || (observer && dc.plane.side(ray.o) == 0) {
-                    return;
-                }
-                if let Some(t) = dc.intersect(ray, acc.bound) {
+                if !on(*s)
+                    && let Some(t) = dc.intersect(ray, acc.bound)
+                    && !(on_surface && dc.plane.side(ray.o) == 0)
+                {
                     acc.flat(cand(t, *s, 0, dc.plane.n), emits(*s));
                 }
             }
             Prim::Sphere(i) => {
                 let (sp, s) = &self.spheres[i as usize];
-                let leaving = on(*s) || (observer && sp.classify(ray.o) == Inside::On);
+                let leaving = on(*s) || (on_surface && sp.classify(ray.o) == Inside::On);
                 if let Some(t) = sp.intersect(ray, acc.bound, leaving) {
                     acc.solid(cand(t, *s, 0, ray.o + t * ray.d - sp.c));
                 }
@@ -1501,7 +1512,7 @@ impl Scene {
                 let (b, s0) = &self.boxes[i as usize];
                 let leaving = match start {
                     Start::On(x, _) if (*s0..*s0 + 6).contains(&x) => Some((x - s0) as usize),
-                    Start::Observer if b.classify(ray.o) == Inside::On => {
+                    _ if on_surface && b.classify(ray.o) == Inside::On => {
                         (0..6).find(|&f| b.face_plane(f).side(ray.o) == 0)
                     }
                     _ => None,

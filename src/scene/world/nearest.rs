@@ -32,8 +32,8 @@
 //! exporters write "double-sided" faces): the ray must meet the one whose
 //! reflecting side faces it, not its black back. So every hit records
 //! whether the side the ray arrives at reflects ([`Cand::lit`],
-//! [`super::Sides::lit`]): in a class, equal `t` goes first to the lit hit
-//! (then to the smaller key). (The first listed of two such rectangles used
+//! [`super::Sides::lit`]): in a class, a lit hit within the tolerance of
+//! the nearest one, when that shows its black side, is met instead. (The first listed of two such rectangles used
 //! to win every tie: behind it, 0 lx of reflected light.) Within one mesh,
 //! the triangle facing the ray wins near ties
 //! ([`crate::geometry::mesh::Mesh::first_hit`]). Across classes the rules
@@ -80,25 +80,60 @@ const NONE: Cand = Cand {
 };
 
 impl Cand {
-    /// Whether `self` is nearer than `other`; equal `t` to the lit one, then
-    /// to the smaller key (a total order: the answer does not depend on the
-    /// order of the offers).
+    /// Whether `self` is nearer than `other`, ties to the smaller key (a
+    /// total order: the answer does not depend on the order of the offers).
     #[inline(always)]
     fn before(&self, other: &Cand) -> bool {
-        self.t < other.t
-            || (self.t == other.t
-                && (self.lit, std::cmp::Reverse(self.key))
-                    > (other.lit, std::cmp::Reverse(other.key)))
+        self.t < other.t || (self.t == other.t && self.key < other.key)
     }
 }
 
-/// The nearest hit of each class so far.
+/// One class's hits so far: the nearest, and the nearest of those whose
+/// side facing the ray reflects. Both are minima of a total order, so the
+/// class's answer ([`Slot::winner`]) does not depend on the order of the
+/// offers.
+#[derive(Clone, Copy, Debug)]
+struct Slot {
+    near: Cand,
+    lit: Cand,
+}
+
+impl Slot {
+    const EMPTY: Slot = Slot {
+        near: NONE,
+        lit: NONE,
+    };
+
+    #[inline(always)]
+    fn offer(&mut self, c: Cand) {
+        if c.before(&self.near) {
+            self.near = c;
+        }
+        if c.lit && c.before(&self.lit) {
+            self.lit = c;
+        }
+    }
+
+    /// The nearest hit, unless it shows its black side and a lit one
+    /// coincides with it within [`COINCIDENT_TIE`] (two one-sided surfaces
+    /// back to back, whose hit distances differ by rounding).
+    #[inline(always)]
+    fn winner(&self) -> Cand {
+        if !self.near.lit && self.lit.t <= self.near.t * (1.0 + COINCIDENT_TIE) {
+            self.lit
+        } else {
+            self.near
+        }
+    }
+}
+
+/// The hits of each class so far.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Nearest {
-    plane: Cand,
-    flat: Cand,
-    emitter: Cand,
-    solid: Cand,
+    plane: Slot,
+    flat: Slot,
+    emitter: Slot,
+    solid: Slot,
     /// Hits at or beyond this `t` \[m\] cannot change the answer.
     pub(super) bound: f64,
 }
@@ -108,10 +143,10 @@ impl Nearest {
     #[inline(always)]
     pub(super) fn new() -> Self {
         Self {
-            plane: NONE,
-            flat: NONE,
-            emitter: NONE,
-            solid: NONE,
+            plane: Slot::EMPTY,
+            flat: Slot::EMPTY,
+            emitter: Slot::EMPTY,
+            solid: Slot::EMPTY,
             bound: f64::INFINITY,
         }
     }
@@ -124,22 +159,17 @@ impl Nearest {
     /// A hit on an infinite plane.
     #[inline(always)]
     pub(super) fn plane(&mut self, c: Cand) {
-        if c.before(&self.plane) {
-            self.plane = c;
-        }
+        self.plane.offer(c);
         self.lower_bound(c.t);
     }
 
     /// A hit on a rectangle or disc (an area source's when `emitter`).
     #[inline(always)]
     pub(super) fn flat(&mut self, c: Cand, emitter: bool) {
-        let slot = if emitter {
-            &mut self.emitter
+        if emitter {
+            self.emitter.offer(c);
         } else {
-            &mut self.flat
-        };
-        if c.before(slot) {
-            *slot = c;
+            self.flat.offer(c);
         }
         self.lower_bound(c.t);
     }
@@ -147,28 +177,32 @@ impl Nearest {
     /// A hit on a sphere, box or mesh.
     #[inline(always)]
     pub(super) fn solid(&mut self, c: Cand) {
-        if c.before(&self.solid) {
-            self.solid = c;
-        }
+        self.solid.offer(c);
         self.lower_bound(c.t);
     }
 
     /// The winning hit and whether it is an emitter's; `None` without hits.
     #[inline]
     pub(super) fn resolve(&self) -> Option<(Cand, bool)> {
-        let flat = if self.flat.t < self.plane.t * (1.0 + COINCIDENT_TIE) {
-            self.flat
+        let (plane, flat, emitter, solid) = (
+            self.plane.winner(),
+            self.flat.winner(),
+            self.emitter.winner(),
+            self.solid.winner(),
+        );
+        let flat = if flat.t < plane.t * (1.0 + COINCIDENT_TIE) {
+            flat
         } else {
-            self.plane
+            plane
         };
-        let (f, emitter) = if self.emitter.t < flat.t * (1.0 + COINCIDENT_TIE) {
-            (self.emitter, true)
+        let (f, emitter) = if emitter.t < flat.t * (1.0 + COINCIDENT_TIE) {
+            (emitter, true)
         } else {
             (flat, false)
         };
         let threshold = f.t * (1.0 - COINCIDENT_TIE);
-        if self.solid.t < threshold {
-            Some((self.solid, false))
+        if solid.t < threshold {
+            Some((solid, false))
         } else if f.t < f64::INFINITY {
             Some((f, emitter))
         } else {
@@ -265,8 +299,9 @@ mod tests {
         }
     }
 
-    /// Of hits at equal `t` in a class, the one whose reflecting side faces
-    /// the ray; across classes the rules above; in every order.
+    /// Of coincident hits in a class (within the tolerance), the one whose
+    /// reflecting side faces the ray; across classes the rules above; in
+    /// every order.
     #[test]
     fn a_lit_side_wins_a_tie_in_its_class() {
         let tie = 0.5 * COINCIDENT_TIE;
@@ -277,8 +312,24 @@ mod tests {
             (vec![(1.0, 4, 0, false), (1.0, 7, 0, true)], Some(7)),
             (vec![(1.0, 20, 2, false), (1.0, 21, 2, true)], Some(21)),
             (vec![(1.0, 1, 3, false), (1.0, 0, 3, true)], Some(0)),
-            // Unequal t in a class: the nearer, lit or not.
-            (vec![(1.0, 4, 0, false), (1.0 + tie, 7, 0, true)], Some(4)),
+            // Within the tolerance in a class: the lit one too (rounding
+            // of two back-to-back tilted rectangles' distances) ...
+            (vec![(1.0, 4, 0, false), (1.0 + tie, 7, 0, true)], Some(7)),
+            (vec![(1.0 + tie, 4, 2, true), (1.0, 7, 2, false)], Some(4)),
+            (
+                vec![
+                    (1.0, 4, 0, false),
+                    (1.0 + tie, 7, 0, true),
+                    (1.0 + 0.5 * tie, 8, 0, true),
+                ],
+                Some(8),
+            ),
+            // ... but not beyond it: the nearer, lit or not.
+            (
+                vec![(1.0, 4, 0, false), (1.0 + 3.0 * tie, 7, 0, true)],
+                Some(4),
+            ),
+            (vec![(1.0, 4, 0, true), (1.0 + tie, 7, 0, false)], Some(4)),
             // Across classes the rules stand: the surface set onto the
             // other covers it, black side or not.
             (vec![(1.0, 0, 3, true), (1.0 + tie, 5, 0, false)], Some(5)),
