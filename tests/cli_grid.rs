@@ -316,3 +316,34 @@ fn semicylindrical_grids_get_an_isolux_plot() {
     assert!(!err.contains("no isolux plot"), "{err}");
     assert!(iso.join("isolux_1_faces.svg").exists(), "{err}");
 }
+
+/// A semicylindrical grid's `facing` of any length: 1e200 overflowed to a
+/// zero normal, written without an error.
+#[test]
+fn semicylindrical_facing_of_any_length() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "{SCENE}\n[[grid]]\nname = \"faces\"\nsurface = \"room.z_min\"\noffset = 1.5\n\
+             spacing = 1\nreceiver = \"semicylindrical\"\nfacing = [1e200, 0, 0]\n"
+        ),
+    )
+    .unwrap();
+    let points = dir.path().join("p.csv");
+    lumest()
+        .args(["grid", "--name", "faces", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&points)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&points).unwrap();
+    let rows: Vec<&str> = text.lines().skip(1).collect();
+    assert!(!rows.is_empty());
+    for r in rows {
+        let c: Vec<&str> = r.split(',').collect();
+        assert_eq!(&c[5..8], ["1", "0", "0"], "{r}");
+    }
+}

@@ -490,6 +490,54 @@ fn sh_fit_refuses_what_r_theta_phi_cannot_describe() {
     );
 }
 
+/// Directions take any length and meshes are bounded where they are
+/// placed: a sun vector in metres ([-1.5e11, 0, -1e11]) and an OBJ in
+/// millimetres with georeferenced coordinates, re-centred by `scale` and
+/// `translate`, were refused by the coordinate bound; a mesh placed beyond
+/// it still is.
+#[test]
+fn directions_of_any_length_and_meshes_bounded_where_placed() {
+    let dir = tempfile::tempdir().unwrap();
+    let sun = "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+               material = { type = \"lambertian\", reflectance = 0.5 }\n\
+               [[light]]\ntype = \"distant\"\ndirection = [-1.5e11, 0, -1e11]\nilluminance = 1000\n";
+    let s = scene::parse(sun, &dir.path().join("sun.toml")).unwrap();
+    let d = DVec3::new(-1.5, 0.0, -1.0).normalize();
+    let rec = Receivers::new(&s, &[(DVec3::ZERO, DVec3::Z)]).unwrap();
+    let r = run(&s, &rec, &common::chains_cfg(256, 1, 1), &mut |_| true);
+    assert!(
+        (r.direct[0] - 1000.0 * -d.z).abs() < 1e-9,
+        "{}",
+        r.direct[0]
+    );
+    // A 1 m cube written in millimetres, 5.8e9 mm north.
+    let mut obj = String::new();
+    for k in 0..8 {
+        let v = [k & 1, (k >> 1) & 1, (k >> 2) & 1].map(|b| b as f64 * 1000.0);
+        obj += &format!("v {} {} {}\n", 3.5e8 + v[0], 5.8e9 + v[1], v[2]);
+    }
+    obj += "f 1 3 2\nf 2 3 4\nf 5 6 7\nf 6 8 7\nf 1 2 5\nf 2 6 5\n\
+            f 3 7 4\nf 4 7 8\nf 1 5 3\nf 3 5 7\nf 2 4 6\nf 4 8 6\n";
+    std::fs::write(dir.path().join("blk.obj"), obj).unwrap();
+    let mesh = |scale: &str, translate: &str| {
+        format!(
+            "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+             material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+             [[surface]]\ntype = \"mesh\"\nfile = \"blk.obj\"\nscale = {scale}\ntranslate = {translate}\n\
+             material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+             [[light]]\ntype = \"point\"\nposition = [0, 0, 3]\nintensity = 100\n"
+        )
+    };
+    scene::parse(
+        &mesh("0.001", "[-350000, -5800000, 0]"),
+        &dir.path().join("m.toml"),
+    )
+    .unwrap();
+    // In metres where placed: 5.8e9 m north, beyond the bound.
+    let e = scene::parse(&mesh("1", "[0, 0, 0]"), &dir.path().join("m.toml")).unwrap_err();
+    assert!(e.to_string().contains("beyond +-1e8 m"), "{e}");
+}
+
 #[test]
 fn overflowing_light_power_is_a_clear_error() {
     let e = parse(

@@ -588,7 +588,7 @@ impl Receivers {
                 return Err(ReceiverError {
                     index: j,
                     message: format!(
-                        "every coordinate must lie within +-{:e} m (lengths are squared, and scores taken to the fourth power)",
+                        "every coordinate must lie within +-{:e} m (the geometry is resolved to 1e-11 of the coordinates; re-centre the scene)",
                         crate::scene::MAX_COORD
                     ),
                 });

@@ -85,13 +85,19 @@ fn point(v: DVec3) -> String {
     format!("({}, {}, {})", f(v.x), f(v.y), f(v.z))
 }
 
-/// The first vertex (index, position) farther out than
-/// [`crate::scene::MAX_COORD`] in some coordinate.
-fn beyond_limit(vertices: &[DVec3]) -> Option<(usize, DVec3)> {
+/// Largest coordinate of a vertex as the file gives it (file units, before
+/// `translate`, `rotate` and `scale`): squares and products stay finite
+/// for the tree and the welding. Where the mesh is placed its vertices must
+/// lie within [`crate::scene::MAX_COORD`] (a file in millimetres with
+/// georeferenced coordinates, re-centred by `translate`, is fine).
+const MAX_FILE_COORD: f64 = 1e100;
+
+/// The first vertex with a coordinate beyond `limit` (index, vertex).
+fn beyond_limit(vertices: &[DVec3], limit: f64) -> Option<(usize, DVec3)> {
     vertices
         .iter()
         .enumerate()
-        .find(|(_, v)| v.abs().max_element() > crate::scene::MAX_COORD)
+        .find(|(_, v)| v.abs().max_element() > limit)
         .map(|(i, v)| (i, *v))
 }
 
@@ -313,14 +319,13 @@ impl Mesh {
                 None => file_error(&file, format!("vertex {} is not finite", point(*v))),
             });
         }
-        if let Some((i, v)) = beyond_limit(&vertices) {
+        if let Some((i, v)) = beyond_limit(&vertices, MAX_FILE_COORD) {
             return Err(file_error(
                 &file,
                 format!(
-                    "vertex {} = {} lies beyond +-{:e} m",
+                    "vertex {} = {} lies beyond +-{MAX_FILE_COORD:e} (file units)",
                     i + 1,
                     point(v),
-                    crate::scene::MAX_COORD
                 ),
             ));
         }
@@ -482,7 +487,7 @@ impl Mesh {
             .iter()
             .map(|&v| translate + scale * (rotation * v))
             .collect::<Vec<_>>();
-        if let Some((i, v)) = beyond_limit(&vertices) {
+        if let Some((i, v)) = beyond_limit(&vertices, crate::scene::MAX_COORD) {
             return Err(file_error(
                 IN_MEMORY,
                 format!(

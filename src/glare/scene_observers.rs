@@ -50,7 +50,7 @@ pub fn scene_observers(path: &Path) -> Result<ViewTable, SceneError> {
         if !eye.is_finite() {
             return Err(invalid(o.eye.span(), "eye", "must be finite [m]"));
         }
-        let Some(unit) = view.try_normalize() else {
+        let Some(unit) = crate::geometry::unit_direction(view) else {
             return Err(invalid(
                 o.view.span(),
                 "view",

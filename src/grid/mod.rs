@@ -235,8 +235,11 @@ fn compile(scene: &SceneDesc, g: &GridDesc, ctx: &SourceCtx) -> Result<Grid, Sce
     match (&g.facing, receiver.as_str()) {
         (Some(f), "semicylindrical") => {
             let d = DVec3::from_array(f.get_ref().0);
-            let h = DVec3::new(d.x, d.y, 0.0);
-            if !(d.is_finite() && h.length() > 0.0 && d.z.abs() <= 1e-9 * d.length()) {
+            // Any length: the unit direction first (1e200 overflowed to a
+            // zero normal, written without an error).
+            let u = crate::geometry::unit_direction(d).unwrap_or(DVec3::ZERO);
+            let h = DVec3::new(u.x, u.y, 0.0);
+            if !(u != DVec3::ZERO && u.z.abs() <= 1e-9) {
                 return Err(invalid(
                     ctx,
                     f.span(),

@@ -74,7 +74,8 @@ impl SourceCtx<'_> {
             .ok_or_else(|| self.invalid(table, field, "missing field"))
     }
 
-    fn finite_vec(&self, v: &Spanned<Vec3>, field: &str) -> Result<DVec3, SceneError> {
+    /// Three finite numbers (a direction: any length).
+    fn finite3(&self, v: &Spanned<Vec3>, field: &str) -> Result<DVec3, SceneError> {
         let a = v.get_ref().0;
         if !a.iter().all(|x| x.is_finite()) {
             return Err(self.invalid(
@@ -83,6 +84,12 @@ impl SourceCtx<'_> {
                 format!("every component must be finite, got {}", triple(a)),
             ));
         }
+        Ok(DVec3::from_array(a))
+    }
+
+    /// A point or a length vector \[m\]: finite and within [`MAX_COORD`].
+    fn finite_vec(&self, v: &Spanned<Vec3>, field: &str) -> Result<DVec3, SceneError> {
+        let a = self.finite3(v, field)?.to_array();
         if a.iter().any(|x| x.abs() > MAX_COORD) {
             return Err(self.invalid(
                 v.span(),
@@ -98,7 +105,8 @@ impl SourceCtx<'_> {
     }
 
     fn unit_vec(&self, v: &Spanned<Vec3>, field: &str) -> Result<DVec3, SceneError> {
-        let d = self.finite_vec(v, field)?;
+        // A direction, of any length (a sun vector in metres).
+        let d = self.finite3(v, field)?;
         crate::geometry::unit_direction(d)
             .ok_or_else(|| self.invalid(v.span(), field, "direction must have a non-zero length"))
     }
