@@ -474,6 +474,12 @@ fn points_cases() -> Vec<Case> {
             Error("p.csv"),
         ),
         points("byte-order mark", &format!("\u{feff}{POINTS}"), Same),
+        // The mark hid the comment's `#`: the comment became the header.
+        points(
+            "byte-order mark before a comment",
+            &format!("\u{feff}# office grid\n{POINTS}"),
+            Same,
+        ),
         points(
             "byte-order mark before `x`",
             "\u{feff}x,y,z,nx,ny,nz,id\n0,0,0.75,0,0,1,a\n1,1,0.75,0,0,1,b\n-1,0.5,0.75,0,0,1,c\n",
@@ -588,6 +594,12 @@ fn points_cases() -> Vec<Case> {
         ),
         // Any non-zero length is a direction, whose square may leave the
         // range of f64 (1e200 read "zero length", 1e-160 "not finite").
+        // Two cells of 1e308 m^2 made the grid's area inf and E_avg NaN.
+        points(
+            "area 1e308",
+            "id,grid,x,y,z,nx,ny,nz,area\na,g,0,0,0.75,0,0,1,1e308\n",
+            Error("p.csv:2: field `area`: an area weight must be positive and at most"),
+        ),
         points(
             "normal 1e200",
             "id,x,y,z,nx,ny,nz\na,0,0,0.75,0,0,1e200\n",

@@ -347,3 +347,91 @@ fn semicylindrical_facing_of_any_length() {
         assert_eq!(&c[5..8], ["1", "0", "0"], "{r}");
     }
 }
+
+/// A disc grid's area weights: the cells over the rim carry their part on
+/// the disc, and the weights sum to the disc's area (each cell carried its
+/// whole area: 1.74 m^2 for a disc of 1.54).
+#[test]
+fn disc_grid_weights_sum_to_the_disc_area() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "{SCENE}\n[[surface]]\ntype = \"disc\"\nname = \"table\"\ncenter = [2, 1.5, 0.7]\n\
+             normal = [0, 0, 1]\nradius = 0.8\nmaterial = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+             [[grid]]\nname = \"table\"\nsurface = \"table\"\nborder = 0.1\n"
+        ),
+    )
+    .unwrap();
+    let points = dir.path().join("p.csv");
+    lumest()
+        .args(["grid", "--name", "table", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&points)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&points).unwrap();
+    let areas: Vec<f64> = text
+        .lines()
+        .skip(1)
+        .map(|r| r.split(',').nth(8).unwrap().parse().unwrap())
+        .collect();
+    let total: f64 = areas.iter().sum();
+    let disc = std::f64::consts::PI * 0.7 * 0.7;
+    assert!((total - disc).abs() < 1e-9 * disc, "{total} for {disc}");
+    let cell = areas.iter().copied().fold(0.0, f64::max);
+    assert!(
+        areas.iter().any(|&a| a < 0.9 * cell),
+        "no rim cell: {areas:?}"
+    );
+}
+
+/// A grid no light reaches: its undefined figures (U0, Ud) are empty cells
+/// in figures.csv, never `NaN` written as a number.
+#[test]
+fn undefined_figures_are_empty_cells() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    // The light outside the room: no light reaches the work plane.
+    std::fs::write(
+        &scene,
+        SCENE.replace("position = [2, 1.5, 2.3]", "position = [2, 1.5, 4]"),
+    )
+    .unwrap();
+    let points = dir.path().join("p.csv");
+    lumest()
+        .args(["grid", "--name", "work plane", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&points)
+        .assert()
+        .success();
+    let figs = dir.path().join("f.csv");
+    let out = lumest()
+        .args(["illuminance", "--chains", "1024", "--quiet", "--scene"])
+        .arg(&scene)
+        .arg("--points")
+        .arg(&points)
+        .arg("--out")
+        .arg(dir.path().join("e.csv"))
+        .arg("--figures-out")
+        .arg(&figs)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let f = std::fs::read_to_string(&figs).unwrap();
+    assert!(!f.contains("NaN") && !f.contains("inf"), "{f}");
+    let u0: Vec<&str> = f
+        .lines()
+        .find(|l| l.contains(",U0,"))
+        .unwrap()
+        .split(',')
+        .collect();
+    assert_eq!(u0[3], "", "{f}");
+}

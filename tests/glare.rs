@@ -547,3 +547,47 @@ fn a_spherical_luminaire_seen_side_on_matches_the_hand_values() {
         assert!((t.omega / (PI * r * r / (d * d)) - 1.0).abs() < 1e-12);
     }
 }
+
+/// A result column's name in the observers CSV is refused before the run,
+/// `UGR_verdict` too when --ugr-limit adds that column (the output had two
+/// `UGR_verdict` columns, a reader taking the first got the input's).
+#[test]
+fn result_column_names_in_the_observers_are_refused_before_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    cosine_ies(dir.path());
+    let scene = standard_room(dir.path(), "cos.ies", 0.0);
+    let obs = dir.path().join("obs.csv");
+    std::fs::write(
+        &obs,
+        "name,x,y,z,dx,dy,dz,UGR_verdict\nwall,0.001,4,1.2,1,0,0,target\n",
+    )
+    .unwrap();
+    let out = dir.path().join("g.csv");
+    let run = |limit: bool| {
+        let mut c = lumest();
+        c.args(["glare", "--quiet", "--chains", "1024", "--scene"])
+            .arg(&scene)
+            .arg("--observers")
+            .arg(&obs)
+            .arg("--out")
+            .arg(&out);
+        if limit {
+            c.args(["--ugr-limit", "19"]);
+        }
+        c.output().unwrap()
+    };
+    let o = run(true);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("column `UGR_verdict` has the name of a result column"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    // Without --ugr-limit the column is the input's own and is kept.
+    let o = run(false);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let header = std::fs::read_to_string(&out).unwrap();
+    let header = header.lines().next().unwrap();
+    assert_eq!(header.matches("UGR_verdict").count(), 1, "{header}");
+}

@@ -485,6 +485,18 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
         let exact: Vec<f64> = case.exact.iter().map(|v| v.e).collect();
         let cp = checkpoint(&r.progress(), &exact, 0..n);
         let target = if n <= 100 { 1e-4 } else { 1e-3 };
+        // The target holds a time too (20 s at 100 points, 60 s above) on
+        // 2 cores: judged by the time this run projects to the target
+        // (errors fall like 1/sqrt(T)), not by its own length.
+        let limit = if n <= 100 { 20.0 } else { 60.0 };
+        let needed = (cp.rms_r / target).powi(2) * r.wall;
+        let met = if r.threads != 2 {
+            "n/a"
+        } else if needed <= limit {
+            "yes"
+        } else {
+            "no"
+        };
         let peak = super::peak_rss::peak();
         println!(
             "{:>7} {:>7.1} {:>12} {:>11.4e} {:>11.4e} {:>10.3e} {:>10.3e} {:>11.4e} {:>10.3e} {:>8.0e} {:>7} {:>9}",
@@ -498,7 +510,7 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
             cp.fom,
             cp.rms_err,
             target,
-            if cp.rms_r < target { "yes" } else { "no" },
+            met,
             super::peak_rss::format_mib(peak),
         );
         // Projected from this run alone (errors fall like 1/sqrt(T)); no
@@ -506,7 +518,8 @@ pub fn bench(a: &BenchArgs) -> anyhow::Result<()> {
         let ours = cp.rms_r.powi(2) * r.wall / 1e-6 * r.threads as f64;
         println!(
             "        time to RMS R = 1e-3 for all {n} points: {ours:.3e} CPU-s here \
-             ({} thread(s) x {:.3} s x (rms_R / 1e-3)^2)",
+             ({} thread(s) x {:.3} s x (rms_R / 1e-3)^2); to the target {target:e}: {needed:.3} s \
+             (met: within {limit} s on 2 threads; n/a on another count)",
             r.threads, r.wall
         );
     }
@@ -620,7 +633,9 @@ pub fn cases(a: &BenchArgs, list: &[NamedCase]) -> anyhow::Result<()> {
                 "        grid: RMS R = 1e-3 at all 10,000 points projects to {needed:.2} s of run on {} \
                  thread(s), after {setup:.2} s of set-up (issue 15 target: 6 s on 2 cores: {})",
                 r.threads,
-                if needed + setup <= 6.0 {
+                if r.threads != 2 {
+                    "not judged on this thread count"
+                } else if needed + setup <= 6.0 {
                     "met"
                 } else {
                     "NOT met"

@@ -22,7 +22,7 @@ pub struct Group {
 
 /// The grids of a points table, in order of first appearance; `None`
 /// without a `grid` column. A row with an empty `grid` cell belongs to no
-/// grid. `area` cells must be finite and positive.
+/// grid. `area` cells must be positive and at most `(2 MAX_COORD)^2`.
 pub fn grid_groups(t: &PointTable, input: &str) -> Result<Option<(Vec<Group>, bool)>, InputError> {
     let Some(gc) = t.headers.iter().position(|h| h == "grid") else {
         return Ok(None);
@@ -37,7 +37,11 @@ pub fn grid_groups(t: &PointTable, input: &str) -> Result<Option<(Vec<Group>, bo
         let w = match ac {
             Some(c) => {
                 let w = number(row.get(c).map_or("", String::as_str), input, line, "area")?;
-                if w <= 0.0 {
+                // At most the square of the coordinate bound: sums of a
+                // million cells stay finite (two cells of 1e308 m^2 made
+                // the grid's area inf and its E_avg NaN).
+                let max = (2.0 * crate::scene::MAX_COORD).powi(2);
+                if !(w > 0.0 && w <= max) {
                     return Err(InputError::Field {
                         file: if input == "-" {
                             "<stdin>".into()
@@ -47,7 +51,7 @@ pub fn grid_groups(t: &PointTable, input: &str) -> Result<Option<(Vec<Group>, bo
                         line,
                         field: "area".into(),
                         message: format!(
-                            "an area weight must be positive [m^2], got {}",
+                            "an area weight must be positive and at most {max:e} [m^2], got {}",
                             format_number(w)
                         ),
                     });
@@ -295,7 +299,16 @@ pub fn figure_rows(all: &[GridFigures]) -> Vec<Vec<String>> {
         ];
         for (name, unit, x, req) in figs {
             let mut row = vec![g.name.clone(), name.to_string(), unit.to_string()];
-            row.extend([x.value, x.std_error, x.ci95.0, x.ci95.1, x.bias].map(format_number));
+            // An undefined figure (U0 of a grid no light reaches) is an
+            // empty cell, never `NaN` written as a number.
+            let cell = |v: f64| {
+                if v.is_finite() {
+                    format_number(v)
+                } else {
+                    String::new()
+                }
+            };
+            row.extend([x.value, x.std_error, x.ci95.0, x.ci95.1, x.bias].map(cell));
             row.push(x.method.name());
             match req {
                 Some((v, verdict)) => {
@@ -308,7 +321,7 @@ pub fn figure_rows(all: &[GridFigures]) -> Vec<Vec<String>> {
                 g.points.to_string(),
                 g.left_out.to_string(),
                 g.flagged.to_string(),
-                format_number(g.area),
+                cell(g.area),
                 format_number(g.maintenance_factor),
                 f.batches.to_string(),
             ]);

@@ -234,6 +234,16 @@ pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
             (table, scene_name.as_str())
         }
     };
+    // Result column names in the input are refused before the run (a
+    // `UGR_verdict` column with --ugr-limit gave the output two of them).
+    let verdict = a.ugr_limit.is_some().then_some("UGR_verdict");
+    if let Some(h) = table
+        .headers
+        .iter()
+        .find(|h| GLARE_COLUMNS.contains(&h.as_str()) || verdict == Some(h.as_str()))
+    {
+        anyhow::bail!("{name}: column `{h}` has the name of a result column; rename it");
+    }
     let mut observers = Vec::with_capacity(table.views.len());
     for (&(o, d), &line) in table.views.iter().zip(&table.lines) {
         let obs = Observer::new(o, d).ok_or_else(|| {
@@ -265,9 +275,6 @@ pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
     );
     let glare = observer_glare(&scene, &areas, &observers, &result);
     let mut headers = table.headers.clone();
-    if let Some(h) = headers.iter().find(|h| GLARE_COLUMNS.contains(&h.as_str())) {
-        anyhow::bail!("{name}: column `{h}` has the name of a result column; rename it");
-    }
     headers.extend(GLARE_COLUMNS.map(String::from));
     if a.ugr_limit.is_some() {
         headers.push("UGR_verdict".to_string());

@@ -1330,6 +1330,15 @@ pub(crate) fn measure_full(
             "lumest: points: no E_avg, E_min, U0 over mixed receiver types ({}): list one type per file, or use grids",
             kinds.into_iter().collect::<Vec<_>>().join(", ")
         );
+    } else if let Some((g, _)) = &groups
+        && g.len() > 1
+    {
+        // Figures over several grids together (a work plane, walls and a
+        // ceiling: U0 0.003) mean nothing: each grid's follow.
+        eprintln!(
+            "lumest: points: {} grids: their figures follow, grid by grid (none over the grids together)",
+            g.len()
+        );
     } else if let Some(t) = &job.points
         && let Some(line) = grid_summary(&result, t.rows.len())
     {

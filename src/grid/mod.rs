@@ -379,12 +379,23 @@ fn area_grid(
         for i in 0..na {
             let (x, y) = ((i as f64 + 0.5) * sa, (j as f64 + 0.5) * sb);
             if let Some(p) = patch.point(x, y) {
+                let (x0, y0) = (i as f64 * sa, j as f64 * sb);
                 points.push(GridPoint {
                     p: p + offset * patch.n,
                     n: patch.n,
-                    area: sa * sb,
+                    area: patch.cell_area(x0, x0 + sa, y0, y0 + sb),
                 });
             }
+        }
+    }
+    // A disc's cells over the rim carry their part on the disc; the parts
+    // of the cells left out (centre beyond the rim) are shared in
+    // proportion, so that the weights sum to the disc's area.
+    if let Some((_, r)) = patch.disc {
+        let total: f64 = points.iter().map(|q| q.area).sum();
+        if total > 0.0 {
+            let k = std::f64::consts::PI * r * r / total;
+            points.iter_mut().for_each(|q| q.area *= k);
         }
     }
     let rule = match spacing {

@@ -55,6 +55,36 @@ impl Patch {
         }
     }
 
+    /// Area \[m^2\] of the cell `[x0, x1] x [y0, y1]` (patch frame, m) that
+    /// lies on the patch: the whole cell on a rectangle; on a disc, its part
+    /// inside the circle (a cell over the rim carried its whole area: a
+    /// disc of 1.54 m^2 summed to 1.74). The chord length integrated by
+    /// 256 midpoints across a cut cell: within 1e-3 of the cell's area.
+    pub fn cell_area(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
+        let full = (x1 - x0) * (y1 - y0);
+        let Some((c, r)) = self.disc else {
+            return full;
+        };
+        let (cx, cy) = ((c - self.origin).dot(self.u), (c - self.origin).dot(self.v));
+        let d2 = |x: f64, y: f64| (x - cx).powi(2) + (y - cy).powi(2);
+        if [(x0, y0), (x1, y0), (x0, y1), (x1, y1)]
+            .iter()
+            .all(|&(x, y)| d2(x, y) <= r * r)
+        {
+            return full;
+        }
+        const N: usize = 256;
+        let dx = (x1 - x0) / N as f64;
+        let chord: f64 = (0..N)
+            .map(|k| {
+                let x = x0 + (k as f64 + 0.5) * dx;
+                let h = (r * r - (x - cx).powi(2)).max(0.0).sqrt();
+                ((cy + h).min(y1) - (cy - h).max(y0)).max(0.0)
+            })
+            .sum();
+        chord * dx
+    }
+
     /// "2 m x 3 m rectangle" or "disc of radius 0.5 m".
     pub fn describe(&self) -> String {
         match self.disc {

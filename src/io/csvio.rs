@@ -90,8 +90,15 @@ fn blank_at(text: &str, at: usize) -> bool {
 pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
     let file = display_name(path);
     let text = read_all(path)?;
-    // The preamble: comment and blank lines before the header.
-    let (mut start, mut start_line, mut comment_lines) = (0usize, 1u64, 0u64);
+    // The preamble: comment and blank lines before the header, after a
+    // byte-order mark (which hid a first `#`: the comment became the
+    // header).
+    let bom = if text.starts_with('\u{feff}') {
+        '\u{feff}'.len_utf8()
+    } else {
+        0
+    };
+    let (mut start, mut start_line, mut comment_lines) = (bom, 1u64, 0u64);
     while start < text.len() && (text[start..].starts_with('#') || blank_at(&text, start)) {
         comment_lines += u64::from(text[start..].starts_with('#'));
         match text[start..].find('\n') {
@@ -376,7 +383,10 @@ pub fn read_views(path: &str) -> Result<ViewTable, InputError> {
 /// Shortest round-trip text of `x`, in scientific notation when very small or large.
 pub fn format_number(x: f64) -> String {
     let a = x.abs();
-    if x == 0.0 || (1e-4..1e15).contains(&a) {
+    if x == 0.0 {
+        // `-0` as `0` (an empty sum of negative zeros printed `-0`).
+        "0".to_string()
+    } else if (1e-4..1e15).contains(&a) {
         format!("{x}")
     } else {
         format!("{x:e}")
