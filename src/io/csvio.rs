@@ -154,11 +154,19 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
     for rec in rdr.records() {
         let rec = rec.map_err(|e| {
             let line = e.position().map_or(0, |p| line_of(p.byte()));
+            // The csv crate's own text counts lines from after the
+            // preamble and records from 0; the file's line is the prefix.
+            let message = match e.kind() {
+                csv::ErrorKind::UnequalLengths {
+                    expected_len, len, ..
+                } => format!("{len} cells where the header has {expected_len} columns"),
+                _ => e.to_string(),
+            };
             InputError::Field {
                 file: file.clone(),
                 line,
                 field: "*".into(),
-                message: e.to_string(),
+                message,
             }
         })?;
         lines.push(rec.position().map_or(0, |p| line_of(p.byte())));
