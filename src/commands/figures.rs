@@ -138,7 +138,17 @@ pub fn grid_figures(r: &RunResult, groups: &[Group], grids: &[Grid]) -> Vec<Grid
             let u0 = spec
                 .and_then(|s| s.u0)
                 .zip(figures.as_ref())
-                .map(|(u0, f)| (u0, judged(&f.u0, u0, flagged)));
+                .map(|(u0, f)| {
+                    // No light at all: U0 = 0/0, which no longer run decides
+                    // ("undecided" said to run longer).
+                    let none = f.e_avg.value == 0.0 && f.e_avg.std_error == 0.0;
+                    let v = if none {
+                        Verdict::Undefined
+                    } else {
+                        judged(&f.u0, u0, flagged)
+                    };
+                    (u0, v)
+                });
             GridFigures {
                 name: g.name.clone(),
                 points: rows.len(),

@@ -1331,12 +1331,15 @@ pub(crate) fn measure_full(
             kinds.into_iter().collect::<Vec<_>>().join(", ")
         );
     } else if let Some((g, _)) = &groups
-        && g.len() > 1
+        && !g.is_empty()
     {
-        // Figures over several grids together (a work plane, walls and a
-        // ceiling: U0 0.003) mean nothing: each grid's follow.
+        // Points of grids: their area-weighted figures follow, grid by
+        // grid. Unweighted figures over all points would disagree with
+        // them (a disc grid's rim cells weigh less), and over several
+        // grids together (a work plane, walls and a ceiling: U0 0.003)
+        // mean nothing.
         eprintln!(
-            "lumest: points: {} grids: their figures follow, grid by grid (none over the grids together)",
+            "lumest: points: {} grid(s): their area-weighted figures follow, grid by grid",
             g.len()
         );
     } else if let Some(t) = &job.points

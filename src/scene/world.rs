@@ -371,8 +371,6 @@ enum Start {
 }
 
 impl Start {
-    /// A ray leaving `from` (a collision's surface and primitive), or from
-    /// the air (`None`: no surface is skipped).
     /// Whether the ray starts on a surface (a collision, or an observer
     /// that may stand on one), not in the air.
     #[inline(always)]
@@ -380,6 +378,8 @@ impl Start {
         !matches!(self, Start::On(u32::MAX, _))
     }
 
+    /// A ray leaving `from` (a collision's surface and primitive), or from
+    /// the air (`None`: no surface is skipped).
     fn leaving(from: Option<(u32, u32)>) -> Self {
         match from {
             Some((s, p)) => Start::On(s, p),

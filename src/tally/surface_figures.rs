@@ -354,15 +354,19 @@ pub enum Verdict {
     NotMet,
     /// The interval straddles the requirement (or is undefined).
     Undecided,
+    /// The figure itself is undefined whatever the run's length: `U0` of a
+    /// grid that no light reaches (`E_avg` exactly 0).
+    Undefined,
 }
 
 impl Verdict {
-    /// `met`, `not met` or `undecided`.
+    /// `met`, `not met`, `undecided` or `undefined`.
     pub fn name(&self) -> &'static str {
         match self {
             Verdict::Met => "met",
             Verdict::NotMet => "not met",
             Verdict::Undecided => "undecided",
+            Verdict::Undefined => "undefined",
         }
     }
 }
