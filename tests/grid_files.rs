@@ -194,6 +194,18 @@ fn rectangle_and_road() {
             g.rule
         );
     }
+    // Edges the other way round: the points face the ground, and the rule
+    // says so (before, only a run in which no point got light warned).
+    assert!(!g.rule.contains("face down"), "{}", g.rule);
+    let g = one(
+        "[[grid]]\nname = \"road\"\ntype = \"road\"\ncorner = [0, 0, 0]\nedge1 = [0, 7, 0]\nedge2 = [36, 0, 0]\nlanes = 2\n",
+    );
+    assert!(g.points.iter().all(|q| q.n.z < 0.0));
+    assert!(
+        g.rule.contains("WARNING: the points face down"),
+        "{}",
+        g.rule
+    );
 }
 
 /// Bad keys get the file, the line and the field.

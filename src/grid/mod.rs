@@ -487,7 +487,14 @@ fn road_grid(g: &GridDesc, ctx: &SourceCtx, offset: f64) -> Result<Grid, SceneEr
                 )
             } else {
                 String::new()
-            }
-        ),
+            },
+        ) + if patch.n.z < 0.0 {
+            // A road's points face edge1 x edge2: written the other way
+            // round they face the ground (0 lx, found only when no light
+            // reaches any point of the whole run).
+            "; WARNING: the points face down (edge1 x edge2 points below the horizon): swap edge1 and edge2"
+        } else {
+            ""
+        },
     })
 }
