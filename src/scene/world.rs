@@ -857,6 +857,42 @@ impl Scene {
         &self.planes
     }
 
+    /// The planes, rectangles, discs, spheres and box faces that point `p`
+    /// lies on (within their on-surface tolerance), in that order, each with
+    /// its geometric normal (a box's faces in face order; meshes are not
+    /// searched).
+    fn surfaces_through(&self, p: DVec3) -> Vec<(u32, DVec3)> {
+        let mut through = Vec::new();
+        for (i, pl) in self.planes.iter().enumerate() {
+            if pl.side(p) == 0 {
+                through.push((self.plane_surface[i], pl.n));
+            }
+        }
+        for (r, s) in &self.rects {
+            if r.plane.side(p) == 0 && r.contains_planar(p) {
+                through.push((*s, r.plane.n));
+            }
+        }
+        for (d, s) in &self.discs {
+            if d.plane.side(p) == 0 && d.contains_planar(p) {
+                through.push((*s, d.plane.n));
+            }
+        }
+        for (sp, s) in &self.spheres {
+            if sp.classify(p) == Inside::On {
+                through.push((*s, (p - sp.c).normalize()));
+            }
+        }
+        for (b, s0) in &self.boxes {
+            if b.classify(p) == Inside::On {
+                for f in (0..6).filter(|&f| b.face_plane(f).side(p) == 0) {
+                    through.push((s0 + f as u32, AaBox::outward_normal(f)));
+                }
+            }
+        }
+        through
+    }
+
     /// The surface that point `p` lies on (within the shapes' on-surface
     /// tolerance; flat shapes, spheres, boxes and meshes, within `MESH_REL`
     /// of a mesh's size), with the unit normal of its reflecting side (the
@@ -870,32 +906,8 @@ impl Scene {
             };
             (s, n, 0)
         };
-        for (i, pl) in self.planes.iter().enumerate() {
-            if pl.side(p) == 0 {
-                return Some(side(self.plane_surface[i], pl.n));
-            }
-        }
-        for (r, s) in &self.rects {
-            if r.plane.side(p) == 0 && r.contains_planar(p) {
-                return Some(side(*s, r.plane.n));
-            }
-        }
-        for (d, s) in &self.discs {
-            if d.plane.side(p) == 0 && d.contains_planar(p) {
-                return Some(side(*s, d.plane.n));
-            }
-        }
-        for (sp, s) in &self.spheres {
-            if sp.classify(p) == Inside::On {
-                return Some(side(*s, (p - sp.c).normalize()));
-            }
-        }
-        for (b, s0) in &self.boxes {
-            if b.classify(p) == Inside::On
-                && let Some(f) = (0..6).find(|&f| b.face_plane(f).side(p) == 0)
-            {
-                return Some(side(s0 + f as u32, AaBox::outward_normal(f)));
-            }
+        if let Some(&(s, ng)) = self.surfaces_through(p).first() {
+            return Some(side(s, ng));
         }
         self.meshes.iter().find_map(|(m, s)| {
             let tol = MESH_REL * (m.bounds().1 - m.bounds().0).length();
@@ -924,35 +936,7 @@ impl Scene {
     /// place (area sources, sphere lights crossing the surface) count as
     /// reaching the region.
     pub fn faces_black_side(&self, p: DVec3, n: DVec3) -> bool {
-        // The surfaces through `p`: (surface, geometric normal) ...
-        let mut through: Vec<(u32, DVec3)> = Vec::new();
-        for (i, pl) in self.planes.iter().enumerate() {
-            if pl.side(p) == 0 {
-                through.push((self.plane_surface[i], pl.n));
-            }
-        }
-        for (r, s) in &self.rects {
-            if r.plane.side(p) == 0 && r.contains_planar(p) {
-                through.push((*s, r.plane.n));
-            }
-        }
-        for (d, s) in &self.discs {
-            if d.plane.side(p) == 0 && d.contains_planar(p) {
-                through.push((*s, d.plane.n));
-            }
-        }
-        for (sp, s) in &self.spheres {
-            if sp.classify(p) == Inside::On {
-                through.push((*s, (p - sp.c).normalize()));
-            }
-        }
-        for (b, s0) in &self.boxes {
-            if b.classify(p) == Inside::On {
-                for f in (0..6).filter(|&f| b.face_plane(f).side(p) == 0) {
-                    through.push((s0 + f as u32, AaBox::outward_normal(f)));
-                }
-            }
-        }
+        let through = self.surfaces_through(p);
         // Whether light can be in the region beyond a black side.
         let reaches = |inside: &dyn Fn(DVec3) -> bool, infinite: bool| {
             self.lights.iter().any(|l| match l {
@@ -962,9 +946,9 @@ impl Scene {
             })
         };
         let lit = |&(s, ng): &(u32, DVec3)| self.surfaces[s as usize].sides.lit(ng, -n);
-        // Facing into a solid from inside one of its faces (not on an
-        // edge) or into a sphere: inside it, whatever else passes through
-        // `p` (a point on the floor under a cabinet standing on it).
+        // Facing into a solid box from inside one of its faces (not on an
+        // edge): inside it, whatever else passes through `p` (a point on
+        // the floor under a cabinet standing on it).
         for (b, s0) in &self.boxes {
             if b.classify(p) == Inside::On {
                 let mut faces = (0..6).filter(|&f| b.face_plane(f).side(p) == 0);
@@ -984,6 +968,16 @@ impl Scene {
         if through.is_empty() || through.iter().any(lit) {
             return false;
         }
+        // A closed solid's black side faces out of it where `n` leaves it
+        // (the region outside, where lights at infinity are too), else into
+        // it.
+        let solid = |classify: &dyn Fn(DVec3) -> Inside, out: bool| {
+            if out {
+                !reaches(&|q| classify(q) == Inside::Out, true)
+            } else {
+                !reaches(&|q| classify(q) == Inside::In, false)
+            }
+        };
         through
             .iter()
             .any(|&(s, ng)| match self.surfaces[s as usize].shape {
@@ -994,20 +988,11 @@ impl Scene {
                 }
                 ShapeRef::BoxFace(i, _) => {
                     let b = &self.boxes[i as usize].0;
-                    // Out of the box where `n` leaves it, else into it.
-                    if n.dot(ng) > 0.0 {
-                        !reaches(&|q| b.classify(q) == Inside::Out, true)
-                    } else {
-                        !reaches(&|q| b.classify(q) == Inside::In, false)
-                    }
+                    solid(&|q| b.classify(q), n.dot(ng) > 0.0)
                 }
                 ShapeRef::Sphere(i) => {
                     let sp = &self.spheres[i as usize].0;
-                    if n.dot(ng) > 0.0 {
-                        !reaches(&|q| sp.classify(q) == Inside::Out, true)
-                    } else {
-                        !reaches(&|q| sp.classify(q) == Inside::In, false)
-                    }
+                    solid(&|q| sp.classify(q), n.dot(ng) > 0.0)
                 }
                 _ => false,
             })
