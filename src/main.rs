@@ -16,7 +16,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Illuminance \[lx\] at CSV points by light-tracing chains and the local estimate.
+    /// Illuminance (lx) at CSV points by light-tracing chains and the local estimate.
     Illuminance(illuminance::IlluminanceArgs),
     /// Luminance [cd/m^2] along CSV views by the double local estimate.
     Luminance(illuminance::LuminanceArgs),
@@ -46,6 +46,16 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // A reader that stops early (`lumest sobolev ... | head`) ends the
+    // program quietly, as it ends other Unix tools, instead of making every
+    // later write to standard output fail (Rust ignores SIGPIPE, and
+    // `println!` then panicked).
+    #[cfg(unix)]
+    // SAFETY: restoring the default action of one signal before any thread
+    // starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let res = match &cli.command {
         Command::Illuminance(a) => illuminance::illuminance(a),

@@ -85,8 +85,10 @@ fn an_interrupted_run_resumes_to_the_identical_result() {
     a.extend(["--resume", ck_s]);
     let o = lumest(&a);
     let err = String::from_utf8_lossy(&o.stderr);
+    // Named alone: the settings once differed too (they held the seed and
+    // the chain count).
     assert!(
-        !o.status.success() && err.contains("another run") && err.contains("seed"),
+        !o.status.success() && err.contains("its seed differ(s)"),
         "{err}"
     );
     let mut a = args(done.to_str().unwrap(), "7");
@@ -94,7 +96,19 @@ fn an_interrupted_run_resumes_to_the_identical_result() {
     a.extend(["--resume", ck_s]);
     let o = lumest(&a);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("--chains"), "{err}");
+    assert!(
+        !o.status.success() && err.contains("its --chains differ(s)"),
+        "{err}"
+    );
+    // Another setting: named by its field.
+    let mut a = args(done.to_str().unwrap(), "7");
+    a.extend(["--orders", "2", "--resume", ck_s]);
+    let o = lumest(&a);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("its settings (orders) differ(s)"),
+        "{err}"
+    );
     // Checkpoints go with a fixed chain count.
     let o = lumest(&[
         "illuminance",

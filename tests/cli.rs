@@ -1126,3 +1126,45 @@ fn chains_within_the_time_keep_their_bytes() {
     assert_eq!(run("b.csv", &["--time", "0.5", "--threads", "64"]), plain);
     assert_eq!(run("c.csv", &["--time", "100"]), plain);
 }
+
+/// `--time` is soft: where even the least run (32 batches of the smallest
+/// timed size) needs longer than the limit, the summary says the run went
+/// on past it; it once said the batches were sized so that they fit.
+#[test]
+fn a_time_limit_shorter_than_the_least_run_is_reported() {
+    let o = illuminance_stdin(&["--time", "1e-6"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("--time: the least run, 32 batches of")
+            && e.contains("which is soft: the run went on past it"),
+        "{e}"
+    );
+    assert!(!e.contains("fit at the measured"), "{e}");
+}
+
+/// A reader that closes the pipe early (`lumest sobolev ... | head -1`)
+/// ends lumest quietly; `println!` on the broken pipe once panicked.
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_the_output_quietly() {
+    use std::io::Read;
+    use std::os::unix::process::ExitStatusExt;
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("lumest"))
+        .args(["sobolev", "--plane", "1", "--r", "0:3:0.001"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 16];
+    child.stdout.take().unwrap().read_exact(&mut first).unwrap();
+    // (The read end is dropped here: the pipe is closed.)
+    let o = child.wait_with_output().unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!e.contains("panicked"), "{e}");
+    assert!(
+        o.status.success() || o.status.signal() == Some(libc::SIGPIPE),
+        "{:?}: {e}",
+        o.status
+    );
+}

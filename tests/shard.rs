@@ -519,3 +519,78 @@ fn states_name_their_build() {
         "{id}"
     );
 }
+
+/// `lumest merge --out` never writes over the run's own inputs (the scene,
+/// the points, a file the scene names, one reached by a symbolic link),
+/// which the shards record; a state without that record (an edited header,
+/// its checksum made good) still merges.
+#[test]
+fn merge_never_writes_over_the_runs_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let sc = dir.path().join("sc");
+    std::fs::create_dir(&sc).unwrap();
+    let files = [
+        "office.toml",
+        "office_grid.csv",
+        "blob.obj",
+        "downlight.ldt",
+        "pendant.ies",
+    ];
+    for f in files {
+        std::fs::copy(data(f), sc.join(f)).unwrap();
+    }
+    let part = dir.path().join("part").to_string_lossy().into_owned();
+    let o = lumest(&[
+        "illuminance",
+        "--scene",
+        sc.join("office.toml").to_str().unwrap(),
+        "--points",
+        sc.join("office_grid.csv").to_str().unwrap(),
+        "--chains",
+        "1000",
+        "--shard",
+        "0/1",
+        "--out",
+        &part,
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let link = dir.path().join("link.ies");
+    std::os::unix::fs::symlink(sc.join("pendant.ies"), &link).unwrap();
+    let targets = files.iter().map(|f| sc.join(f)).chain([link]);
+    for out in targets {
+        let before = std::fs::read(&out).unwrap();
+        let o = lumest(&["merge", &part, "--out", out.to_str().unwrap()]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && e.contains("would overwrite the input"),
+            "{}: {e}",
+            out.display()
+        );
+        assert_eq!(std::fs::read(&out).unwrap(), before, "{}", out.display());
+    }
+    // Without the record (a state written before it), the merge goes on.
+    let bytes = std::fs::read(&part).unwrap();
+    let end = bytes.windows(2).position(|w| w == b"\n\n").unwrap();
+    let header = String::from_utf8(bytes[..end].to_vec()).unwrap();
+    assert!(header.contains("\ninputs = "), "{header}");
+    let kept: Vec<&str> = header
+        .lines()
+        .filter(|l| !l.starts_with("inputs = "))
+        .collect();
+    let mut edited = kept.join("\n").into_bytes();
+    edited.extend(&bytes[end..bytes.len() - 8]);
+    let sum = fnv1a(&edited);
+    edited.extend(sum.to_le_bytes());
+    let old = dir.path().join("old").to_string_lossy().into_owned();
+    std::fs::write(&old, &edited).unwrap();
+    let (r1, r2) = (dir.path().join("r1.csv"), dir.path().join("r2.csv"));
+    for (p, r) in [(&part, &r1), (&old, &r2)] {
+        let o = lumest(&["merge", p, "--out", r.to_str().unwrap()]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{e}");
+        // (The summary once said the merge ran "on 0 thread(s)".)
+        assert!(!e.contains("0 thread(s)"), "{e}");
+    }
+    assert_eq!(std::fs::read(&r1).unwrap(), std::fs::read(&r2).unwrap());
+}

@@ -14,7 +14,7 @@ use std::path::PathBuf;
 /// Run controls and report of a validation case.
 #[derive(Args, Clone, Debug)]
 pub struct CaseArgs {
-    /// Wall-clock time of the run \[s\].
+    /// Wall-clock time of the run (s).
     #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub time: f64,
     /// Seed.

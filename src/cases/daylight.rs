@@ -66,7 +66,7 @@ pub struct DaylightArgs {
     #[arg(long)]
     pub probe: Option<PathBuf>,
     /// Run controls and report: the runs of each reference double their chains
-    /// until one lasts `--time / 2` \[s\] or more (about `2 T` per reference).
+    /// until one lasts `--time / 2` (s) or more (about `2 T` per reference).
     #[command(flatten)]
     pub case: CaseArgs,
 }

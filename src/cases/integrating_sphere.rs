@@ -20,7 +20,7 @@ pub struct SphereArgs {
     /// Wall reflectance, in [0, 1).
     #[arg(long, default_value_t = 0.9, allow_negative_numbers = true)]
     pub rho: f64,
-    /// Radius \[m\].
+    /// Radius (m).
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub radius: f64,
     /// Source position relative to the centre, in units of the radius: `x,y,z`.

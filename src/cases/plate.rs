@@ -15,7 +15,7 @@ use glam::DVec3;
 /// Arguments of `lumest validate plate`.
 #[derive(Args, Clone, Debug)]
 pub struct PlateArgs {
-    /// Side of the square plate \[m\].
+    /// Side of the square plate (m).
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub side: f64,
     /// Reflectance of the plate.

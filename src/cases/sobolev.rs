@@ -30,7 +30,7 @@ pub struct ValidateSobolevArgs {
     /// Number of views (luminance), half looking at each plane.
     #[arg(long, default_value_t = 50, allow_negative_numbers = true)]
     pub views: usize,
-    /// Largest horizontal distance of the points \[m\].
+    /// Largest horizontal distance of the points (m).
     #[arg(long = "r-max", default_value_t = 3.0, allow_negative_numbers = true)]
     pub r_max: f64,
     #[command(flatten)]

@@ -24,7 +24,7 @@ pub struct GlareArgs {
     /// Scene file (TOML).
     #[arg(long)]
     pub scene: std::path::PathBuf,
-    /// Observers CSV: eye position `x,y,z` \[m\] and line of sight
+    /// Observers CSV: eye position `x,y,z` (m) and line of sight
     /// `dx,dy,dz` (not vertical), optionally a `name` column (`-`: stdin).
     /// Without it, the scene file's `[[observer]]` tables (`name`, `eye`,
     /// `view`).

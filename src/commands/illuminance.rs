@@ -320,7 +320,7 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
         )
     };
     let text = format!(
-        "{} receivers, {} chains in {} batches of {}, {:.3} s on {} thread(s), stopped by {:?}\n\
+        "{} receivers, {} chains in {} batches of {}, {:.3} s{}, stopped by {:?}\n\
          {} chains/s, {} scores/s, {:.3} collisions/chain\n\
          relative standard error: RMS {:.3e}, max {:.3e}; FOM = 1/(R_rms^2 T) = {}",
         r.direct.len(),
@@ -332,7 +332,13 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
             r.batch_size.to_string()
         },
         r.wall,
-        r.threads,
+        // (0 where no thread traced this process's chains: a merge of
+        // shards, whose wall times are summed, or a run no light reaches.)
+        if r.threads > 0 {
+            format!(" on {} thread(s)", r.threads)
+        } else {
+            String::new()
+        },
         r.reason,
         per_second(r.chains as f64, r.wall),
         per_second(r.scores as f64, r.wall),
@@ -374,30 +380,29 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
     } else {
         format!("{text}\n{flags}")
     };
-    if let Some(t) = &r.time_sizing
-        && t.batch_size < t.default_batch_size
-    {
-        text += &format!(
-            "\n--time: batches of {} chains (default {}) so that {} batches, and the batches every \
-             thread holds at the limit, fit at the measured {:.3e} chains/s{}",
-            t.batch_size,
-            t.default_batch_size,
-            crate::run::MIN_BATCHES,
-            t.rate,
-            if matches!(
-                r.reason,
-                crate::run::StopReason::Time | crate::run::StopReason::Chains
-            ) {
-                // (Stopped by the time, or by --chains reached first.)
-                String::new()
-            } else {
-                format!(
-                    "; even so the minimum of {} batches needs about {:.3} s",
-                    crate::run::MIN_BATCHES,
-                    t.minimum_time
-                )
-            }
-        );
+    if let Some(t) = &r.time_sizing {
+        if t.minimum_time > t.left {
+            // The limit is soft: the least run goes on past it.
+            text += &format!(
+                "\n--time: the least run, {} batches of {} chains, needs about {:.3} s at the \
+                 measured {:.3e} chains/s, more than the {:.3} s left of the limit, which is soft: \
+                 the run went on past it (give more time, or --chains)",
+                crate::run::MIN_BATCHES,
+                t.batch_size,
+                t.minimum_time,
+                t.rate,
+                t.left
+            );
+        } else if t.batch_size < t.default_batch_size {
+            text += &format!(
+                "\n--time: batches of {} chains (default {}) so that {} batches, and the batches \
+                 every thread holds at the limit, fit at the measured {:.3e} chains/s",
+                t.batch_size,
+                t.default_batch_size,
+                crate::run::MIN_BATCHES,
+                t.rate,
+            );
+        }
     }
     if let Some(p) = r.pilot.as_ref().filter(|p| p.custom) {
         text += &format!(

@@ -11,7 +11,7 @@ use crate::run::{RunResult, StopReason, Tallies, fold_batches};
 use crate::tally::shard::{RunIdentity, ShardState};
 use anyhow::Context;
 use clap::Args;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Most shards of one run.
 pub const MAX_SHARDS: u64 = 1_000_000;
@@ -48,9 +48,8 @@ pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
         a.out != "-",
         "--shard writes its state to a file for `lumest merge`, which reads files: give --out a file name, not `-`"
     );
-    let referenced = crate::scene::referenced_files(&a.scene);
-    let mut inputs = vec![a.scene.as_path(), Path::new(&a.points)];
-    inputs.extend(referenced.iter().map(|p| p.as_path()));
+    let inputs = run_inputs(a);
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
     check_outputs(&inputs, &[("--out", Path::new(&a.out))])?;
     let state = shard_state(a, i, m, None)?;
     write_atomic_with(&a.out, |w| state.write(w)).with_context(|| format!("writing {}", a.out))?;
@@ -63,6 +62,14 @@ pub fn run_shard(a: &IlluminanceArgs, shard: &str) -> anyhow::Result<()> {
         a.out
     );
     Ok(())
+}
+
+/// The files the run `a` reads: the scene, the points, the files the scene
+/// names.
+fn run_inputs(a: &IlluminanceArgs) -> Vec<PathBuf> {
+    let mut inputs = vec![a.scene.clone(), PathBuf::from(&a.points)];
+    inputs.extend(crate::scene::referenced_files(&a.scene));
+    inputs
 }
 
 /// The state of shard `i` of `m` of the run `a` describes (batches `i, i +
@@ -150,6 +157,10 @@ pub fn shard_state(
         rows: table.rows.clone(),
         comment_lines: table.comment_lines,
         batches: r.batches,
+        inputs: run_inputs(a)
+            .iter()
+            .map(|p| p.canonicalize().unwrap_or_else(|_| p.to_path_buf()))
+            .collect(),
     })
 }
 
@@ -202,14 +213,21 @@ fn well_formed(s: &ShardState) -> anyhow::Result<()> {
 
 /// Run `lumest merge`.
 pub fn merge(a: &MergeArgs) -> anyhow::Result<()> {
-    let inputs: Vec<&Path> = a.parts.iter().map(Path::new).collect();
-    check_outputs(&inputs, &[("--out", Path::new(&a.out))])?;
+    let parts: Vec<&Path> = a.parts.iter().map(Path::new).collect();
+    check_outputs(&parts, &[("--out", Path::new(&a.out))])?;
     let mut states = Vec::new();
     for p in &a.parts {
         let bytes = std::fs::read(p).with_context(|| format!("reading {p}"))?;
         let s = ShardState::read(&bytes).with_context(|| p.to_string())?;
         states.push((p.clone(), s));
     }
+    // Nor over the run's own inputs, as the shards recorded them (the
+    // scene, the points, the files the scene names).
+    let inputs: Vec<&Path> = states
+        .iter()
+        .flat_map(|(_, s)| s.inputs.iter().map(PathBuf::as_path))
+        .collect();
+    check_outputs(&inputs, &[("--out", Path::new(&a.out))])?;
     merge_states(states, &a.out)
 }
 
@@ -246,7 +264,7 @@ pub fn merge_states(mut states: Vec<(String, ShardState)>, out: &str) -> anyhow:
             r.chains == f.chains && r.batches == f.batches && r.batch_size == f.batch_size,
         )?;
         same(
-            "settings",
+            &super::run_state::settings_differ(&r.config, &f.config),
             r.config == f.config && r.orders == f.orders && r.receivers == f.receivers,
         )?;
         same("shard counts", s.shard.1 == m)?;

@@ -72,7 +72,8 @@ pub struct RunArgs {
     /// other stopping rule is given.
     #[arg(long, value_parser = parse_count, allow_negative_numbers = true)]
     pub chains: Option<u64>,
-    /// Wall-clock limit \[s\].
+    /// Wall-clock limit (s). Soft: a run completes at least 32 batches, and
+    /// its summary says when they need longer than the limit.
     #[arg(long, allow_negative_numbers = true)]
     pub time: Option<f64>,
     /// Stop when the largest relative standard error of E over the points is below this.
@@ -110,7 +111,7 @@ pub struct RunArgs {
     pub rr_weight: f64,
     /// Near/far split against the singular kernel and for far points: `auto`
     /// (the default: where a point has a surface closer than a tenth of its
-    /// distance to the nearest light, with a quarter of that distance), a radius \[m\] for
+    /// distance to the nearest light, with a quarter of that distance), a radius (m) for
     /// every point, or `0` (off: the plain local estimate). Collisions closer
     /// than the radius leave their share to backward paths from the point
     /// (unbiased; keeps the variance finite next to walls and in corners, and

@@ -14,22 +14,22 @@ pub struct RenderArgs {
     /// Scene file (TOML).
     #[arg(long)]
     pub scene: PathBuf,
-    /// Camera position `x,y,z` \[m\].
+    /// Camera position `x,y,z` (m).
     #[arg(long, allow_hyphen_values = true)]
     pub eye: String,
-    /// Point the camera looks at `x,y,z` \[m\].
+    /// Point the camera looks at `x,y,z` (m).
     #[arg(long, allow_hyphen_values = true)]
     pub look: String,
     /// Up direction `x,y,z`.
     #[arg(long, default_value = "0,0,1", allow_hyphen_values = true)]
     pub up: String,
-    /// Horizontal field of view \[degrees\].
+    /// Horizontal field of view (degrees).
     #[arg(long, default_value_t = 60.0, allow_negative_numbers = true)]
     pub fov: f64,
-    /// Image width \[pixels\].
+    /// Image width (pixels).
     #[arg(long, default_value_t = 160, allow_negative_numbers = true)]
     pub width: usize,
-    /// Image height \[pixels\].
+    /// Image height (pixels).
     #[arg(long, default_value_t = 120, allow_negative_numbers = true)]
     pub height: usize,
     /// Output PNG (display image). Also written: the same name with `.hdr`
@@ -38,10 +38,10 @@ pub struct RenderArgs {
     /// with a lens, per lens sample, and per pixel in `_pixels.csv`).
     #[arg(long)]
     pub out: String,
-    /// Thin-lens depth of field: aperture radius \[m\] (0: pinhole).
+    /// Thin-lens depth of field: aperture radius (m) (0: pinhole).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub aperture: f64,
-    /// Thin-lens focus distance along the viewing axis \[m\] (default: |look - eye|).
+    /// Thin-lens focus distance along the viewing axis (m) (default: |look - eye|).
     #[arg(long, allow_negative_numbers = true)]
     pub focus: Option<f64>,
     /// Lens samples per pixel with `--aperture` (a stratified square grid: 1, 4, 9, 16, ...).

@@ -41,7 +41,14 @@ pub fn identity(
     if let Some((t, _)) = &job.views {
         points ^= table_hash(&t.headers, &t.rows).rotate_left(1);
     }
+    // (The seed and the chain count are compared on their own, so that a
+    // mismatch names them and not the settings too.)
     let settings = RunConfig {
+        seed: 0,
+        stop: crate::run::Stop {
+            chains: None,
+            ..cfg.stop
+        },
         threads: 0,
         shard: None,
         resume: None,
@@ -63,6 +70,35 @@ pub fn identity(
             env!("CARGO_PKG_VERSION"),
             env!("LUMEST_BUILD")
         ),
+    }
+}
+
+/// `settings`, naming the first setting in which two runs' `config` texts
+/// ([`RunIdentity::config`]) differ: the field of the run's configuration
+/// (`settings (near)`) or the build.
+pub fn settings_differ(a: &str, b: &str) -> String {
+    if a == b {
+        return "settings".to_string();
+    }
+    let k = a
+        .char_indices()
+        .zip(b.chars())
+        .find(|((_, x), y)| x != y)
+        .map_or(a.len().min(b.len()), |((k, _), _)| k);
+    let before = &a[..k];
+    // The text is `lumest V build B estimator E RunConfig { field: value, .. }`.
+    if !before.contains('{') {
+        return "settings (the lumest build or the estimator)".to_string();
+    }
+    let field = before.rfind(": ").map(|end| {
+        let start = before[..end]
+            .rfind(|c: char| !(c.is_alphanumeric() || c == '_'))
+            .map_or(0, |i| i + 1);
+        &before[start..end]
+    });
+    match field {
+        Some(f) if !f.is_empty() => format!("settings ({f})"),
+        _ => "settings".to_string(),
     }
 }
 
@@ -151,7 +187,7 @@ pub fn resume(
     let bytes = std::fs::read(path).with_context(|| format!("reading {path}"))?;
     let c = Checkpoint::read(&bytes).with_context(|| path.to_string())?;
     let want = identity(scene, job, cfg, estimator, c.run.batch_size);
-    let differ: Vec<&str> = [
+    let differ: Vec<String> = [
         (
             "scene (or its --direct-lights, --ris-candidates)",
             want.scene != c.run.scene,
@@ -168,7 +204,11 @@ pub fn resume(
         ),
     ]
     .into_iter()
-    .filter_map(|(what, d)| d.then_some(what))
+    .filter(|&(_, d)| d)
+    .map(|(what, _)| match what {
+        "settings" => settings_differ(&want.config, &c.run.config),
+        _ => what.to_string(),
+    })
     .collect();
     anyhow::ensure!(
         differ.is_empty(),

@@ -33,10 +33,10 @@ pub struct ShFitArgs {
     /// Degree L of the expansion ((L + 1)^2 coefficients).
     #[arg(long, allow_negative_numbers = true)]
     pub degree: usize,
-    /// Output CSV of coefficients `k,m,a,b` \[m\].
+    /// Output CSV of coefficients `k,m,a,b` (m).
     #[arg(long)]
     pub out: PathBuf,
-    /// Centre of the expansion `x,y,z` \[m\] (default: the mesh's volume centroid).
+    /// Centre of the expansion `x,y,z` (m) (default: the mesh's volume centroid).
     #[arg(long, allow_hyphen_values = true)]
     pub center: Option<String>,
     /// Number of sample directions (default: max(4000, 20 (L + 1)^2)).

@@ -8,10 +8,10 @@ use rayon::prelude::*;
 /// Physical parameters of the Sobolev problem.
 #[derive(Args, Clone, Debug)]
 pub struct SobolevParams {
-    /// Distance from the source to plane 1 \[m\].
+    /// Distance from the source to plane 1 (m).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub h1: f64,
-    /// Distance from the source to plane 2 \[m\].
+    /// Distance from the source to plane 2 (m).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub h2: f64,
     /// Reflectance of plane 1.
@@ -20,7 +20,7 @@ pub struct SobolevParams {
     /// Reflectance of plane 2.
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub rho2: f64,
-    /// Intensity of the isotropic source \[cd\].
+    /// Intensity of the isotropic source (cd).
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub intensity: f64,
 }
@@ -41,7 +41,7 @@ pub struct SobolevArgs {
     /// Plane (1 or 2).
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=2), allow_negative_numbers = true)]
     pub plane: u8,
-    /// Horizontal distances \[m\]: `a,b,c` or `start:stop:step`.
+    /// Horizontal distances (m): `a,b,c` or `start:stop:step`.
     #[arg(long, allow_hyphen_values = true)]
     pub r: String,
     /// Also print reflection orders 1..K.

@@ -22,6 +22,13 @@ pub enum InputError {
         field: String,
         message: String,
     },
+    /// A row as a whole (its cell count), no one field.
+    #[error("{file}:{line}: {message}")]
+    Row {
+        file: String,
+        line: u64,
+        message: String,
+    },
 }
 
 /// A point list as read: raw columns (to carry through) and parsed geometry.
@@ -162,10 +169,9 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
                 } => format!("{len} cells where the header has {expected_len} columns"),
                 _ => e.to_string(),
             };
-            InputError::Field {
+            InputError::Row {
                 file: file.clone(),
                 line,
-                field: "*".into(),
                 message,
             }
         })?;

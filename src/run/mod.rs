@@ -287,8 +287,10 @@ pub struct TimeSizing {
     /// The batch size chosen.
     pub batch_size: u64,
     /// Estimated time of [`MIN_BATCHES`] batches at the chosen size \[s\]:
-    /// above the time limit when even the smallest batches cannot fit.
+    /// above [`Self::left`] when even the smallest batches cannot fit.
     pub minimum_time: f64,
+    /// Time left of the limit when the batches were sized \[s\].
+    pub left: f64,
 }
 
 /// Smallest batch a `--time` run shrinks to, and the batch size of the
@@ -347,6 +349,7 @@ pub fn time_batch_size(
         default_batch_size: bs,
         batch_size: chosen,
         minimum_time: (MIN_BATCHES * chosen) as f64 / rate,
+        left,
     }
 }
 

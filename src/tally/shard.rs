@@ -21,6 +21,10 @@
 //! points = <16 hex digits> FNV-1a 64 of the points file
 //! config = <text>          every run setting that changes the numbers, which must match
 //! wall = <seconds>         the shard's wall time (for the merged summary only)
+//! inputs = <paths>         optional: the run's input files (scene, points, the files the
+//!                          scene names), canonical, tab-separated, with `%`, tab, CR and
+//!                          LF written `%25`, `%09`, `%0D`, `%0A`: `lumest merge --out`
+//!                          never writes over them (states without it still merge)
 //!
 //! body: direct (n f64), the checks watched, near_plain, near_reach and
 //! enclosed (each a u64 count, then one byte per receiver), the points table (headers, rows
@@ -39,6 +43,7 @@
 use super::Batch;
 use super::state_file::*;
 use std::io::{self, Write};
+use std::path::PathBuf;
 
 pub use super::state_file::{RunIdentity, StateError, fnv1a};
 
@@ -66,16 +71,30 @@ pub struct ShardState {
     pub comment_lines: u64,
     /// The shard's batches in index order.
     pub batches: Vec<Batch>,
+    /// The run's input files where the shard ran (scene, points, the files
+    /// the scene names; canonical where they resolve), which a merge must
+    /// not write over. Not part of the run's identity: shards may run from
+    /// other folders or machines.
+    pub inputs: Vec<PathBuf>,
 }
 
 impl ShardState {
     /// Write the state (format in the module docs).
     pub fn write<W: Write>(&self, w: W) -> io::Result<()> {
         let mut w = hashing(w);
-        let extra = [
+        let mut extra = vec![
             ("shard", format!("{}/{}", self.shard.0, self.shard.1)),
             ("wall", format!("{:e}", self.wall)),
         ];
+        // (A path that is not UTF-8 is left out: the check only loses it.)
+        let inputs: Vec<String> = self
+            .inputs
+            .iter()
+            .filter_map(|p| p.to_str().map(escape_path))
+            .collect();
+        if !inputs.is_empty() {
+            extra.push(("inputs", inputs.join("\t")));
+        }
         write_header(&mut w, MAGIC, &self.run, &extra)?;
         self.direct
             .iter()
@@ -102,6 +121,11 @@ impl ShardState {
             .and_then(|(i, m)| Some((i.parse().ok()?, m.parse().ok()?)))
             .ok_or_else(|| StateError::Header(format!("shard `{shard}` is not I/M")))?;
         let wall = key_f64(&kv, "wall")?;
+        let inputs = kv.get("inputs").map_or_else(Vec::new, |v| {
+            v.split('\t')
+                .map(|p| PathBuf::from(unescape_path(p)))
+                .collect()
+        });
         let r = &mut body;
         let direct = get_f64s(r, run.receivers as usize)?;
         let checks = [get_flags(r)?, get_flags(r)?, get_flags(r)?, get_flags(r)?];
@@ -128,6 +152,7 @@ impl ShardState {
             rows,
             comment_lines,
             batches,
+            inputs,
         })
     }
 }
@@ -165,6 +190,24 @@ pub fn read_batches(r: &mut &[u8]) -> Result<Vec<Batch>, StateError> {
         });
     }
     Ok(batches)
+}
+
+/// A path as one header value: `%`, tab, CR and LF percent-escaped.
+fn escape_path(p: &str) -> String {
+    p.replace('%', "%25")
+        .replace('\t', "%09")
+        .replace('\r', "%0D")
+        .replace('\n', "%0A")
+}
+
+/// The inverse of [`escape_path`]. Replacing one escape after another is
+/// exact: an escaped `%` reads `%25`, so no other escape starts inside one,
+/// and `%25` goes last.
+fn unescape_path(s: &str) -> String {
+    s.replace("%09", "\t")
+        .replace("%0D", "\r")
+        .replace("%0A", "\n")
+        .replace("%25", "%")
 }
 
 #[cfg(test)]
@@ -211,6 +254,7 @@ mod tests {
                     near_hits: vec![4, 5],
                 })
                 .collect(),
+            inputs: vec!["/data/a b%0A.toml".into(), "/p\tq\n%.csv".into()],
         }
     }
 
@@ -227,6 +271,7 @@ mod tests {
         );
         assert_eq!(r.checks, s.checks);
         assert_eq!((r.headers, r.rows), (s.headers, s.rows));
+        assert_eq!(r.inputs, s.inputs);
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&r.direct), bits(&s.direct));
         for (a, b) in r.batches.iter().zip(&s.batches) {

@@ -10,7 +10,7 @@ pub struct StressArgs {
     /// Run only the quick subset, each case with its own fixed number of chains.
     #[arg(long)]
     pub quick: bool,
-    /// Wall-clock time per case \[s\] (default 2; with `--quick`, fixed chains instead).
+    /// Wall-clock time per case (s) (default 2; with `--quick`, fixed chains instead).
     #[arg(long = "time-per-case", allow_negative_numbers = true)]
     pub time_per_case: Option<f64>,
     /// Chains per case instead of a time (paths per point for the backward

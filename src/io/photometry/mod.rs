@@ -308,13 +308,17 @@ impl Photometry {
 
 /// An error in a photometric file, naming the file, the line and the field.
 #[derive(Debug, thiserror::Error, PartialEq)]
-#[error("{file}{}: {field}: {message}", if *line > 0 { format!(":{line}") } else { String::new() })]
+#[error(
+    "{file}{}: {}{message}",
+    if *line > 0 { format!(":{line}") } else { String::new() },
+    if field.is_empty() { String::new() } else { format!("{field}: ") }
+)]
 pub struct PhotometryError {
     /// The file, as given.
     pub file: String,
     /// 1-based line number (0: the file as a whole).
     pub line: usize,
-    /// The field, in the format's own words.
+    /// The field, in the format's own words (empty: the file as a whole).
     pub field: String,
     /// What is wrong.
     pub message: String,
@@ -326,7 +330,7 @@ pub fn read(path: &std::path::Path) -> Result<Photometry, PhotometryError> {
     let bytes = std::fs::read(path).map_err(|e| PhotometryError {
         file: name.clone(),
         line: 0,
-        field: "file".into(),
+        field: String::new(),
         message: format!("cannot read: {e}"),
     })?;
     // Photometric files are often Latin-1: keep every byte as a character.
