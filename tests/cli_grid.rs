@@ -421,3 +421,64 @@ fn undefined_figures_are_empty_cells() {
     // Its requirement U0 >= 0.1 is undefined, not "undecided" (run longer).
     assert_eq!(u0[10], "undefined", "{f}");
 }
+
+/// A cylindrical grid 1.2 m above the floor over a cabinet 1.2 m tall:
+/// `lumest grid` leaves out the points on the cabinet's top (a solid
+/// receiver there would be partly inside it, and the run refused the whole
+/// file), says so, and the run goes through; a hemispherical grid on the
+/// floor itself, every point on a surface, is refused with the way out.
+#[test]
+fn solid_receivers_on_a_surface_are_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = format!(
+        "{SCENE}\n[[surface]]\ntype = \"box\"\nname = \"cabinet\"\nmin = [0, 0, 0]\n\
+         max = [1.0, 0.8, 1.2]\nnormals = \"outward\"\n\
+         material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\
+         [[grid]]\nname = \"cyl\"\nsurface = \"room.z_min\"\noffset = 1.2\nspacing = 0.5\n\
+         receiver = \"cylindrical\"\n\
+         [[grid]]\nname = \"hemi\"\nsurface = \"room.z_min\"\nspacing = 0.5\n\
+         receiver = \"hemispherical\"\n"
+    );
+    let (s, p) = (dir.path().join("s.toml"), dir.path().join("p.csv"));
+    std::fs::write(&s, &scene).unwrap();
+    let o = lumest()
+        .args(["grid", "--name", "cyl", "--scene"])
+        .arg(&s)
+        .arg("--out")
+        .arg(&p)
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{e}");
+    // 8 x 6 cells, 4 of whose centres lie over the cabinet.
+    assert!(
+        e.contains("grid `cyl`: 4 of its 48 points lie on a surface") && e.contains("left out"),
+        "{e}"
+    );
+    let text = std::fs::read_to_string(&p).unwrap();
+    assert_eq!(text.lines().count(), 1 + 44, "{text}");
+    let o = lumest()
+        .args(["illuminance", "--chains", "1024", "--quiet", "--scene"])
+        .arg(&s)
+        .arg("--points")
+        .arg(&p)
+        .arg("--out")
+        .arg(dir.path().join("e.csv"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = lumest()
+        .args(["grid", "--name", "hemi", "--scene"])
+        .arg(&s)
+        .arg("--out")
+        .arg(dir.path().join("h.csv"))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && e.contains("grid `hemi`: every point lies on a surface")
+            && e.contains("offset"),
+        "{e}"
+    );
+}

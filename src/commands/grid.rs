@@ -71,6 +71,40 @@ pub fn describe(g: &Grid) -> String {
     )
 }
 
+/// A solid receiver (cylindrical, semicylindrical, hemispherical,
+/// spherical) on a surface would lie partly inside it, and `lumest
+/// illuminance` refuses it. Grid `g`'s points of such a type that lie on a
+/// surface of `scene` (a cylindrical grid at 1.2 m over a cabinet 1.2 m
+/// tall) are left out, and the note returned says how many; a grid all of
+/// whose points lie on surfaces (a hemispherical grid on the road itself)
+/// is refused.
+fn leave_out_points_on_surfaces(
+    scene: &crate::scene::Scene,
+    g: &mut Grid,
+) -> anyhow::Result<Option<String>> {
+    let Ok(Some(kind)) = crate::estimator::solid::Solid::parse(&g.receiver) else {
+        return Ok(None);
+    };
+    let before = g.points.len();
+    g.points.retain(|q| !scene.on_surface(q.p));
+    let left_out = before - g.points.len();
+    anyhow::ensure!(
+        before == 0 || !g.points.is_empty(),
+        "grid `{}`: every point lies on a surface, where a {} receiver would be partly inside it: \
+         give the [[grid]] an `offset` (such as 0.001 m) or another height",
+        g.name,
+        kind.name()
+    );
+    Ok((left_out > 0).then(|| {
+        format!(
+            "grid `{}`: {left_out} of its {before} points lie on a surface (furniture, a wall), \
+             where a {} receiver would be partly inside it: left out",
+            g.name,
+            kind.name()
+        )
+    }))
+}
+
 /// Run `lumest grid`.
 pub fn grid(a: &GridArgs) -> anyhow::Result<()> {
     // The scene and every file it names (photometric files, meshes, SH
@@ -80,7 +114,7 @@ pub fn grid(a: &GridArgs) -> anyhow::Result<()> {
     inputs.extend(referenced.iter().map(|p| p.as_path()));
     check_outputs(&inputs, &[("--out", Path::new(&a.out))])?;
     // The scene must compile: a grid on a scene that does not is no use.
-    crate::scene::load(&a.scene)?;
+    let scene = crate::scene::load(&a.scene)?;
     let mut grids = crate::grid::load(&a.scene)?;
     anyhow::ensure!(
         !grids.is_empty(),
@@ -97,6 +131,12 @@ pub fn grid(a: &GridArgs) -> anyhow::Result<()> {
             names.join(", ")
         );
     }
+    let mut notes = Vec::new();
+    for g in &mut grids {
+        if let Some(note) = leave_out_points_on_surfaces(&scene, g)? {
+            notes.push(note);
+        }
+    }
     let headers: Vec<String> = GRID_COLUMNS.map(String::from).to_vec();
     let (staged, n) = stage_csv(&a.out, &headers, grid_rows(&grids))
         .with_context(|| format!("writing {}", a.out))?;
@@ -105,6 +145,9 @@ pub fn grid(a: &GridArgs) -> anyhow::Result<()> {
         .with_context(|| format!("writing {}", a.out))?;
     for g in &grids {
         eprintln!("lumest: {}", describe(g));
+    }
+    for note in notes {
+        eprintln!("lumest: {note}");
     }
     let out = if a.out == "-" { "<stdout>" } else { &a.out };
     eprintln!("lumest: {n} points written to {out}");
