@@ -220,6 +220,44 @@ fn shard(dir: &Path, name: &str, i: u64, m: u64, seed: &str, scene: &str) -> Str
     p
 }
 
+/// The office scene and the files it names, with its work-plane points.
+const OFFICE_FILES: [&str; 5] = [
+    "office.toml",
+    "office_grid.csv",
+    "blob.obj",
+    "downlight.ldt",
+    "pendant.ies",
+];
+
+/// A copy of [`OFFICE_FILES`] in `dir/sc`; returns that folder.
+fn office_copy(dir: &Path) -> PathBuf {
+    let sc = dir.join("sc");
+    std::fs::create_dir(&sc).unwrap();
+    for f in OFFICE_FILES {
+        std::fs::copy(data(f), sc.join(f)).unwrap();
+    }
+    sc
+}
+
+/// Shard 0/1 of a 1000-chain run of the office copy in `sc`, its state to
+/// `out`.
+fn office_shard(sc: &Path, out: &str) -> std::process::Output {
+    lumest(&[
+        "illuminance",
+        "--scene",
+        sc.join("office.toml").to_str().unwrap(),
+        "--points",
+        sc.join("office_grid.csv").to_str().unwrap(),
+        "--chains",
+        "1000",
+        "--shard",
+        "0/1",
+        "--out",
+        out,
+        "--quiet",
+    ])
+}
+
 /// FNV-1a 64, the states' documented checksum (written out here from its
 /// definition).
 fn fnv1a(bytes: &[u8]) -> u64 {
@@ -383,32 +421,10 @@ fn shard_options_are_checked() {
         assert!(!Path::new(&p).exists());
     }
     // A shard's state never goes over a file the scene names.
-    let sc = dir.path().join("sc");
-    std::fs::create_dir(&sc).unwrap();
-    for f in [
-        "office.toml",
-        "office_grid.csv",
-        "blob.obj",
-        "downlight.ldt",
-        "pendant.ies",
-    ] {
-        std::fs::copy(data(f), sc.join(f)).unwrap();
-    }
+    let sc = office_copy(dir.path());
     let ies = sc.join("pendant.ies");
     let before = std::fs::read(&ies).unwrap();
-    let o = lumest(&[
-        "illuminance",
-        "--scene",
-        sc.join("office.toml").to_str().unwrap(),
-        "--points",
-        sc.join("office_grid.csv").to_str().unwrap(),
-        "--chains",
-        "1000",
-        "--shard",
-        "0/1",
-        "--out",
-        ies.to_str().unwrap(),
-    ]);
+    let o = office_shard(&sc, ies.to_str().unwrap());
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && e.contains("overwrite the input"),
@@ -527,37 +543,13 @@ fn states_name_their_build() {
 #[test]
 fn merge_never_writes_over_the_runs_inputs() {
     let dir = tempfile::tempdir().unwrap();
-    let sc = dir.path().join("sc");
-    std::fs::create_dir(&sc).unwrap();
-    let files = [
-        "office.toml",
-        "office_grid.csv",
-        "blob.obj",
-        "downlight.ldt",
-        "pendant.ies",
-    ];
-    for f in files {
-        std::fs::copy(data(f), sc.join(f)).unwrap();
-    }
+    let sc = office_copy(dir.path());
     let part = dir.path().join("part").to_string_lossy().into_owned();
-    let o = lumest(&[
-        "illuminance",
-        "--scene",
-        sc.join("office.toml").to_str().unwrap(),
-        "--points",
-        sc.join("office_grid.csv").to_str().unwrap(),
-        "--chains",
-        "1000",
-        "--shard",
-        "0/1",
-        "--out",
-        &part,
-        "--quiet",
-    ]);
+    let o = office_shard(&sc, &part);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let link = dir.path().join("link.ies");
     std::os::unix::fs::symlink(sc.join("pendant.ies"), &link).unwrap();
-    let targets = files.iter().map(|f| sc.join(f)).chain([link]);
+    let targets = OFFICE_FILES.iter().map(|f| sc.join(f)).chain([link]);
     for out in targets {
         let before = std::fs::read(&out).unwrap();
         let o = lumest(&["merge", &part, "--out", out.to_str().unwrap()]);
