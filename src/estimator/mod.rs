@@ -525,6 +525,29 @@ impl Receivers {
     /// front of it (a collision there can score into it); the exact first
     /// order is computed here once.
     pub fn from_receivers(scene: &Scene, receivers: &[Receiver]) -> Result<Self, ReceiverError> {
+        // Points a hair off a mesh or an SH surface, on it
+        // ([`Scene::snap_to_surface`]); positions that are not finite and
+        // normals that are not unit are refused below as they are.
+        let snapped: Vec<Receiver>;
+        let receivers = if scene.has_curved_shapes() {
+            snapped = receivers
+                .iter()
+                .map(|r| match r.response {
+                    Response::Illuminance
+                        if r.p.is_finite() && (r.n.length() - 1.0).abs() < 1e-9 =>
+                    {
+                        Receiver {
+                            p: scene.snap_to_surface(r.p, r.n),
+                            ..*r
+                        }
+                    }
+                    _ => *r,
+                })
+                .collect();
+            &snapped[..]
+        } else {
+            receivers
+        };
         let masks: Vec<SideMask> = receivers.iter().map(|r| scene.side_mask(r.p)).collect();
         let inside: Vec<u64> = receivers.iter().map(|r| scene.inside_mask(r.p)).collect();
         let frames: Vec<Frame> = receivers.iter().map(|r| Frame::from_normal(r.n)).collect();
