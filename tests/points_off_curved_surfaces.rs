@@ -76,6 +76,25 @@ intensity = 80
         "{}",
         flag(last)
     );
+    // A receiver whose normal lies along the floor (a vertical plane's
+    // point, at floor level): moved onto the floor all the same (the first
+    // version looked along the normal only, and 2e-9 m below read 0.53 lx
+    // against 31.7).
+    let side: Vec<(DVec3, DVec3)> = [0.0, 2e-9]
+        .iter()
+        .map(|&d| (DVec3::new(1.6, 1.0, -d), -DVec3::X))
+        .collect();
+    let rec = Receivers::new(&scene, &side).unwrap();
+    let r = run(&scene, &rec, &common::chains_cfg(20_000, 1, 2), &mut |_| {
+        true
+    });
+    let e = |j: usize| r.direct[j] + r.tallies.estimated[j].mean();
+    assert!(
+        e(0) > 0.0 && (e(1) / e(0) - 1.0).abs() < 1e-9,
+        "{} vs {}",
+        e(1),
+        e(0)
+    );
 }
 
 #[test]

@@ -926,7 +926,7 @@ impl Scene {
 
     /// Point `p` of a receiver with unit normal `n` moved onto a mesh
     /// triangle or a spherical-harmonic surface that it lies within
-    /// `MESH_REL` of the shape's size of (measured along `n` for a mesh,
+    /// `MESH_REL` of the shape's size of (along the triangle's normal, or
     /// radially for an SH object), where it is farther than rounding from
     /// it; `p` itself otherwise. [`Self::surface_at`] counts such a point
     /// as on the mesh, but a shadow test skips a mesh only within
@@ -935,18 +935,39 @@ impl Scene {
     /// reflected light (68.1 lx flagged `ok` against 74.0 on the floor); a
     /// point 4e-12 m outside an SH integrating sphere (coordinates written
     /// to 12 digits) read 0. Moved, both read the surface's value.
+    ///
+    /// A mesh's triangles near `p` are found by short rays through `p`
+    /// along `n` and the three axes (one of which crosses any plane at
+    /// least at `1 / sqrt(3)`), so the receiver's normal need not be the
+    /// surface's; of the planes met within the tolerance, the nearest.
     pub fn snap_to_surface(&self, p: DVec3, n: DVec3) -> DVec3 {
         if !self.surfaces_through(p).is_empty() {
             return p;
         }
+        // Closer than this, `p` is on the surface to the rounding of its
+        // coordinates: left as it is.
+        let rounding = |size: f64| 1e-12 * size + 64.0 * f64::EPSILON * p.abs().max_element();
         for (m, _) in &self.meshes {
             let size = (m.bounds().1 - m.bounds().0).length();
             let tol = MESH_REL * size;
-            let o = p + tol * n;
-            if let Some((t, _, _)) = m.first_hit(o, -n, 0.0, 2.0 * tol, None, None)
-                && (t - tol).abs() > 1e-12 * size
-            {
-                return o - t * n;
+            let reach = tol * 3f64.sqrt();
+            let mut nearest: Option<(f64, DVec3)> = None;
+            for d in [n, DVec3::X, DVec3::Y, DVec3::Z] {
+                let o = p - reach * d;
+                if let Some((t, ng, _)) = m.first_hit(o, d, 0.0, 2.0 * reach, None, None) {
+                    // Signed distance of `p` from the triangle's plane.
+                    let dist = (p - (o + t * d)).dot(ng);
+                    if dist.abs() <= tol && nearest.is_none_or(|(b, _)| dist.abs() < b.abs()) {
+                        nearest = Some((dist, ng));
+                    }
+                }
+            }
+            if let Some((dist, ng)) = nearest {
+                return if dist.abs() > rounding(size) {
+                    p - dist * ng
+                } else {
+                    p
+                };
             }
         }
         for (sh, _) in &self.shs {
@@ -959,7 +980,7 @@ impl Scene {
             let f = sh.level(p);
             // (Well within the march's band, 1e-12 of the radius, a point
             // counts as on the surface already.)
-            if f.abs() > 1e-13 * r_max && f.abs() <= MESH_REL * r_max {
+            if f.abs() > (1e-13 * r_max).max(rounding(0.0)) && f.abs() <= MESH_REL * r_max {
                 return sh.center() + v * ((rho - f) / rho);
             }
         }
