@@ -389,6 +389,15 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         pool,
         reach,
     } = *path;
+    // Under `--max-order K` no light of a higher order counts: the light a
+    // seated source sends into its surface arrives orders above the vertex
+    // that adds it ([`Seated`]).
+    let max_order = cfg.chain.max_order;
+    let mut add = |order: u32, v: f64| {
+        if max_order.is_none_or(|k| order <= k) {
+            add(order, v);
+        }
+    };
     let mut reached = 0;
     let mut exposed = 0;
     // Rays of next-event estimation at a vertex and of one connection.
@@ -401,7 +410,8 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
     let mut rays = 0;
     // Light that a point-like source on a surface sends into it, reflected
     // at the source's position ([`seat_intensity`]), reaches the receiver
-    // at once: order 1, where the source lies within the first segment's
+    // at once: order 1 (2, 3, ... for what bounces on between the faces of
+    // a room's edge or corner), where the source lies within the first segment's
     // reach (a near part's radius never holds a source: the chains score
     // that light, and its paths skip the loop).
     let seated = (0..scene.lights.len())
@@ -417,10 +427,12 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         let w = v / d2.sqrt();
         let (value, _) = rec.transfer(frame, -w);
         if value > 0.0 && scene.visible(y, None, rec.p) {
-            let i = seat_intensity(scene, k, seat, w, rng);
-            if i > 0.0 {
-                add(1, value * i / d2);
-            }
+            // Reflected `b` times at the source: order `b`.
+            seat_intensity(scene, k, seat, w, rng, |b, i| {
+                if i > 0.0 {
+                    add(b, value * i / d2);
+                }
+            });
         }
         rays += 1;
     }
@@ -451,8 +463,11 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                 }
             },
         );
-        if v > 0.0 {
-            add(1, v);
+        if v.0 > 0.0 {
+            add(1, v.0);
+        }
+        for (b, x) in v.1 {
+            add(1 + b, x);
         }
         rays += connect_rays;
     }
@@ -509,9 +524,9 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         let m = &scene.surfaces[h.surface as usize].material;
         let f_frame = Frame::from_normal(h.n);
         let wo = f_frame.to_local(-d);
-        let (nee, p_b) = next_event(scene, &h, m, &f_frame, wo, guide, pool.is_none(), rng);
+        let (nee, seat, p_b) = next_event(scene, &h, m, &f_frame, wo, guide, pool.is_none(), rng);
         rays += nee_rays;
-        if nee > 0.0 {
+        if nee > 0.0 || !seat.is_empty() {
             // Strategy A's share of the balance heuristic (1 without guiding).
             // p_A / (p_A + p_B) with p_A = pdf cos / t^2, written without the
             // division by t^2 (no overflow for tiny t).
@@ -521,7 +536,13 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
             } else {
                 1.0
             };
-            add(order, beta * nee * w_a);
+            if nee > 0.0 {
+                add(order, beta * nee * w_a);
+            }
+            // Reflected `b` more times at a source on a surface.
+            for (b, v) in seat {
+                add(order + b, beta * v * w_a);
+            }
         }
         // With a pool, the split radius at this vertex: light from closer
         // surfaces comes by the path, from farther ones by the pool.
@@ -573,8 +594,11 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                     }
                 },
             );
-            if v > 0.0 {
-                add(order + 1, v);
+            if v.0 > 0.0 {
+                add(order + 1, v.0);
+            }
+            for (b, x) in v.1 {
+                add(order + 1 + b, x);
             }
             rays += connect_rays;
         }
@@ -734,7 +758,7 @@ fn next_event(
     guide: bool,
     deposit: bool,
     rng: &mut Philox4x32,
-) -> (f64, f64) {
+) -> (f64, Seated, f64) {
     let v = VertexLight {
         scene,
         h,
@@ -745,6 +769,7 @@ fn next_event(
         hm: scene.side_mask(h.p),
         from: Some((h.surface, h.prim)),
         seen: std::cell::Cell::new(None),
+        seat: std::cell::RefCell::new(Vec::new()),
     };
     let (mut nee, mut p_b) = (0.0, 0.0);
     match scene.vertex_light_array() {
@@ -762,6 +787,9 @@ fn next_event(
             // Strategy B's density stays the exact sum over the sources.
             if let Some(pick) = array.pick(&scene.lights, h.p, Some(h.n), rng) {
                 nee = pick.w * v.nee(pick.k as usize, rng);
+                for x in v.seat.borrow_mut().iter_mut() {
+                    x.1 *= pick.w;
+                }
             }
             if guide {
                 for k in 0..scene.lights.len() {
@@ -770,10 +798,16 @@ fn next_event(
             }
         }
     }
-    (nee, p_b)
+    (nee, v.seat.into_inner(), p_b)
 }
 
-/// An estimate of the intensity \[cd\] towards unit `w` of the light that
+/// Light that point-like sources on a surface sent into it, reflected there
+/// `b` times (1, 2, ...: more on a room's edge or corner) before it reaches
+/// a vertex ([`seat_intensity`]), as `(b, value)` pairs in the units of the
+/// next-event estimate: `b` orders above it. Empty without such sources.
+type Seated = Vec<(u32, f64)>;
+
+/// Estimates of the intensity \[cd\] towards unit `w` of the light that
 /// point-like light `k`, standing on the surfaces of `seat`, sends into
 /// them: it meets them at the light's own position
 /// ([`crate::scene::world::LightSeat`]) and is reflected there, a point
@@ -781,31 +815,33 @@ fn next_event(
 /// directions that meet a face (on a room's edge, reflected light can meet
 /// the next face at once: those bounces are walked too, with Russian
 /// roulette). One emission direction drawn from the light's photon
-/// density, so the estimate is unbiased. 0 where `w` meets the seat.
+/// density, so the estimate is unbiased. Nothing where `w` meets the seat.
 /// The chains find this light as collisions at the light's position; a
 /// backward path cannot hit that point, so next-event estimation adds it.
+/// `out(b, I_b)` takes the share reflected `b` times at the seat (1, and 2,
+/// 3, ... on a room's edge or corner): `b` reflection orders of its own.
 fn seat_intensity(
     scene: &Scene,
     k: usize,
     seat: &crate::scene::world::LightSeat,
     w: DVec3,
     rng: &mut Philox4x32,
-) -> f64 {
-    const MAX_BOUNCES: usize = 64;
+    mut out: impl FnMut(u32, f64),
+) {
+    const MAX_BOUNCES: u32 = 64;
     let l = &scene.lights[k];
     if seat.meets(w).is_some() {
-        return 0.0;
+        return;
     }
     let d = l.photon(rng.next_2d(), rng.next_f64());
     let pdf = l.photon_pdf(d);
     if pdf <= 0.0 {
-        return 0.0;
+        return;
     }
     let mut weight = l.intensity(d) / pdf;
     let threshold = 0.25 * weight;
     let mut d = d;
-    let mut total = 0.0;
-    for _ in 0..MAX_BOUNCES {
+    for b in 1..=MAX_BOUNCES {
         let Some((s, n)) = seat.meets(d) else {
             break;
         };
@@ -814,7 +850,7 @@ fn seat_intensity(
         let wi = frame.to_local(-d);
         let wo = frame.to_local(w);
         if wo.z > 0.0 {
-            total += weight * m.eval(wi, wo) * wo.z;
+            out(b, weight * m.eval(wi, wo) * wo.z);
         }
         let smp = m.sample(wi, rng.next_2d());
         if smp.pdf <= 0.0 || smp.w.z <= 0.0 {
@@ -827,7 +863,6 @@ fn seat_intensity(
         weight = survivor;
         d = frame.to_world(smp.w);
     }
-    total
 }
 
 /// A surface vertex lit by next-event estimation (see [`next_event`]).
@@ -846,6 +881,9 @@ struct VertexLight<'a> {
     from: Option<(u32, u32)>,
     /// The last light whose centre was tested, and the answer.
     seen: std::cell::Cell<Option<(usize, bool)>>,
+    /// What [`Self::nee`] found of the light sources on a surface sent
+    /// into it ([`Seated`]), apart from its return value.
+    seat: std::cell::RefCell<Seated>,
 }
 
 impl VertexLight<'_> {
@@ -996,18 +1034,26 @@ impl VertexLight<'_> {
             Light::Point { .. } | Light::Gonio { .. } | Light::Spot(_) => {
                 // (The shadow test only for light that arrives: a source
                 // that sends nothing this way, the back of the vertex.)
-                let mut e = l.direct_illuminance(h.p, h.n);
+                let e = l.direct_illuminance(h.p, h.n);
                 // A light on a surface: and what it sends into the surface,
-                // reflected there ([`seat_intensity`]).
+                // reflected there ([`seat_intensity`]), orders of its own.
+                let mut seated = Seated::new();
                 if deposit && let Some(seat) = scene.light_surface(k) {
                     let cos_x = h.n.dot(to_c) / dist;
                     if cos_x > 0.0 && dist > 0.0 {
-                        let i = seat_intensity(scene, k, seat, -to_c / dist, rng);
-                        e += i * cos_x / (dist * dist);
+                        seat_intensity(scene, k, seat, -to_c / dist, rng, |b, i| {
+                            if i > 0.0 {
+                                seated.push((b, i * cos_x / (dist * dist)));
+                            }
+                        });
                     }
                 }
-                if e > 0.0 && self.center_seen(k) {
-                    return m.eval(f_frame.to_local(to_c / dist), wo) * e;
+                if (e > 0.0 || !seated.is_empty()) && self.center_seen(k) {
+                    let f = m.eval(f_frame.to_local(to_c / dist), wo);
+                    self.seat
+                        .borrow_mut()
+                        .extend(seated.into_iter().map(|(b, x)| (b, f * x)));
+                    return f * e;
                 }
                 0.0
             }
@@ -1059,7 +1105,7 @@ fn connect(
     deposit: bool,
     rng: &mut Philox4x32,
     transfer: impl Fn(DVec3) -> (f64, f64),
-) -> f64 {
+) -> (f64, Seated) {
     let k = scene.pick_light_index(rng.next_f64());
     let light = &scene.lights[k];
     // A light at infinity, an area source or a luminous opening has no
@@ -1067,7 +1113,7 @@ fn connect(
     // is left out of `p_B` too, see [`next_event`], so the combination
     // stays unbiased; its light comes by next-event estimation).
     if light.is_directional() || matches!(light, Light::Area(_)) || light.emits_from_opening() {
-        return 0.0;
+        return (0.0, Seated::new());
     }
     // Isotropic from points and spheres; a goniometric light's photons
     // follow its emission (so that p_B stays positive where it emits).
@@ -1082,34 +1128,34 @@ fn connect(
     // A light on a surface: photons into it meet it at the light (no
     // vertex of a path lies there), the others leave it.
     let leave = match scene.light_surface(k) {
-        Some(seat) if seat.meets(dir).is_some() => return 0.0,
+        Some(seat) if seat.meets(dir).is_some() => return (0.0, Seated::new()),
         Some(seat) => Some((seat.leaves(dir), seat.prim())),
         None => None,
     };
     let Some(y) = scene.intersect(&ray, leave) else {
-        return 0.0;
+        return (0.0, Seated::new());
     };
     if dir.dot(y.n) >= 0.0 {
-        return 0.0; // the photon met a black back side
+        return (0.0, Seated::new()); // the photon met a black back side
     }
     let v = y.p - x;
     let t2 = v.length_squared();
     let t = t2.sqrt();
     if !(t > 0.0 && t < max_t) {
-        return 0.0;
+        return (0.0, Seated::new());
     }
     let w = v / t;
     let cos_y = -w.dot(y.n);
     if cos_y <= 0.0 {
-        return 0.0;
+        return (0.0, Seated::new());
     }
     let (tr, pdf_a) = transfer(w);
     if tr <= 0.0 || !scene.visible(x, from, y.p) {
-        return 0.0;
+        return (0.0, Seated::new());
     }
     let f_frame = Frame::from_normal(y.n);
     let m = &scene.surfaces[y.surface as usize].material;
-    let (nee, p_b) = next_event(
+    let (nee, mut seat, p_b) = next_event(
         scene,
         &y,
         m,
@@ -1119,11 +1165,15 @@ fn connect(
         deposit,
         rng,
     );
-    if nee <= 0.0 || p_b <= 0.0 {
-        return 0.0;
+    if (nee <= 0.0 && seat.is_empty()) || p_b <= 0.0 {
+        return (0.0, Seated::new());
     }
     // T (cos_y / t^2) N / (pdf_a cos_y / t^2 + p_B), multiplied through by t^2.
-    tr * cos_y * nee / (pdf_a * cos_y + p_b * t2)
+    let denom = pdf_a * cos_y + p_b * t2;
+    for x in &mut seat {
+        x.1 = tr * cos_y * x.1 / denom;
+    }
+    (tr * cos_y * nee / denom, seat)
 }
 
 #[cfg(test)]
