@@ -1128,8 +1128,9 @@ fn chains_within_the_time_keep_their_bytes() {
 }
 
 /// `--time` is soft: where even the least run (32 batches of the smallest
-/// timed size) needs longer than the limit, the summary says the run went
-/// on past it; it once said the batches were sized so that they fit.
+/// timed size) needs longer than the limit, the summary says the run
+/// completes them all the same; it once said the batches were sized so
+/// that they fit.
 #[test]
 fn a_time_limit_shorter_than_the_least_run_is_reported() {
     let o = illuminance_stdin(&["--time", "1e-6"]);
@@ -1137,7 +1138,7 @@ fn a_time_limit_shorter_than_the_least_run_is_reported() {
     assert!(o.status.success(), "{e}");
     assert!(
         e.contains("--time: the least run, 32 batches of")
-            && e.contains("which is soft: the run went on past it"),
+            && e.contains("which is soft: the run completes them all the same"),
         "{e}"
     );
     assert!(!e.contains("fit at the measured"), "{e}");

@@ -386,7 +386,7 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
             text += &format!(
                 "\n--time: the least run, {} batches of {} chains, needs about {:.3} s at the \
                  measured {:.3e} chains/s, more than the {:.3} s left of the limit, which is soft: \
-                 the run went on past it (give more time, or --chains)",
+                 the run completes them all the same (give more time, or --chains)",
                 crate::run::MIN_BATCHES,
                 t.batch_size,
                 t.minimum_time,
