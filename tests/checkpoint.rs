@@ -100,13 +100,13 @@ fn an_interrupted_run_resumes_to_the_identical_result() {
         !o.status.success() && err.contains("its --chains differ(s)"),
         "{err}"
     );
-    // Another setting: named by its field.
+    // Another setting: named by its option.
     let mut a = args(done.to_str().unwrap(), "7");
     a.extend(["--orders", "2", "--resume", ck_s]);
     let o = lumest(&a);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        !o.status.success() && err.contains("its settings (orders) differ(s)"),
+        !o.status.success() && err.contains("its settings (--orders) differ(s)"),
         "{err}"
     );
     // Checkpoints go with a fixed chain count.

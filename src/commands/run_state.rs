@@ -74,8 +74,8 @@ pub fn identity(
 }
 
 /// `settings`, naming the first setting in which two runs' `config` texts
-/// ([`RunIdentity::config`]) differ: the field of the run's configuration
-/// (`settings (near)`) or the build.
+/// ([`RunIdentity::config`]) differ: the option that sets it (`settings
+/// (--orders)`), else the field of the run's configuration, or the build.
 pub fn settings_differ(a: &str, b: &str) -> String {
     if a == b {
         return "settings".to_string();
@@ -96,8 +96,26 @@ pub fn settings_differ(a: &str, b: &str) -> String {
             .map_or(0, |i| i + 1);
         &before[start..end]
     });
+    // The options that set the configuration's fields, where one does.
+    const OPTIONS: [(&str, &str); 12] = [
+        ("time", "--time"),
+        ("rel_error", "--rel-error or --rms-error"),
+        ("rms", "--rms-error"),
+        ("orders", "--orders"),
+        ("rr_weight", "--rr-weight"),
+        ("max_order", "--max-order"),
+        ("guide", "--no-guide"),
+        ("qmc", "--qmc or --no-stratify"),
+        ("near", "--near-radius or --near-paths"),
+        ("near_auto", "--near-radius"),
+        ("near_paths_auto", "--near-paths"),
+        ("pilot_measure", "--figure-target"),
+    ];
     match field {
-        Some(f) if !f.is_empty() => format!("settings ({f})"),
+        Some(f) if !f.is_empty() => {
+            let shown = OPTIONS.iter().find(|(k, _)| *k == f).map_or(f, |(_, o)| o);
+            format!("settings ({shown})")
+        }
         _ => "settings".to_string(),
     }
 }
@@ -230,4 +248,28 @@ pub fn resume(
         resume: Some(std::sync::Arc::new(c)),
         ..cfg.clone()
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::settings_differ;
+
+    #[test]
+    fn the_setting_that_differs_is_named() {
+        let a = "lumest 0.1 build x estimator Local RunConfig { seed: 0, orders: 2, chain: \
+                 ChainParams { rr_weight: 0.1, max_order: None } }";
+        let b = a.replace("orders: 2", "orders: 3");
+        assert_eq!(settings_differ(a, &b), "settings (--orders)");
+        let b = a.replace("max_order: None", "max_order: Some(1)");
+        assert_eq!(settings_differ(a, &b), "settings (--max-order)");
+        // A field no option sets keeps its name; the build comes first.
+        let b = a.replace("seed: 0", "seed: 7");
+        assert_eq!(settings_differ(a, &b), "settings (seed)");
+        let b = a.replace("build x", "build y");
+        assert_eq!(
+            settings_differ(a, &b),
+            "settings (the lumest build or the estimator)"
+        );
+        assert_eq!(settings_differ(a, a), "settings");
+    }
 }
