@@ -739,8 +739,11 @@ fn join_pool<F: FnMut(u32, f64)>(
 /// `f_frame` of its front normal, unit direction `wo` towards the previous
 /// vertex in that frame): `N = sum_l f(wi_l, wo) E_l V_l` (per unit path
 /// weight), exact for a point light, one direction drawn uniformly in the
-/// cone of a sphere light. With `guide`, also the density `p_B(h)` [1/m^2]
-/// of the light-guided strategy at `h` (see [`trace`]; 0 without).
+/// cone of a sphere light. With `deposit`, apart from `N`, the light that
+/// sources standing on a surface sent into it ([`Seated`], orders above
+/// `N`'s). With `guide`, also the density `p_B(h)` [1/m^2] of the
+/// light-guided strategy at `h` (see [`trace`]; 0 without). Returns
+/// `(N, seated, p_B)`.
 ///
 /// With the scene's light array ([`Scene::vertex_light_array`], many sources) the
 /// sum is replaced by one source kept by RIS and weighted by its unbiased
@@ -1097,6 +1100,8 @@ impl VertexLight<'_> {
 /// [`trace`]). `transfer(w)` gives `x`'s transfer towards unit world
 /// direction `w` (path weight times BRDF or response, times `cos_x`) and the
 /// solid-angle density of its own sampling there.
+/// Returns the score and, apart, the seated shares of `y`'s next-event
+/// estimate ([`Seated`], one order above the score's and more).
 fn connect(
     scene: &Scene,
     x: DVec3,

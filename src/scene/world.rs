@@ -939,7 +939,8 @@ impl Scene {
     /// A mesh's triangles near `p` are found by short rays through `p`
     /// along `n` and the three axes (one of which crosses any plane at
     /// least at `1 / sqrt(3)`), so the receiver's normal need not be the
-    /// surface's; of the planes met within the tolerance, the nearest.
+    /// surface's; of the planes met within the tolerance, over all meshes,
+    /// the nearest. A point on one of them to rounding is left alone.
     pub fn snap_to_surface(&self, p: DVec3, n: DVec3) -> DVec3 {
         if !self.surfaces_through(p).is_empty() {
             return p;
@@ -947,28 +948,30 @@ impl Scene {
         // Closer than this, `p` is on the surface to the rounding of its
         // coordinates: left as it is.
         let rounding = |size: f64| 1e-12 * size + 64.0 * f64::EPSILON * p.abs().max_element();
+        // The nearest plane over every mesh; a point already on one (to
+        // rounding) stays, also where another mesh's face passes within the
+        // tolerance (a floor point at a cabinet mesh's foot).
+        let mut nearest: Option<(f64, DVec3)> = None;
         for (m, _) in &self.meshes {
             let size = (m.bounds().1 - m.bounds().0).length();
             let tol = MESH_REL * size;
             let reach = tol * 3f64.sqrt();
-            let mut nearest: Option<(f64, DVec3)> = None;
             for d in [n, DVec3::X, DVec3::Y, DVec3::Z] {
                 let o = p - reach * d;
                 if let Some((t, ng, _)) = m.first_hit(o, d, 0.0, 2.0 * reach, None, None) {
                     // Signed distance of `p` from the triangle's plane.
                     let dist = (p - (o + t * d)).dot(ng);
+                    if dist.abs() <= rounding(size) {
+                        return p;
+                    }
                     if dist.abs() <= tol && nearest.is_none_or(|(b, _)| dist.abs() < b.abs()) {
                         nearest = Some((dist, ng));
                     }
                 }
             }
-            if let Some((dist, ng)) = nearest {
-                return if dist.abs() > rounding(size) {
-                    p - dist * ng
-                } else {
-                    p
-                };
-            }
+        }
+        if let Some((dist, ng)) = nearest {
+            return p - dist * ng;
         }
         for (sh, _) in &self.shs {
             let (r_min, r_max) = sh.bounds();
