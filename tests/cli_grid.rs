@@ -34,6 +34,27 @@ fn lumest() -> Command {
     Command::cargo_bin("lumest").unwrap()
 }
 
+/// `lumest illuminance --chains N --quiet` on `scene` and `points`, writing
+/// `out`, with `extra` arguments.
+fn illuminance(
+    chains: &str,
+    scene: &std::path::Path,
+    points: &std::path::Path,
+    out: &std::path::Path,
+    extra: &[&std::ffi::OsStr],
+) -> std::process::Output {
+    lumest()
+        .args(["illuminance", "--chains", chains, "--quiet", "--scene"])
+        .arg(scene)
+        .arg("--points")
+        .arg(points)
+        .arg("--out")
+        .arg(out)
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
 /// `scene` written to `dir/s.toml`, and the points of its grid `name` by
 /// `lumest grid` in `dir/p.csv`: (scene path, points path).
 fn grid_points(
@@ -107,17 +128,13 @@ fn grid_writes_points_and_illuminance_writes_figures() {
     // The run: figures per grid, with verdicts.
     let res = dir.path().join("e.csv");
     let figs = dir.path().join("f.csv");
-    let out = lumest()
-        .args(["illuminance", "--chains", "16384", "--quiet", "--scene"])
-        .arg(&scene)
-        .arg("--points")
-        .arg(&points)
-        .arg("--out")
-        .arg(&res)
-        .arg("--figures-out")
-        .arg(&figs)
-        .output()
-        .unwrap();
+    let out = illuminance(
+        "16384",
+        &scene,
+        &points,
+        &res,
+        &["--figures-out".as_ref(), figs.as_ref()],
+    );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     let f = std::fs::read_to_string(&figs).unwrap();
@@ -228,17 +245,13 @@ fn grid_writes_points_and_illuminance_writes_figures() {
     // --figures-out needs a grid column.
     let plain = dir.path().join("plain.csv");
     std::fs::write(&plain, "x,y,z,nx,ny,nz\n1,1,0.8,0,0,1\n").unwrap();
-    let out = lumest()
-        .args(["illuminance", "--chains", "1000", "--quiet", "--scene"])
-        .arg(&scene)
-        .arg("--points")
-        .arg(&plain)
-        .arg("--out")
-        .arg(dir.path().join("x.csv"))
-        .arg("--figures-out")
-        .arg(dir.path().join("y.csv"))
-        .output()
-        .unwrap();
+    let out = illuminance(
+        "1000",
+        &scene,
+        &plain,
+        &dir.path().join("x.csv"),
+        &["--figures-out".as_ref(), dir.path().join("y.csv").as_ref()],
+    );
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("no `grid` column"));
     // A bad area weight names the file, line and field.
@@ -247,15 +260,7 @@ fn grid_writes_points_and_illuminance_writes_figures() {
         "grid,area,x,y,z,nx,ny,nz\na,0.5,1,1,0.8,0,0,1\na,-1,2,1,0.8,0,0,1\n",
     )
     .unwrap();
-    let out = lumest()
-        .args(["illuminance", "--chains", "1000", "--quiet", "--scene"])
-        .arg(&scene)
-        .arg("--points")
-        .arg(&plain)
-        .arg("--out")
-        .arg(dir.path().join("x.csv"))
-        .output()
-        .unwrap();
+    let out = illuminance("1000", &scene, &plain, &dir.path().join("x.csv"), &[]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(err.contains("plain.csv:3: field `area`"), "{err}");
@@ -393,17 +398,13 @@ fn undefined_figures_are_empty_cells() {
         "work plane",
     );
     let figs = dir.path().join("f.csv");
-    let out = lumest()
-        .args(["illuminance", "--chains", "1024", "--quiet", "--scene"])
-        .arg(&scene)
-        .arg("--points")
-        .arg(&points)
-        .arg("--out")
-        .arg(dir.path().join("e.csv"))
-        .arg("--figures-out")
-        .arg(&figs)
-        .output()
-        .unwrap();
+    let out = illuminance(
+        "1024",
+        &scene,
+        &points,
+        &dir.path().join("e.csv"),
+        &["--figures-out".as_ref(), figs.as_ref()],
+    );
     assert!(
         out.status.success(),
         "{}",
@@ -457,15 +458,7 @@ fn solid_receivers_on_a_surface_are_left_out() {
     );
     let text = std::fs::read_to_string(&p).unwrap();
     assert_eq!(text.lines().count(), 1 + 44, "{text}");
-    let o = lumest()
-        .args(["illuminance", "--chains", "1024", "--quiet", "--scene"])
-        .arg(&s)
-        .arg("--points")
-        .arg(&p)
-        .arg("--out")
-        .arg(dir.path().join("e.csv"))
-        .output()
-        .unwrap();
+    let o = illuminance("1024", &s, &p, &dir.path().join("e.csv"), &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let o = lumest()
         .args(["grid", "--name", "hemi", "--scene"])
