@@ -150,7 +150,10 @@ flux = {flux}
     let bound = lumest::tally::sidak_bound(1e-3, dirs.len(), Some(r.tallies.batches()));
     for k in 0..dirs.len() {
         let j0 = k * m;
-        let z = (r.tallies.estimated[j0].mean() - reflected) / r.tallies.estimated[j0].std_error();
+        let se = r.tallies.estimated[j0].std_error();
+        // Precise enough that a 2 % error shows.
+        assert!(0.02 * reflected > bound * se, "direction {k}: se {se}");
+        let z = (r.tallies.estimated[j0].mean() - reflected) / se;
         assert!(z.abs() < bound, "direction {k}: z = {z}");
         for (i, o) in outside.iter().enumerate().take(m - 1).skip(1) {
             let j = j0 + i;
