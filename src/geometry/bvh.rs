@@ -101,6 +101,8 @@ pub const FACING_TIE: f64 = 1e-9;
 pub struct RayQuery {
     /// Origin \[m\].
     o: DVec3,
+    /// Direction.
+    d: DVec3,
     /// Axis of the largest direction component (becomes `z` after shearing).
     kz: usize,
     /// The two other axes, ordered to keep the winding.
@@ -149,6 +151,7 @@ impl RayQuery {
         }
         Self {
             o,
+            d,
             kz,
             kx,
             ky,
@@ -244,6 +247,47 @@ pub struct Bvh {
     nodes: Vec<Node>,
     /// Input index of each box in leaf order.
     ids: Vec<u32>,
+}
+
+/// Which triangles a ray or segment does not meet at its ends: `skip`, the
+/// one it leaves (a collision's), and any met within `near` \[m\] of an
+/// end lying on the triangle's plane, within `tol` \[m\] (a receiver on a
+/// mesh floor, a collision on a rug laid on it, a panel written front and
+/// back: rounding would put such a hit at `t ~ 1e-17`, on either side). A
+/// triangle the end lies off, however near (a floor point `1e-10` m from a
+/// cabinet's side), is met: skipping every triangle within `near`, the
+/// rule before, let the rays of such a point pass through the cabinet's
+/// side, and the point lost the light of that side (E_indirect 0.21
+/// against 3.58 lx at 1e-3 m).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Ends {
+    /// The triangle the ray leaves, never met.
+    pub skip: Option<u32>,
+    /// Distance from an end within which a triangle through that end is
+    /// not met \[m\] (0: every hit counts).
+    pub near: f64,
+    /// How far an end may lie from a triangle's plane and be on it \[m\].
+    pub tol: f64,
+}
+
+impl Ends {
+    /// Skip triangle `skip` alone.
+    pub fn skip(skip: Option<u32>) -> Self {
+        Self {
+            skip,
+            ..Self::default()
+        }
+    }
+
+    /// Whether a hit at distance `t` from the end `p` counts: beyond
+    /// `near`, or with `p` farther than `tol` from the plane of `v`.
+    #[inline(always)]
+    fn counts(&self, p: DVec3, t: f64, v: &[DVec3; 3]) -> bool {
+        t > self.near || {
+            let n = (v[1] - v[0]).cross(v[2] - v[0]);
+            (p - v[0]).dot(n).abs() > self.tol * n.length()
+        }
+    }
 }
 
 /// A BVH over a fixed set of triangles, answering nearest-hit and any-hit
@@ -495,10 +539,10 @@ impl TriangleBvh {
         q: &RayQuery,
         t_min: f64,
         t_max: f64,
-        skip: Option<u32>,
+        ends: Ends,
         facing: Option<(DVec3, bool)>,
     ) -> Option<(f64, u32, [DVec3; 3])> {
-        let skip = skip.unwrap_or(u32::MAX);
+        let skip = ends.skip.unwrap_or(u32::MAX);
         let ids = self.tree.ids();
         let faces = |p: &[DVec3; 3]| {
             facing.is_none_or(|(d, front)| {
@@ -514,6 +558,7 @@ impl TriangleBvh {
                 && t > t_min
                 && t < bound
                 && t < t_max
+                && ends.counts(q.o, t, &self.tris[pos])
             {
                 let take = match best {
                     None => true,
@@ -564,14 +609,19 @@ impl TriangleBvh {
         });
     }
 
-    /// Whether any triangle but `skip` is hit with `t` in `(t_min, t_max)`.
-    pub fn any_hit(&self, q: &RayQuery, t_min: f64, t_max: f64, skip: Option<u32>) -> bool {
-        let skip = skip.unwrap_or(u32::MAX);
+    /// Whether any triangle is hit with `t` in `(t_min, t_max)` that
+    /// `ends` lets count, both ends of the segment `(0, t_max)` checked.
+    pub fn any_hit(&self, q: &RayQuery, t_min: f64, t_max: f64, ends: Ends) -> bool {
+        let skip = ends.skip.unwrap_or(u32::MAX);
         let ids = self.tree.ids();
         self.tree.any(q, t_min, t_max, |pos| {
             ids[pos] != skip
-                && q.triangle(&self.tris[pos])
-                    .is_some_and(|t| t > t_min && t < t_max)
+                && q.triangle(&self.tris[pos]).is_some_and(|t| {
+                    t > t_min
+                        && t < t_max
+                        && ends.counts(q.o, t, &self.tris[pos])
+                        && ends.counts(q.o + t_max * q.d, t_max - t, &self.tris[pos])
+                })
         })
     }
 }
@@ -753,10 +803,12 @@ mod tests {
         let tris = vec![[DVec3::ZERO, DVec3::X, DVec3::Y]; 5000];
         let bvh = TriangleBvh::build(&tris);
         let q = RayQuery::new(DVec3::new(0.2, 0.2, 1.0), -DVec3::Z);
-        let (t, id, _) = bvh.first_hit(&q, 0.0, f64::INFINITY, None, None).unwrap();
+        let (t, id, _) = bvh
+            .first_hit(&q, 0.0, f64::INFINITY, Ends::default(), None)
+            .unwrap();
         assert_eq!(t, 1.0);
         assert!(id < 5000);
-        assert!(bvh.any_hit(&q, 0.0, 1.5, Some(id)));
-        assert!(!bvh.any_hit(&q, 0.0, 1.0, None));
+        assert!(bvh.any_hit(&q, 0.0, 1.5, Ends::skip(Some(id))));
+        assert!(!bvh.any_hit(&q, 0.0, 1.0, Ends::default()));
     }
 }

@@ -46,7 +46,7 @@
 //! `(t_min, t_max)`; `skip` names the triangle a ray leaves (so a ray
 //! leaving a surface never re-hits it at `t ~ 0`).
 
-use super::bvh::{RayQuery, TriangleBvh};
+use super::bvh::{Ends, RayQuery, TriangleBvh};
 use glam::{DMat3, DVec3};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -576,11 +576,34 @@ impl Mesh {
         skip: Option<u32>,
         front: Option<bool>,
     ) -> Option<(f64, DVec3, u32)> {
+        self.first_hit_leaving(o, d, t_min, t_max, Ends::skip(skip), front)
+    }
+
+    /// [`Self::first_hit`] for a ray leaving a point that may lie on
+    /// triangles ([`Ends`]: the triangles through `o` met within
+    /// `ends.near` are skipped).
+    pub fn first_hit_leaving(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        t_max: f64,
+        ends: Ends,
+        front: Option<bool>,
+    ) -> Option<(f64, DVec3, u32)> {
         let q = RayQuery::new(o, d);
         let (t, tri, p) = self
             .bvh
-            .first_hit(&q, t_min, t_max, skip, front.map(|f| (d, f)))?;
+            .first_hit(&q, t_min, t_max, ends, front.map(|f| (d, f)))?;
         Some((t, (p[1] - p[0]).cross(p[2] - p[0]).normalize(), tri))
+    }
+
+    /// How far a point `p` may lie from a triangle's plane and be on it
+    /// \[m\]: the rounding of coordinates of `p`'s and the mesh's size
+    /// (1e-12 of the mesh's size, and 64 ulp of the largest coordinate).
+    pub fn on_tolerance(&self, p: DVec3) -> f64 {
+        let scale = p.abs().max(self.lo.abs()).max(self.hi.abs()).max_element();
+        1e-12 * (self.hi - self.lo).length() + 64.0 * f64::EPSILON * scale
     }
 
     /// A triangle that point `p` lies on, within `tol` \[m\] of its plane
@@ -629,8 +652,15 @@ impl Mesh {
     /// with `t` \[m\] in `(t_min, t_max)` (shadow ray; stops at the first hit
     /// found).
     pub fn occluded(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64, skip: Option<u32>) -> bool {
+        self.segment_blocked(o, d, t_min, t_max, Ends::skip(skip))
+    }
+
+    /// Whether the segment from `o` to `o + t_max d` (unit `d`) meets a
+    /// triangle with `t` \[m\] in `(t_min, t_max)` that [`Ends`] lets
+    /// count at either end.
+    pub fn segment_blocked(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64, ends: Ends) -> bool {
         let q = RayQuery::new(o, d);
-        self.bvh.any_hit(&q, t_min, t_max, skip)
+        self.bvh.any_hit(&q, t_min, t_max, ends)
     }
 
     /// The mesh as Wavefront OBJ text: a comment, `v x y z` lines (shortest
@@ -1049,6 +1079,70 @@ mod tests {
         assert_eq!(m.triangle_count(), 2000);
         assert_eq!(m.dropped_triangles(), 2);
         check_against_brute_force(&m, 1000, 0.5, 6);
+    }
+
+    #[test]
+    fn ends_skip_the_triangles_through_an_end_only() {
+        // A 2 x 2 square as two triangles at z = 0, a third coincident with
+        // the first (a rug on the floor), and a wall at x = 1.
+        let v = vec![
+            DVec3::new(-1.0, -1.0, 0.0),
+            DVec3::new(1.0, -1.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(-1.0, 1.0, 0.0),
+            DVec3::new(1.0, -1.0, 1.0),
+            DVec3::new(1.0, 1.0, 1.0),
+        ];
+        let t = vec![[0, 1, 2], [0, 2, 3], [0, 1, 2], [1, 2, 5], [1, 5, 4]];
+        let m = Mesh::from_triangles(v, t).unwrap();
+        let near = 1e-9;
+        let ends = |skip, p: DVec3| Ends {
+            skip,
+            near,
+            tol: m.on_tolerance(p),
+        };
+        // From a point on the floor (triangle 0, and the rug 2 through it)
+        // 1e-10 m from the wall, towards the wall: the wall, at 1.4e-10.
+        let o = DVec3::new(1.0 - 1e-10, 0.2, 0.0);
+        let d = DVec3::new(1.0, 0.0, 1.0).normalize();
+        let (t, _, tri) = m
+            .first_hit_leaving(o, d, 0.0, f64::INFINITY, ends(Some(0), o), None)
+            .unwrap();
+        assert!(
+            tri >= 3 && (t / (1e-10 * 2f64.sqrt()) - 1.0).abs() < 1e-5,
+            "{tri} at {t}"
+        );
+        // Skipping every triangle within `near` (the rule before) passes
+        // through the wall.
+        assert!(
+            m.first_hit(o, d, near, f64::INFINITY, Some(0), None)
+                .is_none()
+        );
+        // Along the floor, away from the wall: neither the floor nor the
+        // rug it lies on.
+        let away = DVec3::new(-1.0, 0.0, 0.1).normalize();
+        assert!(
+            m.first_hit_leaving(o, away, 0.0, f64::INFINITY, ends(Some(0), o), None)
+                .is_none()
+        );
+        // A segment from above to that point is not blocked by the floor it
+        // ends on; to a point 1e-10 m below the floor, it is; to a point
+        // 1e-10 m beyond the wall, the wall blocks it (the rule before let
+        // both through), not to one 1e-10 m before it.
+        let above = DVec3::new(0.5, 0.2, 0.7);
+        let blocked = |a: DVec3, b: DVec3| {
+            let (d, len) = ((b - a).normalize(), (b - a).length());
+            let e = Ends {
+                skip: None,
+                near: near * len,
+                tol: m.on_tolerance(a).max(m.on_tolerance(b)),
+            };
+            m.segment_blocked(a, d, 0.0, len, e)
+        };
+        assert!(!blocked(above, o));
+        assert!(blocked(above, o - 1e-10 * DVec3::Z));
+        assert!(blocked(above, DVec3::new(1.0 + 1e-10, 0.2, 0.5)));
+        assert!(!blocked(above, DVec3::new(1.0 - 1e-10, 0.2, 0.5)));
     }
 
     #[test]

@@ -362,13 +362,20 @@ impl AaBox {
 
     /// Nearest hit `(t, face)` in `(0, t_max)` of a ray. `leaving`: the face
     /// the ray starts on (a collision): leaving outward it never meets the box
-    /// again (convex); leaving inward it meets the exit face.
+    /// again (convex); leaving inward it meets the exit face. A start on
+    /// the face's plane but just beyond its edge (within the tolerance of
+    /// [`Self::classify`]: a floor point beside a cabinet's foot) may miss
+    /// the box, or enter it through the next face, which it then meets from
+    /// outside: the exit face, met from inside, lost that face's light.
     pub fn intersect(&self, ray: &Ray, t_max: f64, leaving: Option<usize>) -> Option<(f64, usize)> {
         let (t0, t1, f0, f1) = self.slab(ray.o, ray.d, 0.0);
         if let Some(f) = leaving {
             let inward = ray.d.dot(Self::outward_normal(f)) < 0.0;
-            if !inward {
+            if !inward || t0 > t1 {
                 return None;
+            }
+            if t0 > 0.0 && f0 != f {
+                return (t0 < t_max).then_some((t0, f0));
             }
             return (t1 > 0.0 && t1 < t_max && f1 != f).then_some((t1, f1));
         }
@@ -420,6 +427,37 @@ mod tests {
             o: DVec3::from_array(o),
             d: DVec3::from_array(d).normalize(),
         }
+    }
+
+    #[test]
+    fn leaving_a_face_beside_its_edge() {
+        // A unit box; a start on the plane of its floor face (z_min), 1e-11
+        // m outside its x_min face (a floor point at a cabinet's foot,
+        // within the box's tolerance).
+        let b = AaBox {
+            lo: DVec3::new(1.0, 1.0, 0.0),
+            hi: DVec3::new(2.0, 2.0, 1.0),
+        };
+        let o = DVec3::new(1.0 - 1e-11, 1.5, 0.0);
+        assert_eq!(b.classify(o), Inside::On);
+        let z_min = 4;
+        // Towards the box: it meets the x_min face from outside, at once,
+        // not the far faces from inside.
+        let d = DVec3::new(1.0, 0.0, 1.0).normalize();
+        let (t, f) = b
+            .intersect(&Ray { o, d }, f64::INFINITY, Some(z_min))
+            .unwrap();
+        assert!(f == 0 && t < 1e-10, "face {f} at {t}");
+        // Up and along the face, past the box: nothing.
+        let d = DVec3::new(1e-12, 1.0, 1.0).normalize();
+        assert_eq!(b.intersect(&Ray { o, d }, f64::INFINITY, Some(z_min)), None);
+        // From inside the face, as before: the exit face.
+        let o = DVec3::new(1.5, 1.5, 0.0);
+        let d = DVec3::new(0.0, 0.0, 1.0);
+        assert_eq!(
+            b.intersect(&Ray { o, d }, f64::INFINITY, Some(z_min)),
+            Some((1.0, 5))
+        );
     }
 
     #[test]

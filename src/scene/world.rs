@@ -31,7 +31,7 @@ pub use panes::{Pane, PaneHit, PaneShape};
 
 pub use shape_tree::{AUTO_MIN_SHAPES, Accel};
 
-use crate::geometry::bvh::RayQuery;
+use crate::geometry::bvh::{Ends, RayQuery};
 use crate::geometry::mesh::Mesh;
 use crate::geometry::sh::ShSurface;
 use crate::geometry::shapes::{AaBox, Disc, Flat, Inside, Rect, Sphere};
@@ -284,9 +284,10 @@ impl std::fmt::Display for SceneSummary {
 }
 
 /// Relative length of the ends of a segment (or of the start of an
-/// observer's ray) in which a mesh triangle does not count as a blocker:
-/// end points lying on a triangle (a collision, a receiver on a mesh) are
-/// not shadowed by it, at any scale.
+/// observer's ray) in which a mesh triangle whose plane the end lies on
+/// (to rounding, [`Mesh::on_tolerance`]) does not count as a blocker: end
+/// points lying on a triangle (a collision, a receiver on a mesh) are not
+/// shadowed by it, at any scale ([`Ends`]).
 const MESH_REL: f64 = 1e-9;
 
 /// Largest number of infinite planes the bit-mask visibility supports.
@@ -925,34 +926,39 @@ impl Scene {
     }
 
     /// Point `p` of a receiver with unit normal `n` moved onto a mesh
-    /// triangle or a spherical-harmonic surface that it lies within
-    /// `MESH_REL` of the shape's size of (along the triangle's normal, or
-    /// radially for an SH object), where it is farther than rounding from
-    /// it; `p` itself otherwise. [`Self::surface_at`] counts such a point
-    /// as on the mesh, but a shadow test skips a mesh only within
-    /// `MESH_REL` of the segment's length of its ends, so a point 1e-9 m
-    /// below a mesh room's floor kept its direct light and lost part of its
-    /// reflected light (68.1 lx flagged `ok` against 74.0 on the floor); a
+    /// triangle it lies behind (on a one-sided mesh's black side; for a
+    /// two-sided mesh, on the side `n` faces away from), within `MESH_REL`
+    /// of the mesh's size (along the triangle's normal), or onto a
+    /// spherical-harmonic surface it lies within `MESH_REL` of the radius
+    /// of (radially), where it is farther than rounding from it; `p`
+    /// itself otherwise. [`Self::surface_at`] counts such a point
+    /// as on the mesh, but rays and shadow tests pass a triangle only where
+    /// their end lies on its plane to rounding ([`Ends`]), so a point 1e-9 m
+    /// below a mesh room's floor would lie under it (before the rule of
+    /// [`Ends`] it kept its direct light and lost part of its reflected
+    /// light, 68.1 lx flagged `ok` against 74.0 on the floor); a
     /// point 4e-12 m outside an SH integrating sphere (coordinates written
     /// to 12 digits) read 0. Moved, both read the surface's value.
     ///
     /// A mesh's triangles near `p` are found by short rays through `p`
     /// along `n` and the three axes (one of which crosses any plane at
     /// least at `1 / sqrt(3)`), so the receiver's normal need not be the
-    /// surface's; of the planes met within the tolerance, over all meshes,
-    /// the nearest. A point on one of them to rounding is left alone.
+    /// surface's; of the planes met within the tolerance that `p` lies
+    /// behind, over all meshes, the nearest. A point on one of them to
+    /// rounding is left alone.
     pub fn snap_to_surface(&self, p: DVec3, n: DVec3) -> DVec3 {
         if !self.surfaces_through(p).is_empty() {
             return p;
         }
-        // Closer than this, `p` is on the surface to the rounding of its
-        // coordinates: left as it is.
-        let rounding = |size: f64| 1e-12 * size + 64.0 * f64::EPSILON * p.abs().max_element();
+        // Closer than this, `p` is on an SH surface to the rounding of its
+        // coordinates: left as it is (a mesh's: `Mesh::on_tolerance`).
+        let rounding = 64.0 * f64::EPSILON * p.abs().max_element();
         // The nearest plane over every mesh; a point already on one (to
         // rounding) stays, also where another mesh's face passes within the
         // tolerance (a floor point at a cabinet mesh's foot).
         let mut nearest: Option<(f64, DVec3)> = None;
-        for (m, _) in &self.meshes {
+        for (m, s) in &self.meshes {
+            let sides = self.surfaces[*s as usize].sides;
             let size = (m.bounds().1 - m.bounds().0).length();
             let tol = MESH_REL * size;
             let reach = tol * 3f64.sqrt();
@@ -961,10 +967,26 @@ impl Scene {
                 if let Some((t, ng, _)) = m.first_hit(o, d, 0.0, 2.0 * reach, None, None) {
                     // Signed distance of `p` from the triangle's plane.
                     let dist = (p - (o + t * d)).dot(ng);
-                    if dist.abs() <= rounding(size) {
+                    if dist.abs() <= m.on_tolerance(p) {
                         return p;
                     }
-                    if dist.abs() <= tol && nearest.is_none_or(|(b, _)| dist.abs() < b.abs()) {
+                    // Only from behind: from a one-sided mesh's black
+                    // side, or a two-sided mesh's side the receiver's
+                    // normal faces away from (a point written 2e-9 m under
+                    // a floor, facing up). From the front a point's rays
+                    // and shadow tests meet the triangle ([`Ends`]) and its
+                    // value is what is there; one whose normal lies along
+                    // the triangle would, moved onto it, see it edge-on
+                    // (0 lx from it, against pi L / 2 beside it).
+                    let behind = match sides {
+                        Sides::Front => dist < 0.0,
+                        Sides::Back => dist > 0.0,
+                        Sides::Both => n.dot(ng) * dist < 0.0,
+                    };
+                    if behind
+                        && dist.abs() <= tol
+                        && nearest.is_none_or(|(b, _)| dist.abs() < b.abs())
+                    {
                         nearest = Some((dist, ng));
                     }
                 }
@@ -983,7 +1005,7 @@ impl Scene {
             let f = sh.level(p);
             // (Well within the march's band, 1e-12 of the radius, a point
             // counts as on the surface already.)
-            if f.abs() > (1e-13 * r_max).max(rounding(0.0)) && f.abs() <= MESH_REL * r_max {
+            if f.abs() > (1e-13 * r_max).max(rounding) && f.abs() <= MESH_REL * r_max {
                 return sh.center() + v * ((rho - f) / rho);
             }
         }
@@ -1569,9 +1591,15 @@ impl Scene {
                 let (b, s0) = &self.boxes[i as usize];
                 let leaving = match start {
                     Start::On(x, _) if (*s0..*s0 + 6).contains(&x) => Some((x - s0) as usize),
-                    _ if on_surface && b.classify(ray.o) == Inside::On => {
-                        (0..6).find(|&f| b.face_plane(f).side(ray.o) == 0)
-                    }
+                    // Of the faces through the start (two at an edge, a
+                    // floor point at a cabinet's foot), the nearest: the
+                    // start lies on it and may lie just outside the others,
+                    // which `intersect` then meets from outside.
+                    _ if on_surface && b.classify(ray.o) == Inside::On => (0..6)
+                        .map(|f| (f, b.face_plane(f).signed_distance(ray.o).abs()))
+                        .filter(|&(f, _)| b.face_plane(f).side(ray.o) == 0)
+                        .min_by(|x, y| x.1.total_cmp(&y.1))
+                        .map(|(f, _)| f),
                     _ => None,
                 };
                 if let Some((t, f)) = b.intersect(ray, acc.bound, leaving) {
@@ -1580,19 +1608,26 @@ impl Scene {
             }
             Prim::Mesh(i) => {
                 let (m, s) = &self.meshes[i as usize];
-                // A ray leaving a surface does not meet a mesh within
-                // `MESH_REL` of the mesh's size: a triangle lying on that
-                // surface (a rug on the floor, a panel written front and
-                // back) would otherwise meet it again at t ~ 1e-17, on
-                // whichever side rounding picks.
+                // A ray leaving a surface does not meet, within `MESH_REL`
+                // of the mesh's size, a triangle whose plane its start lies
+                // on ([`Ends`]: a rug on the floor, a panel written front
+                // and back, which rounding would meet again at t ~ 1e-17,
+                // on either side); a triangle its start lies off, however
+                // near, it meets.
                 let near = MESH_REL * (m.bounds().1 - m.bounds().0).length();
-                let (t_min, skip) = match start {
-                    Start::On(x, p) if x == *s => (near, Some(p)),
-                    Start::On(u32::MAX, _) => (0.0, None),
-                    Start::On(..) | Start::Observer => (near, None),
+                let ends = |skip| Ends {
+                    skip,
+                    near,
+                    tol: m.on_tolerance(ray.o),
+                };
+                let ends = match start {
+                    Start::On(x, p) if x == *s => ends(Some(p)),
+                    Start::On(u32::MAX, _) => Ends::default(),
+                    Start::On(..) | Start::Observer => ends(None),
                 };
                 let front = self.surfaces[*s as usize].sides.front();
-                if let Some((t, ng, tri)) = m.first_hit(ray.o, ray.d, t_min, acc.bound, skip, front)
+                if let Some((t, ng, tri)) =
+                    m.first_hit_leaving(ray.o, ray.d, 0.0, acc.bound, ends, front)
                 {
                     acc.solid(cand(t, *s, tri, ng));
                 }
@@ -1624,8 +1659,9 @@ impl Scene {
             Prim::Box(i) => {
                 !skip(self.spheres.len() + i as usize) && self.boxes[i as usize].0.crosses(a, b)
             }
-            // A shadow ray over `(MESH_REL, 1 - MESH_REL)` of the segment,
-            // skipping the triangle `a` is on.
+            // A shadow ray over the segment, skipping the triangle `a` is
+            // on and, within `MESH_REL` of the segment's length of an end,
+            // the triangles whose planes that end lies on ([`Ends`]).
             Prim::Mesh(i) => {
                 let (m, s) = &self.meshes[i as usize];
                 // Through the core of a closed mesh from outside its
@@ -1635,8 +1671,12 @@ impl Scene {
                 {
                     return true;
                 }
-                let skip = from.filter(|f| f.0 == *s).map(|f| f.1);
-                m.occluded(a, d, MESH_REL * len, (1.0 - MESH_REL) * len, skip)
+                let ends = Ends {
+                    skip: from.filter(|f| f.0 == *s).map(|f| f.1),
+                    near: MESH_REL * len,
+                    tol: m.on_tolerance(a).max(m.on_tolerance(b)),
+                };
+                m.segment_blocked(a, d, 0.0, len, ends)
             }
             Prim::Sh(i) => {
                 let o = &self.shs[i as usize].0;
