@@ -425,6 +425,58 @@ fn a_partly_hidden_luminaire_counts_the_part_the_eye_sees() {
     assert!((half.omega / open.omega - 0.5).abs() < 1e-12);
     assert!((half.value() / open.value() - 0.5).abs() < 1e-12);
     assert!(term(&screen(-1.0)).is_none());
+    // A screen whose edge runs obliquely across the opening, y = k x + y0
+    // in its plane: the eye sees the part of the opening on one side of a
+    // line, whose area is clipped exactly here. The 8 x 8 cell centres used
+    // before resolved such an edge to a cell (a screen edge along a row of
+    // cells read 0.375 against 0.350, 0.24 UGR).
+    for (k, y0) in [(0.3, 0.02), (-0.05, -0.1), (2.5, 0.13)] {
+        let slanted = format!(
+            "[[surface]]\ntype = \"rectangle\"\ncorner = [-1, {}, 2.9999]\nedge1 = [2, {}, 0]\n\
+             edge2 = [0, 1, 0]\nsides = \"both\"\nmaterial = {{ type = \"lambertian\", reflectance = 0.5 }}\n",
+            y0 - k,
+            2.0 * k
+        );
+        let t = term(&slanted).unwrap();
+        // The sight line from the eye to (x, y, 3) crosses the screen's
+        // plane at s = 1.7999 / 1.8 of the way, at (-3 + s (x + 3), s y):
+        // seen where y - k x < c.
+        let s = 1.7999 / 1.8;
+        let c = (y0 + 3.0 * k * (s - 1.0)) / s;
+        let exact = half_square_area(0.15, k, c) / 0.09;
+        assert!(
+            (t.seen - exact).abs() < 2e-3 && exact > 0.05 && exact < 0.95,
+            "edge y = {k} x + {y0}: seen {} against {exact}",
+            t.seen
+        );
+    }
+}
+
+/// Area of `{(x, y) in [-a, a]^2 : y - k x < c}`: the square clipped by
+/// the half-plane (Sutherland-Hodgman), by the shoelace formula.
+fn half_square_area(a: f64, k: f64, c: f64) -> f64 {
+    let square = [(-a, -a), (a, -a), (a, a), (-a, a)];
+    let f = |p: (f64, f64)| c - (p.1 - k * p.0);
+    let mut poly = Vec::new();
+    for i in 0..4 {
+        let (p, q) = (square[i], square[(i + 1) % 4]);
+        if f(p) >= 0.0 {
+            poly.push(p);
+        }
+        if (f(p) >= 0.0) != (f(q) >= 0.0) {
+            let t = f(p) / (f(p) - f(q));
+            poly.push((p.0 + t * (q.0 - p.0), p.1 + t * (q.1 - p.1)));
+        }
+    }
+    let n = poly.len();
+    (0..n)
+        .map(|i| {
+            let (p, q) = (poly[i], poly[(i + 1) % n]);
+            p.0 * q.1 - q.0 * p.1
+        })
+        .sum::<f64>()
+        .abs()
+        / 2.0
 }
 
 /// The scene file's `[[observer]]` tables rate as the same observers given

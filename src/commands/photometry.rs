@@ -37,13 +37,20 @@ pub fn plane_intensity(g: &Goniometric, c: f64, theta: f64) -> f64 {
     g.intensity(d)
 }
 
-/// Full angle \[deg\] about the peak of a plane's curve (0.1 degree steps)
-/// within which the intensity stays at or above `fraction` of the plane's
-/// peak: the beam angle at 0.5, the field angle at 0.1 (CIE / IES
-/// definitions); `None` for a dark plane.
+/// Full angle \[deg\] about the peak of a plane's curve within which the
+/// intensity stays at or above `fraction` of the plane's peak: the beam
+/// angle at 0.5, the field angle at 0.1 (CIE / IES definitions); `None`
+/// for a dark plane. The curve is followed round the whole circle of the
+/// plane (through the zenith: an uplight's beam about gamma = 180 is
+/// whole), sampled every 0.1 degree, each crossing placed by linear
+/// interpolation between samples; 360 where the intensity never falls
+/// below the limit.
 pub fn spread_angle(g: &Goniometric, c: f64, fraction: f64) -> Option<f64> {
-    let thetas: Vec<f64> = (-1800..=1800).map(|k| k as f64 / 10.0).collect();
-    let vals: Vec<f64> = thetas.iter().map(|&t| plane_intensity(g, c, t)).collect();
+    const STEP: f64 = 0.1;
+    let n = 3600usize;
+    let vals: Vec<f64> = (0..n)
+        .map(|k| plane_intensity(g, c, -180.0 + k as f64 * STEP))
+        .collect();
     let (peak_at, peak) =
         vals.iter().enumerate().fold(
             (0, 0.0),
@@ -53,15 +60,21 @@ pub fn spread_angle(g: &Goniometric, c: f64, fraction: f64) -> Option<f64> {
         return None;
     }
     let limit = fraction * peak;
-    let mut lo = peak_at;
-    while lo > 0 && vals[lo - 1] >= limit {
-        lo -= 1;
-    }
-    let mut hi = peak_at;
-    while hi + 1 < vals.len() && vals[hi + 1] >= limit {
-        hi += 1;
-    }
-    Some(thetas[hi] - thetas[lo])
+    // Degrees from the peak to the first crossing below the limit, going
+    // up (`+1`) or down (`n - 1`) the circle.
+    let reach = |step: usize| -> Option<f64> {
+        (1..n).find_map(|j| {
+            let (a, b) = (
+                vals[(peak_at + (j - 1) * step) % n],
+                vals[(peak_at + j * step) % n],
+            );
+            (b < limit).then(|| (j as f64 - 1.0 + (a - limit) / (a - b)) * STEP)
+        })
+    };
+    Some(match (reach(1), reach(n - 1)) {
+        (Some(up), Some(down)) => (up + down).min(360.0),
+        _ => 360.0,
+    })
 }
 
 /// The summary lines of a photometric file: the upright luminaire (with
@@ -273,5 +286,72 @@ mod tests {
         );
         let svg = polar_svg(&p, "cosine").unwrap();
         assert!(svg.contains("C0-C180") && svg.contains("C90-C270") && svg.contains("cosine"));
+    }
+
+    /// A rotational table every 0.5 degrees over `gammas` (degrees) of
+    /// `i(gamma)` \[cd\].
+    fn rotational(gammas: std::ops::RangeInclusive<u32>, i: impl Fn(f64) -> f64) -> Goniometric {
+        let g: Vec<f64> = gammas.map(|k| f64::from(k) / 2.0).collect();
+        let text = format!(
+            "IESNA:LM-63-2002\n[TEST] t\nTILT=NONE\n1 -1 1 {} 1 1 2 0 0 0\n1 1 0\n{}\n0\n{}\n",
+            g.len(),
+            g.iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(" "),
+            g.iter()
+                .map(|&x| format!("{:.17e}", i(x)))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+        Goniometric::new(&ies::parse(&text, "t.ies").unwrap(), 1.0)
+    }
+
+    #[test]
+    fn beam_and_field_angles_follow_the_curve_through_the_zenith() {
+        // I = I0 cos^4 of the angle from the beam's axis: half at
+        // acos(0.5^(1/4)), a tenth at acos(0.1^(1/4)) from it. Read with
+        // the plane's angle from -180 to 180 and no wrap, an uplight's beam
+        // about gamma = 180 came out cut in half (32.7 against 65.5
+        // degrees), and every angle floored to the 0.1 degree grid.
+        let (beam, field) = (
+            2.0 * 0.5f64.powf(0.25).acos().to_degrees(),
+            2.0 * 0.1f64.powf(0.25).acos().to_degrees(),
+        );
+        let cos4 = |a: f64| 1000.0 * a.to_radians().cos().max(0.0).powi(4);
+        for (what, g) in [
+            ("downlight", rotational(0..=180, cos4)),
+            ("uplight", rotational(180..=360, |x| cos4(180.0 - x))),
+            (
+                "uplight over 0-180",
+                rotational(0..=360, |x| cos4(180.0 - x)),
+            ),
+        ] {
+            for c in [0.0, 90.0] {
+                let b = spread_angle(&g, c, 0.5).unwrap();
+                let f = spread_angle(&g, c, 0.1).unwrap();
+                assert!(
+                    (b - beam).abs() < 0.02 && (f - field).abs() < 0.02,
+                    "{what}: {b} {f}"
+                );
+            }
+        }
+        // A ring 10 degrees off the axis, down or up: in a plane its two
+        // lobes meet above half the peak on the axis, so the beam spans
+        // both, 2 (10 + acos(0.5^(1/4))).
+        for (what, g) in [
+            ("ring downlight", rotational(0..=360, |x| cos4(10.0 - x))),
+            ("ring uplight", rotational(0..=360, |x| cos4(170.0 - x))),
+        ] {
+            let b = spread_angle(&g, 0.0, 0.5).unwrap();
+            let f = spread_angle(&g, 0.0, 0.1).unwrap();
+            assert!(
+                (b - beam - 20.0).abs() < 0.02 && (f - field - 20.0).abs() < 0.02,
+                "{what}: {b} {f}"
+            );
+        }
+        // Above half the peak all round: the whole circle.
+        let g = rotational(0..=360, |x| 1000.0 - x);
+        assert_eq!(spread_angle(&g, 0.0, 0.5), Some(360.0));
     }
 }

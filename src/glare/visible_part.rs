@@ -3,12 +3,20 @@
 //! luminaire half hidden behind a screen or a beam glares with half its
 //! solid angle (its luminance unchanged).
 //!
-//! The fraction is taken over a fixed stratified set of points on the
-//! luminous parts ([`VISIBILITY_GRID`] x [`VISIBILITY_GRID`] cell centres
-//! on each part), each part weighted by its projected area towards the eye:
-//! exactly 1 when every point is seen and 0 when none is; where an edge of
-//! an obstruction crosses the luminaire it is resolved to a cell (1/64 of
-//! the part's area per cell on the edge). The points are deterministic, so
+//! The fraction is taken over each part's parameter square, cut into
+//! [`VISIBILITY_GRID`] x [`VISIBILITY_GRID`] cells, each part weighted by
+//! its projected area towards the eye. A cell whose four corners and centre
+//! the eye all sees (or none) counts whole; a cell where they differ (an
+//! obstruction's edge crosses it) is split in four, down to
+//! [`MAX_SPLITS`] times, and a cell still mixed at the finest level counts
+//! by its centre. So the fraction is exactly 1 when everything is
+//! seen and 0 when nothing is, and an edge across a luminaire is resolved
+//! to `1 / (16 * 2^6) = 1/1024` of the part's side: the fixed 8 x 8 cell
+//! centres used before resolved it to an eighth of the side, and a screen
+//! edge along a row of cells put the fraction at 0.375 against an exact
+//! 0.350 (0.24 UGR, 10 standard errors, flagged `ok`). An obstruction
+//! thinner than a cell of the first grid (1/16 of the part) that passes
+//! between all its points is not seen. The points are deterministic, so
 //! the rating stays exact given `E_ind`; no random numbers are drawn.
 //!
 //! The parts: a goniometric luminaire's bottom opening and luminous sides,
@@ -28,8 +36,11 @@ use crate::light::{Light, LuminaireFrame};
 use crate::scene::Scene;
 use glam::DVec3;
 
-/// Points along each side of a part's grid.
-pub const VISIBILITY_GRID: usize = 8;
+/// Cells along each side of a part's first grid.
+pub const VISIBILITY_GRID: usize = 16;
+
+/// How many times a cell an edge crosses is split in four.
+pub const MAX_SPLITS: u32 = 6;
 
 /// A point nudged towards the eye by this fraction of its distance before
 /// the shadow test, so that a luminous opening lying in a ceiling (its
@@ -50,17 +61,24 @@ pub fn visible_fraction(
     w: DVec3,
 ) -> f64 {
     let seen = |q: DVec3| scene.visible(eye, None, q + (eye - q) * NUDGE);
-    // The share of the grid's points of one part that the eye sees.
+    // The share of one part's parameter square that the eye sees.
     let share = |point: &dyn Fn([f64; 2]) -> DVec3| -> f64 {
+        let sees = |u: [f64; 2]| seen(point(u));
         let n = VISIBILITY_GRID;
-        let mut k = 0usize;
+        let h = 1.0 / n as f64;
+        let corner: Vec<bool> = (0..=n)
+            .flat_map(|i| (0..=n).map(move |j| [i as f64 * h, j as f64 * h]))
+            .map(sees)
+            .collect();
+        let at = |i: usize, j: usize| corner[i * (n + 1) + j];
+        let mut sum = 0.0;
         for i in 0..n {
             for j in 0..n {
-                let u = [(i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64];
-                k += seen(point(u)) as usize;
+                let c = [at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)];
+                sum += cell_share(&sees, [i as f64 * h, j as f64 * h], h, c, 0);
             }
         }
-        k as f64 / (n * n) as f64
+        sum / (n * n) as f64
     };
     // (part's projected area, its seen share), summed.
     let mut parts: Vec<(f64, f64)> = Vec::new();
@@ -99,4 +117,39 @@ pub fn visible_fraction(
     } else {
         0.0
     }
+}
+
+/// The share of the cell `[lo, lo + h]^2` of a part's parameter square
+/// that the eye sees (`sees`), given its corners' answers (`c`: low-low,
+/// high-low, low-high, high-high in `(u0, u1)`): whole where the corners
+/// and the centre agree, else the mean of its four quarters, split
+/// `level` times of at most [`MAX_SPLITS`] (by its centre there).
+fn cell_share(
+    sees: &dyn Fn([f64; 2]) -> bool,
+    lo: [f64; 2],
+    h: f64,
+    c: [bool; 4],
+    level: u32,
+) -> f64 {
+    let m = h / 2.0;
+    let centre = sees([lo[0] + m, lo[1] + m]);
+    if c.iter().all(|&x| x == centre) {
+        return f64::from(u8::from(centre));
+    }
+    if level == MAX_SPLITS {
+        // By its centre: a corner may lie on the edge itself (a screen
+        // edge along a line of the grid), where either answer is right.
+        return f64::from(u8::from(centre));
+    }
+    let (u0, u1) = (lo[0], lo[1]);
+    let low = sees([u0 + m, u1]);
+    let high = sees([u0 + m, u1 + h]);
+    let left = sees([u0, u1 + m]);
+    let right = sees([u0 + h, u1 + m]);
+    let quarter = |q: [f64; 2], c: [bool; 4]| cell_share(sees, q, m, c, level + 1);
+    (quarter([u0, u1], [c[0], low, left, centre])
+        + quarter([u0 + m, u1], [low, c[1], centre, right])
+        + quarter([u0, u1 + m], [left, centre, c[2], high])
+        + quarter([u0 + m, u1 + m], [centre, right, high, c[3]]))
+        / 4.0
 }
