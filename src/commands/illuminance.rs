@@ -717,6 +717,13 @@ impl Job {
             let (file, line) = origin[e.index];
             anyhow::anyhow!("{file}:{line}: {}", e.message)
         })?;
+        if let Some(&first) = receivers.lifted().first() {
+            let (file, line) = origin[first as usize];
+            eprintln!(
+                "lumest: {} point(s) lie on a surface they do not face along (an edge, a corner, a screen through a grid; first {file}:{line}): each reads the limit from the side its normal faces (the surface's reflecting side where the normal lies along it)",
+                receivers.lifted().len()
+            );
+        }
         Ok(Job {
             points: points_t,
             views,

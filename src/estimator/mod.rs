@@ -494,6 +494,9 @@ pub struct Receivers {
     frames: Vec<Frame>,
     /// The distinct receiver lists ([`Self::from_receivers`]).
     lists: Vec<ReceiverList>,
+    /// The receivers read as the limit beside the surfaces they lie on
+    /// ([`Self::lifted`]).
+    lifted: Vec<u32>,
     /// Per surface: its list.
     list_of: Vec<u32>,
     total_len: usize,
@@ -526,28 +529,38 @@ impl Receivers {
     /// order is computed here once.
     pub fn from_receivers(scene: &Scene, receivers: &[Receiver]) -> Result<Self, ReceiverError> {
         // Points a hair off a mesh or an SH surface, on it
-        // ([`Scene::snap_to_surface`]); positions that are not finite and
-        // normals that are not unit are refused below as they are.
-        let snapped: Vec<Receiver>;
-        let receivers = if scene.has_curved_shapes() {
-            snapped = receivers
-                .iter()
-                .map(|r| match r.response {
-                    Response::Illuminance
-                        if r.p.is_finite() && (r.n.length() - 1.0).abs() < 1e-9 =>
-                    {
-                        Receiver {
-                            p: scene.snap_to_surface(r.p, r.n),
-                            ..*r
-                        }
+        // ([`Scene::snap_to_surface`]); points on surfaces they do not face
+        // along, off them ([`Scene::lift_to_its_side`]); positions that are
+        // not finite and normals that are not unit are refused below as
+        // they are.
+        // The direct part is taken where a point is seated (snapped, not
+        // lifted): it is continuous there, and exact.
+        let mut lifted = Vec::new();
+        let mut seated = Vec::with_capacity(receivers.len());
+        let placed: Vec<Receiver> = receivers
+            .iter()
+            .enumerate()
+            .map(|(j, r)| match r.response {
+                Response::Illuminance if r.p.is_finite() && (r.n.length() - 1.0).abs() < 1e-9 => {
+                    let p = if scene.has_curved_shapes() {
+                        scene.snap_to_surface(r.p, r.n)
+                    } else {
+                        r.p
+                    };
+                    seated.push(p);
+                    let q = scene.lift_to_its_side(p, r.n);
+                    if q != p {
+                        lifted.push(j as u32);
                     }
-                    _ => *r,
-                })
-                .collect();
-            &snapped[..]
-        } else {
-            receivers
-        };
+                    Receiver { p: q, ..*r }
+                }
+                _ => {
+                    seated.push(r.p);
+                    *r
+                }
+            })
+            .collect();
+        let receivers = &placed[..];
         let masks: Vec<SideMask> = receivers.iter().map(|r| scene.side_mask(r.p)).collect();
         let inside: Vec<u64> = receivers.iter().map(|r| scene.inside_mask(r.p)).collect();
         let frames: Vec<Frame> = receivers.iter().map(|r| Frame::from_normal(r.n)).collect();
@@ -568,7 +581,7 @@ impl Receivers {
             !l.is_point_like() && !matches!(l, Light::Distant(dl) if dl.collimated())
         };
         for (j, rec) in receivers.iter().enumerate() {
-            let (p, n) = (rec.p, rec.n);
+            let (p, n) = (seated[j], rec.n);
             if !(p.is_finite() && n.is_finite() && (n.length() - 1.0).abs() < 1e-9) {
                 return Err(ReceiverError {
                     index: j,
@@ -1002,9 +1015,17 @@ impl Receivers {
             direct_sets,
             direct_set,
             direct_strategy: direct::Strategy::Power,
+            lifted,
         };
         r.refresh_watch();
         Ok(r)
+    }
+
+    /// The receivers (by index) that lay on surfaces they do not face
+    /// along, read as the limit from the side they face
+    /// ([`Scene::lift_to_its_side`]).
+    pub fn lifted(&self) -> &[u32] {
+        &self.lifted
     }
 
     /// Set each entry's watched radius: the view radius where it exceeds

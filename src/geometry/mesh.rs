@@ -629,6 +629,26 @@ impl Mesh {
         })
     }
 
+    /// The unit geometric normals (by winding) of the triangles that point
+    /// `p` lies on, within `tol` \[m\] of their planes: found by segments
+    /// through `p` along the three axes (one crosses any plane), so a
+    /// point on an edge or a corner finds every triangle there; a plane
+    /// met by two of them or by two triangles comes more than once.
+    pub fn normals_through(&self, p: DVec3, tol: f64) -> Vec<DVec3> {
+        let reach = 4.0 * tol.max(f64::MIN_POSITIVE);
+        let mut out = Vec::new();
+        for d in [DVec3::X, DVec3::Y, DVec3::Z] {
+            let q = RayQuery::new(p - reach * d, d);
+            self.bvh.for_each_hit(&q, 0.0, 2.0 * reach, |_, v| {
+                let n = (v[1] - v[0]).cross(v[2] - v[0]);
+                if (p - v[0]).dot(n).abs() <= tol * n.length() {
+                    out.push(n.normalize());
+                }
+            });
+        }
+        out
+    }
+
     /// The signed crossings of the ray `o + t d` (unit `d`), `t > t_min`,
     /// with the mesh: +1 for each triangle it leaves through the front of
     /// (the side the counter-clockwise winding faces), -1 for each it

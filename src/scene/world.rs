@@ -1012,6 +1012,82 @@ impl Scene {
         p
     }
 
+    /// Point `p` of a receiver with unit normal `n` that lies on surfaces
+    /// (flat shapes, box faces, spheres, mesh triangles) and faces along
+    /// the normal of not every one of them, moved off them into the region
+    /// it belongs to: its value is the limit from there. On a surface, a
+    /// receiver belongs to the side its normal faces (the reflecting side
+    /// where its normal lies along a one-sided surface; along a two-sided
+    /// one, no side: it sees past the sheet on both, as before); a
+    /// surface through the point itself it would see edge-on, and so
+    /// count no light from it, where a point beside it sees it over a part
+    /// of its hemisphere, `pi L (1 - cos a) / 2` for a normal at `a` to the
+    /// surface's. A floor point at a wall's foot facing up read 35.26 lx
+    /// against 41.88 a micrometre into the room, a room's corner point
+    /// facing its diagonal 31.14 against 39.31, a floor point facing along
+    /// the floor 4.35 against 11.13, all flagged `ok` (a reviewer's find).
+    ///
+    /// The point moves along the sum of those sides' normals by the least
+    /// of `1e-8 s 2^k` (`s` the scale of the coordinates: 100 times the
+    /// tolerances of boxes, 1000 times those of flat shapes, so that the
+    /// collisions its rays find next to the edge are resolved too) that
+    /// leaves every surface it was on; `p` itself where it faces along every normal (a
+    /// floor point facing up: exact as it is), lies on nothing, or faces a
+    /// black side ([`Self::faces_black_side`]: flagged as it is).
+    pub fn lift_to_its_side(&self, p: DVec3, n: DVec3) -> DVec3 {
+        let mut sides: Vec<DVec3> = Vec::new();
+        let mut side = |s: u32, ng: DVec3| {
+            let c = n.dot(ng);
+            if c.abs() > 1e-12 {
+                sides.push(ng * c.signum());
+            } else {
+                match self.surfaces[s as usize].sides {
+                    Sides::Back => sides.push(-ng),
+                    Sides::Front => sides.push(ng),
+                    // Edge-on to a sheet that reflects on both sides (a
+                    // partition screen through a work-plane grid): neither
+                    // side is the point's, which sees both halves of the
+                    // room past the sheet, as before.
+                    Sides::Both => {}
+                }
+            }
+        };
+        for (s, ng) in self.surfaces_through(p) {
+            side(s, ng);
+        }
+        for (m, s) in &self.meshes {
+            for ng in m.normals_through(p, m.on_tolerance(p)) {
+                side(*s, ng);
+            }
+        }
+        if sides.iter().all(|m| n.dot(*m) >= 1.0 - 1e-12) || self.faces_black_side(p, n) {
+            return p;
+        }
+        let u = sides.iter().sum::<DVec3>().normalize_or_zero();
+        if u == DVec3::ZERO {
+            return p;
+        }
+        let on = |q: DVec3| {
+            !self.surfaces_through(q).is_empty()
+                || self
+                    .meshes
+                    .iter()
+                    .any(|(m, _)| !m.normals_through(q, m.on_tolerance(q)).is_empty())
+        };
+        let bounds = self
+            .finite_bounds()
+            .map_or(0.0, |(lo, hi)| lo.abs().max(hi.abs()).max_element());
+        let mut delta = 1e-8 * p.abs().max_element().max(bounds).max(1e-6);
+        for _ in 0..64 {
+            let q = p + delta * u;
+            if !on(q) {
+                return q;
+            }
+            delta *= 2.0;
+        }
+        p
+    }
+
     /// Whether a receiver at `p` with unit normal `n` lies on the boundary
     /// of a region no light can reach and faces into it: on an infinite
     /// plane, a box's face or a sphere, with `n` on that surface's black
