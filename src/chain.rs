@@ -204,17 +204,17 @@ pub fn trace_ex<F: FnMut(&Collision)>(
             from_emitter = false;
             scene.first_hit_from(ray.o, ray.d)
         } else if let Some(seat) = seat.filter(|_| on_surface) {
-            match seat.meets(ray.d) {
-                Some((s, n)) => Some(Hit {
+            match seat.meets_prim(ray.d) {
+                Some((s, n, prim)) => Some(Hit {
                     t: 0.0,
                     p: ray.o,
                     n,
                     surface: s,
-                    prim: seat.prim(),
+                    prim,
                 }),
                 None => {
                     on_surface = false;
-                    scene.intersect(&ray, Some((seat.leaves(ray.d), seat.prim())))
+                    scene.intersect(&ray, Some(seat.leaves(ray.d)))
                 }
             }
         } else {

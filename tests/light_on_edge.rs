@@ -76,14 +76,14 @@ fn same_as_just_off(
     on: DVec3,
     off: DVec3,
     points: &[(DVec3, DVec3)],
-    faces_on: usize,
+    faces_on: std::ops::RangeInclusive<usize>,
 ) {
     let cfg = |seed| common::chains_cfg(400_000, seed, 2);
     let s_on = scene(surfaces, on);
-    assert_eq!(
-        s_on.light_surface(0).map(|s| s.faces().len()),
-        Some(faces_on),
-        "the light at {on} stands on {faces_on} face(s)"
+    let n = s_on.light_surface(0).map_or(0, |s| s.faces().count());
+    assert!(
+        faces_on.contains(&n),
+        "the light at {on} stands on {n} face(s), not {faces_on:?}"
     );
     let s_off = scene(surfaces, off);
     assert!(
@@ -159,7 +159,7 @@ fn a_light_on_a_rooms_edge_or_corner_keeps_its_light_in_the_room() {
         DVec3::new(0.0, 2.0, 2.8),
         DVec3::new(e, 2.0, 2.8 - e),
         &room_points(),
-        2,
+        2..=2,
     );
     // The corner of two walls and the ceiling.
     same_as_just_off(
@@ -167,7 +167,72 @@ fn a_light_on_a_rooms_edge_or_corner_keeps_its_light_in_the_room() {
         DVec3::new(0.0, 0.0, 2.8),
         DVec3::new(e, e, 2.8 - e),
         &room_points(),
-        3,
+        3..=3,
+    );
+}
+
+/// `ROOM` as six rectangles facing in, with its reflectances.
+fn room_of_rectangles() -> String {
+    let rect = |c: [f64; 3], e1: [f64; 3], e2: [f64; 3], rho: f64| {
+        format!(
+            "[[surface]]\ntype = \"rectangle\"\ncorner = {c:?}\nedge1 = {e1:?}\nedge2 = {e2:?}\n\
+             material = {{ type = \"lambertian\", reflectance = {rho} }}\n"
+        )
+    };
+    [
+        rect([0.0, 0.0, 0.0], [6.0, 0.0, 0.0], [0.0, 4.0, 0.0], 0.5),
+        rect([0.0, 0.0, 2.8], [0.0, 4.0, 0.0], [6.0, 0.0, 0.0], 0.2),
+        rect([0.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 2.8], 0.85),
+        rect([6.0, 0.0, 0.0], [0.0, 0.0, 2.8], [0.0, 4.0, 0.0], 0.5),
+        rect([0.0, 0.0, 0.0], [0.0, 0.0, 2.8], [6.0, 0.0, 0.0], 0.5),
+        rect([0.0, 4.0, 0.0], [6.0, 0.0, 0.0], [0.0, 0.0, 2.8], 0.5),
+    ]
+    .concat()
+}
+
+/// A light in a corner or on an edge of a room built of rectangles or of a
+/// mesh stands on every face there: seated on the first face alone, it
+/// sent the light it aimed through the others out of the room (7.2 lx
+/// against 16.2 at a ceiling point, a reviewer's find).
+#[test]
+fn a_light_on_an_edge_of_a_room_of_rectangles_or_a_mesh_stands_on_every_face() {
+    let e = 1e-7;
+    let rooms = room_of_rectangles();
+    same_as_just_off(
+        &rooms,
+        DVec3::new(0.0, 0.0, 2.8),
+        DVec3::new(e, e, 2.8 - e),
+        &room_points(),
+        3..=3,
+    );
+    same_as_just_off(
+        &rooms,
+        DVec3::new(0.0, 2.0, 2.8),
+        DVec3::new(e, 2.0, 2.8 - e),
+        &room_points(),
+        2..=2,
+    );
+    // One mesh, one material, counter-clockwise seen from inside: each
+    // wall's corner lies on one or both triangles of its quad.
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("room.obj");
+    std::fs::write(
+        &obj,
+        "v 0 0 0\nv 6 0 0\nv 0 4 0\nv 6 4 0\nv 0 0 2.8\nv 6 0 2.8\nv 0 4 2.8\nv 6 4 2.8\n\
+         f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n",
+    )
+    .unwrap();
+    let mesh = format!(
+        "[[surface]]\ntype = \"mesh\"\nfile = {:?}\nsides = \"front\"\n\
+         material = {{ type = \"lambertian\", reflectance = 0.5 }}\n",
+        obj.display().to_string()
+    );
+    same_as_just_off(
+        &mesh,
+        DVec3::new(0.0, 0.0, 2.8),
+        DVec3::new(e, e, 2.8 - e),
+        &room_points(),
+        3..=6,
     );
 }
 
@@ -221,7 +286,42 @@ fn a_lamp_on_a_desks_edge_hides_only_the_desk() {
     direct_lit_and_dark(&s, p, &lit, &dark);
     // The reflected light: the limit from just outside the edge.
     let e = 1e-7;
-    same_as_just_off(DESK, p, p + DVec3::new(0.0, -e, e), &lit, 2);
+    same_as_just_off(DESK, p, p + DVec3::new(0.0, -e, e), &lit, 2..=2);
+}
+
+/// The desk as a closed mesh (one-sided, counter-clockwise seen from
+/// outside): a lamp on its top front edge stands on the triangles of the
+/// top and the front there. Seated on one triangle, it lit nothing below
+/// the top's plane (a reviewer's find).
+#[test]
+fn a_lamp_on_a_mesh_desks_edge_hides_only_the_desk() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("desk.obj");
+    std::fs::write(
+        &obj,
+        "v 1 1 0\nv 2.6 1 0\nv 2.6 1.8 0\nv 1 1.8 0\nv 1 1 0.75\nv 2.6 1 0.75\nv 2.6 1.8 0.75\nv 1 1.8 0.75\n\
+         f 5 6 7 8\nf 1 4 3 2\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n",
+    )
+    .unwrap();
+    let desk = DESK
+        .split("[[surface]]\ntype = \"box\"")
+        .next()
+        .unwrap()
+        .to_string()
+        + &format!(
+            "[[surface]]\ntype = \"mesh\"\nfile = {:?}\nsides = \"front\"\n\
+             material = {{ type = \"lambertian\", reflectance = 0.7 }}\n",
+            obj.display().to_string()
+        );
+    let p = DVec3::new(1.8, 1.0, 0.75);
+    let lit = [
+        (DVec3::new(1.8, 0.0, 2.8), -DVec3::Z),
+        (DVec3::new(1.8, 1.4, 1.5), -DVec3::Z),
+        (DVec3::new(1.8, 0.5, 0.0), DVec3::Z),
+        (DVec3::new(1.0, 0.2, 0.4), DVec3::Y),
+    ];
+    let e = 1e-7;
+    same_as_just_off(&desk, p, p + DVec3::new(0.0, -e, e), &lit, 2..=4);
 }
 
 /// A shelf (a rectangle reflecting upward) in front of a wall, a spot
@@ -269,5 +369,5 @@ fn a_light_on_a_shelfs_rim_lights_below_beyond_the_rim() {
     let e = 1e-5;
     // Just above the rim (along the shelf's normal: the limit a light on
     // a surface is defined by; from beyond the rim it would be another).
-    same_as_just_off(SHELF, p, p + DVec3::new(0.0, 0.0, e), &lit, 1);
+    same_as_just_off(SHELF, p, p + DVec3::new(0.0, 0.0, e), &lit, 1..=1);
 }

@@ -136,7 +136,7 @@ fn points_on_edges_and_corners_read_the_limit_from_their_side() {
     .zip(&on)
     .map(|(&o, &(p, n))| (p + o, n))
     .collect();
-    let kinds = 4;
+    let kinds = 6;
     let bound = sidak_bound(1e-3, kinds * on.len(), None);
     let boxed = scene(BOX_ROOM, dir.path());
     let want = illuminance(&boxed, &off, 11);
@@ -158,6 +158,26 @@ fn points_on_edges_and_corners_read_the_limit_from_their_side() {
         "cabinet's foot",
         &illuminance(&cab, &foot, 15),
         &illuminance(&cab, &beside, 16),
+        bound,
+    );
+    // A two-sided partition standing on the floor: a floor point at its
+    // foot, edge-on to it, leaves the floor only (the first version slid it
+    // up the partition's plane, out of the room: E_indirect 0, flagged
+    // `ok`, a reviewer's find).
+    let part = scene(
+        &format!(
+            "{BOX_ROOM}[[surface]]\ntype = \"rectangle\"\ncorner = [2, 1, 0]\nedge1 = [0, 1, 0]\n\
+             edge2 = [0, 0, 1.5]\nsides = \"both\"\nmaterial = {{ type = \"lambertian\", reflectance = 0.6 }}\n"
+        ),
+        dir.path(),
+    );
+    let tilted = d(0.0, 0.6, 0.8);
+    let foot = [(d(2.0, 1.5, 0.0), tilted), (d(2.0, 1.5, 0.0), DVec3::Y)];
+    let above = [(d(2.0, 1.5, 1e-6), tilted), (d(2.0, 1.5, 1e-6), DVec3::Y)];
+    agree(
+        "partition's foot",
+        &illuminance(&part, &foot, 17),
+        &illuminance(&part, &above, 18),
         bound,
     );
 }

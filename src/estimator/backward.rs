@@ -1134,7 +1134,7 @@ fn connect(
     // vertex of a path lies there), the others leave it.
     let leave = match scene.light_surface(k) {
         Some(seat) if seat.meets(dir).is_some() => return (0.0, Seated::new()),
-        Some(seat) => Some((seat.leaves(dir), seat.prim())),
+        Some(seat) => Some(seat.leaves(dir)),
         None => None,
     };
     let Some(y) = scene.intersect(&ray, leave) else {

@@ -588,7 +588,7 @@ impl TriangleBvh {
         best.map(|(pos, t, _)| (t, ids[pos], self.tris[pos]))
     }
 
-    /// Call `f(t, corners)` for every triangle the ray meets with `t` in
+    /// Call `f(t, input index, corners)` for every triangle the ray meets with `t` in
     /// `(t_min, t_max)`, each once (including triangles met at the same
     /// distance), in no particular order.
     pub fn for_each_hit(
@@ -596,14 +596,15 @@ impl TriangleBvh {
         q: &RayQuery,
         t_min: f64,
         t_max: f64,
-        mut f: impl FnMut(f64, &[DVec3; 3]),
+        mut f: impl FnMut(f64, u32, &[DVec3; 3]),
     ) {
+        let ids = self.tree.ids();
         self.tree.any(q, t_min, t_max, |pos| {
             if let Some(t) = q.triangle(&self.tris[pos])
                 && t > t_min
                 && t < t_max
             {
-                f(t, &self.tris[pos]);
+                f(t, ids[pos], &self.tris[pos]);
             }
             false
         });

@@ -629,23 +629,23 @@ impl Mesh {
         })
     }
 
-    /// The unit geometric normals (by winding) of the triangles that point
-    /// `p` lies on, within `tol` \[m\] of their planes: found by segments
-    /// through `p` along the three axes (one crosses any plane), so a
-    /// point on an edge or a corner finds every triangle there; a plane
-    /// met by two of them or by two triangles comes more than once.
-    pub fn normals_through(&self, p: DVec3, tol: f64) -> Vec<DVec3> {
+    /// The triangles that point `p` lies on, within `tol` \[m\] of their
+    /// planes, in index order, each once, with their corners: found by
+    /// segments through `p` along the three axes (one crosses any plane),
+    /// so a point on an edge or a corner finds every triangle there.
+    pub fn triangles_through(&self, p: DVec3, tol: f64) -> Vec<(u32, [DVec3; 3])> {
         let reach = 4.0 * tol.max(f64::MIN_POSITIVE);
-        let mut out = Vec::new();
+        let mut out: Vec<(u32, [DVec3; 3])> = Vec::new();
         for d in [DVec3::X, DVec3::Y, DVec3::Z] {
             let q = RayQuery::new(p - reach * d, d);
-            self.bvh.for_each_hit(&q, 0.0, 2.0 * reach, |_, v| {
+            self.bvh.for_each_hit(&q, 0.0, 2.0 * reach, |_, id, v| {
                 let n = (v[1] - v[0]).cross(v[2] - v[0]);
-                if (p - v[0]).dot(n).abs() <= tol * n.length() {
-                    out.push(n.normalize());
+                if (p - v[0]).dot(n).abs() <= tol * n.length() && out.iter().all(|x| x.0 != id) {
+                    out.push((id, *v));
                 }
             });
         }
+        out.sort_by_key(|x| x.0);
         out
     }
 
@@ -657,7 +657,7 @@ impl Mesh {
     pub fn signed_crossings(&self, o: DVec3, d: DVec3, t_min: f64) -> i64 {
         let q = RayQuery::new(o, d);
         let mut n = 0i64;
-        self.bvh.for_each_hit(&q, t_min, f64::INFINITY, |_, p| {
+        self.bvh.for_each_hit(&q, t_min, f64::INFINITY, |_, _, p| {
             let facing = (p[1] - p[0]).cross(p[2] - p[0]).dot(d);
             n += match facing.partial_cmp(&0.0) {
                 Some(std::cmp::Ordering::Greater) => 1,

@@ -1028,59 +1028,79 @@ impl Scene {
     /// the floor 4.35 against 11.13, all flagged `ok` (a reviewer's find).
     ///
     /// The point moves along the sum of those sides' normals by the least
-    /// of `1e-8 s 2^k` (`s` the scale of the coordinates: 100 times the
-    /// tolerances of boxes, 1000 times those of flat shapes, so that the
-    /// collisions its rays find next to the edge are resolved too) that
-    /// leaves every surface it was on; `p` itself where it faces along every normal (a
-    /// floor point facing up: exact as it is), lies on nothing, or faces a
-    /// black side ([`Self::faces_black_side`]: flagged as it is).
+    /// of `1e-8 s 2^k`, `k <= 6` (`s` the scale of the coordinates: 100
+    /// times the tolerances of boxes, 1000 times those of flat shapes, so
+    /// that the collisions its rays find next to the edge are resolved
+    /// too) that leaves every one of those surfaces; it stays where it is
+    /// where that sum does not point off every one of them (a cabinet's
+    /// bottom face lying on the floor, facing down: sliding along a surface
+    /// took a point out of the room, a reviewer's find); `p` itself also
+    /// where it faces along every normal (a floor point facing up: exact as
+    /// it is), lies on nothing, or faces a black side
+    /// ([`Self::faces_black_side`]: flagged as it is).
     pub fn lift_to_its_side(&self, p: DVec3, n: DVec3) -> DVec3 {
-        let mut sides: Vec<DVec3> = Vec::new();
-        let mut side = |s: u32, ng: DVec3| {
+        // The side of surface `s` (geometric normal `ng`) the point belongs
+        // to, if any.
+        let side = |s: u32, ng: DVec3| -> Option<DVec3> {
             let c = n.dot(ng);
             if c.abs() > 1e-12 {
-                sides.push(ng * c.signum());
-            } else {
-                match self.surfaces[s as usize].sides {
-                    Sides::Back => sides.push(-ng),
-                    Sides::Front => sides.push(ng),
-                    // Edge-on to a sheet that reflects on both sides (a
-                    // partition screen through a work-plane grid): neither
-                    // side is the point's, which sees both halves of the
-                    // room past the sheet, as before.
-                    Sides::Both => {}
-                }
+                return Some(ng * c.signum());
+            }
+            match self.surfaces[s as usize].sides {
+                Sides::Back => Some(-ng),
+                Sides::Front => Some(ng),
+                // Edge-on to a sheet that reflects on both sides (a
+                // partition screen through a work-plane grid): neither side
+                // is the point's, which sees both halves of the room past
+                // the sheet, as before.
+                Sides::Both => None,
             }
         };
+        // The faces to leave: (surface, mesh triangle or `u32::MAX`, side).
+        let mut faces: Vec<(u32, u32, DVec3)> = Vec::new();
         for (s, ng) in self.surfaces_through(p) {
-            side(s, ng);
+            faces.extend(side(s, ng).map(|m| (s, u32::MAX, m)));
         }
         for (m, s) in &self.meshes {
-            for ng in m.normals_through(p, m.on_tolerance(p)) {
-                side(*s, ng);
+            for (tri, v) in m.triangles_through(p, m.on_tolerance(p)) {
+                let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+                faces.extend(side(*s, ng).map(|m| (*s, tri, m)));
             }
         }
-        if sides.iter().all(|m| n.dot(*m) >= 1.0 - 1e-12) || self.faces_black_side(p, n) {
+        if faces.iter().all(|f| n.dot(f.2) >= 1.0 - 1e-12) || self.faces_black_side(p, n) {
             return p;
         }
-        let u = sides.iter().sum::<DVec3>().normalize_or_zero();
-        if u == DVec3::ZERO {
+        // The move must leave every one of them: along one it would slide
+        // on it, out of the room. Where the sum of the sides does not (a
+        // face lying against another, facing the other way), the point
+        // stays where it is.
+        let u = faces.iter().map(|f| f.2).sum::<DVec3>().normalize_or_zero();
+        if faces.iter().any(|f| u.dot(f.2) < 1e-3) {
             return p;
         }
-        let on = |q: DVec3| {
-            !self.surfaces_through(q).is_empty()
-                || self
-                    .meshes
-                    .iter()
-                    .any(|(m, _)| !m.normals_through(q, m.on_tolerance(q)).is_empty())
+        let still_on = |q: DVec3| {
+            let through = self.surfaces_through(q);
+            faces.iter().any(|&(s, tri, _)| {
+                if tri == u32::MAX {
+                    through.iter().any(|t| t.0 == s)
+                } else {
+                    self.meshes.iter().any(|(m, ms)| {
+                        *ms == s
+                            && m.triangles_through(q, m.on_tolerance(q))
+                                .iter()
+                                .any(|t| t.0 == tri)
+                    })
+                }
+            })
         };
         let bounds = self
             .finite_bounds()
             .map_or(0.0, |(lo, hi)| lo.abs().max(hi.abs()).max_element());
         let mut delta = 1e-8 * p.abs().max_element().max(bounds).max(1e-6);
-        for _ in 0..64 {
+        // At most 1e-6 of the scale.
+        for _ in 0..7 {
             let q = p + delta * u;
-            if !on(q) {
+            if !still_on(q) {
                 return q;
             }
             delta *= 2.0;
@@ -1168,33 +1188,59 @@ impl Scene {
             })
     }
 
-    /// The seat of a light at `p` ([`LightSeat`]): the surface
-    /// [`Self::surface_at`] finds, with the other faces of a box through
-    /// `p` (an edge or a corner) or the rim of a rectangle or disc.
+    /// The seat of a light at `p` ([`LightSeat`]): every face through `p`
+    /// (within the shapes' on-surface tolerances; a mesh's triangles within
+    /// `MESH_REL` of its size), each with the unit normal of its reflecting
+    /// side (the geometric normal's where both reflect) and its edges
+    /// through `p`: a box's other faces there, a rectangle's or disc's
+    /// rim, a triangle's sides.
     fn seat_at(&self, p: DVec3) -> Option<LightSeat> {
-        let (s, n, prim) = self.surface_at(p)?;
-        let surf = &self.surfaces[s as usize];
-        Some(match surf.shape {
-            ShapeRef::Rect(i) => LightSeat::flat(s, n, &self.rects[i as usize].0.rims(p)),
-            ShapeRef::Disc(i) => {
-                let rim = self.discs[i as usize].0.rim(p);
-                LightSeat::flat(s, n, rim.as_slice())
-            }
-            ShapeRef::BoxFace(i, _) => {
-                let (b, s0) = &self.boxes[i as usize];
-                let inward = surf.sides == Sides::Back;
-                let faces: Vec<(u32, DVec3)> = (0..6)
-                    .filter(|&f| b.face_plane(f).side(p) == 0)
-                    .map(|f| {
-                        let n = AaBox::outward_normal(f);
-                        (s0 + f as u32, if inward { -n } else { n })
+        let reflecting = |s: u32, ng: DVec3| match self.surfaces[s as usize].sides {
+            Sides::Back => -ng,
+            Sides::Front | Sides::Both => ng,
+        };
+        let mut faces: Vec<(u32, u32, DVec3, Vec<DVec3>)> = Vec::new();
+        for (s, ng) in self.surfaces_through(p) {
+            let edges = match self.surfaces[s as usize].shape {
+                ShapeRef::Rect(i) => self.rects[i as usize].0.rims(p),
+                ShapeRef::Disc(i) => self.discs[i as usize].0.rim(p).into_iter().collect(),
+                // Into the box across the other faces through `p`.
+                ShapeRef::BoxFace(i, f) => {
+                    let b = &self.boxes[i as usize].0;
+                    (0..6)
+                        .filter(|&g| g != f as usize && b.face_plane(g).side(p) == 0)
+                        .map(|g| -AaBox::outward_normal(g))
+                        .collect()
+                }
+                _ => Vec::new(),
+            };
+            faces.push((s, 0, reflecting(s, ng), edges));
+        }
+        for (m, s) in &self.meshes {
+            let tol = MESH_REL * (m.bounds().1 - m.bounds().0).length();
+            for (tri, v) in m.triangles_through(p, tol) {
+                let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+                // Into the triangle across each side whose line passes
+                // within `tol` of `p`.
+                let edges = (0..3)
+                    .filter_map(|k| {
+                        let (a, b, c) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
+                        let along = (b - a).normalize();
+                        let off = (p - a) - along * along.dot(p - a);
+                        (off.length() <= tol).then(|| {
+                            let e = n.cross(along);
+                            if e.dot(c - a) < 0.0 { -e } else { e }
+                        })
                     })
                     .collect();
-                LightSeat::box_faces(&faces, !inward)
+                faces.push((*s, tri, reflecting(*s, n), edges));
             }
-            ShapeRef::Mesh(_) => LightSeat::flat(s, n, &[]).on_triangle(prim),
-            _ => LightSeat::flat(s, n, &[]),
-        })
+        }
+        let faces: Vec<(u32, u32, DVec3, &[DVec3])> = faces
+            .iter()
+            .map(|(s, prim, n, e)| (*s, *prim, *n, e.as_slice()))
+            .collect();
+        LightSeat::new(&faces)
     }
 
     /// Whether point `p` lies on a surface (within the shapes' on-surface
@@ -1468,14 +1514,14 @@ impl Scene {
     /// otherwise [`Self::first_hit_from`].
     pub fn observer_hit(&self, o: DVec3, d: DVec3) -> Option<Hit> {
         if let Some(seat) = self.seat_at(o)
-            && let Some((surface, n)) = seat.meets(d)
+            && let Some((surface, n, prim)) = seat.meets_prim(d)
         {
             return Some(Hit {
                 t: 0.0,
                 p: o,
                 n,
                 surface,
-                prim: seat.prim(),
+                prim,
             });
         }
         self.first_hit_from(o, d)

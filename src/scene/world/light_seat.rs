@@ -6,22 +6,32 @@
 //! limit as the light approaches from that side. Light it emits into the
 //! surface meets the surface at once, at the light's position, and points
 //! behind the surface do not see it. On a face of a box, a sphere or the
-//! inside of a flat shape this darkens a half-space. On an edge the limit
-//! is not a half-space; it is taken along the bisector of the faces
-//! through the light (along the normal off a flat shape's rim):
+//! inside of a flat shape this darkens a half-space. Where several faces
+//! pass through the light (an edge or a corner of a box, of a room built
+//! of rectangles or of a mesh, a rug's rim on the floor) the limit is
+//! taken along the bisector `b` of their reflecting normals: from `p + e b`
+//! a direction meets the face whose plane it crosses first inside that
+//! face (each face near the light is its plane cut by its edges through
+//! the light: a half-plane at an edge, a wedge at a corner). So:
 //!
 //! - **a solid's edge or corner** (a box with outward normals: a lamp on a
 //!   desk's front edge): a direction meets the solid only if it points into
 //!   every face through the light (the solid's cone there), and then meets
 //!   the face whose plane it crosses last (the least steep one);
-//! - **a room's edge or corner** (a box with inward normals: a luminaire
-//!   where a wall meets the ceiling): a direction leaves the room through
-//!   any face it points out of, and meets the face it crosses first (the
-//!   steepest);
+//! - **a room's edge or corner** (a box with inward normals, or rectangles,
+//!   or a mesh: a luminaire where a wall meets the ceiling): a direction
+//!   leaves the room through any face it points out of, and meets the face
+//!   it crosses first (the steepest);
 //! - **the rim of a rectangle or disc**: a direction into the back of the
 //!   shape meets it only where it crosses the plane inside the shape, that
 //!   is, where it also points into the shape across every edge through the
-//!   light.
+//!   light; beyond the rim it meets what lies there (the floor under a rug).
+//!
+//! Seated on one face only (the rule before), a light in a corner of a
+//! room of rectangles or of a mesh sent the light it aimed through the
+//! other walls out of the room (7.2 lx against 16.2 at a ceiling point),
+//! and a light on a mesh cabinet's top edge lit nothing below the top's
+//! plane (a reviewer's find).
 //!
 //! A direction that meets a face at the light reflects there and is
 //! tested against the seat again (a room's corner can send it into another
@@ -29,86 +39,111 @@
 
 use glam::DVec3;
 
-/// How the faces of a seat combine.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Joint {
-    /// One surface (in front of a face, a sphere or a flat shape).
-    One,
-    /// A solid's edge or corner: dark only into every face.
-    Solid,
-    /// A room's edge or corner: dark into any face.
-    Room,
+/// Most faces a seat holds (a mesh vertex where many triangles meet keeps
+/// the first ones).
+const MAX_FACES: usize = 8;
+
+/// One face through the light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Face {
+    surface: u32,
+    /// The primitive (a mesh's triangle; 0 otherwise).
+    prim: u32,
+    /// Unit normal of the reflecting side the light stands on.
+    n: DVec3,
+    /// In-plane unit vectors into the face across its edges through the
+    /// light (none: the whole plane near the light).
+    edges: [DVec3; 2],
+    n_edges: usize,
 }
 
-/// The surfaces a point-like light stands on, with the unit normals of the
-/// sides it belongs to, and for a light on a flat shape's rim, the
-/// in-plane unit vectors into the shape across each edge through it.
+/// The faces a point-like light stands on ([`Self::new`]) and the
+/// bisector its limit is taken along.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightSeat {
-    joint: Joint,
-    /// The primitive of a one-surface seat (a mesh's triangle; 0 otherwise).
-    prim: u32,
-    faces: [(u32, DVec3); 3],
+    faces: [Face; MAX_FACES],
     n_faces: usize,
-    rims: [DVec3; 2],
-    n_rims: usize,
+    /// Unit bisector of the faces' reflecting normals.
+    b: DVec3,
 }
 
 impl LightSeat {
+    /// A seat on `faces`: each `(surface, primitive, unit normal of the
+    /// side the light stands on, in-plane unit vectors into the face across
+    /// its edges through the light (at most two; none in its interior))`;
+    /// `None` without faces.
+    pub fn new(faces: &[(u32, u32, DVec3, &[DVec3])]) -> Option<Self> {
+        let first = faces.first()?;
+        let empty = Face {
+            surface: first.0,
+            prim: first.1,
+            n: first.2,
+            edges: [DVec3::ZERO; 2],
+            n_edges: 0,
+        };
+        let mut seat = Self {
+            faces: [empty; MAX_FACES],
+            n_faces: 0,
+            b: DVec3::ZERO,
+        };
+        // Each distinct normal once in the bisector (the two triangles of
+        // a mesh's quad, a rug on the floor).
+        let mut normals: Vec<DVec3> = Vec::new();
+        for &(surface, prim, n, edges) in faces.iter().take(MAX_FACES) {
+            let k = edges.len().min(2);
+            let mut e = [DVec3::ZERO; 2];
+            e[..k].copy_from_slice(&edges[..k]);
+            seat.faces[seat.n_faces] = Face {
+                surface,
+                prim,
+                n,
+                edges: e,
+                n_edges: k,
+            };
+            seat.n_faces += 1;
+            if !normals.iter().any(|m| m.dot(n) > 1.0 - 1e-12) {
+                normals.push(n);
+            }
+        }
+        seat.b = normals.iter().sum::<DVec3>().normalize_or(first.2);
+        Some(seat)
+    }
+
     /// A light on one surface `s` with the unit normal `n` of its side,
     /// on the rim of a flat shape where `rims` (in-plane unit vectors into
     /// the shape, at most two) are given.
     pub fn flat(s: u32, n: DVec3, rims: &[DVec3]) -> Self {
-        let mut r = [DVec3::ZERO; 2];
-        let n_rims = rims.len().min(2);
-        r[..n_rims].copy_from_slice(&rims[..n_rims]);
-        Self {
-            joint: Joint::One,
-            prim: 0,
-            faces: [(s, n); 3],
-            n_faces: 1,
-            rims: r,
-            n_rims,
-        }
-    }
-
-    /// A light on one to three faces of a box, each `(surface, unit normal
-    /// of the reflecting side)`; `solid`: the box reflects outward (the
-    /// light stands outside it), else inward (inside a room).
-    pub fn box_faces(faces: &[(u32, DVec3)], solid: bool) -> Self {
-        assert!(
-            (1..=3).contains(&faces.len()),
-            "a point lies on 1 to 3 faces of a box"
-        );
-        let mut f = [faces[0]; 3];
-        f[..faces.len()].copy_from_slice(faces);
-        Self {
-            prim: 0,
-            joint: match (faces.len(), solid) {
-                (1, _) => Joint::One,
-                (_, true) => Joint::Solid,
-                (_, false) => Joint::Room,
-            },
-            faces: f,
-            n_faces: faces.len(),
-            rims: [DVec3::ZERO; 2],
-            n_rims: 0,
-        }
-    }
-
-    /// The seat on triangle `tri` of a mesh (see [`Self::flat`]).
-    pub fn on_triangle(self, tri: u32) -> Self {
-        Self { prim: tri, ..self }
-    }
-
-    /// The primitive a face met or left is: a mesh's triangle, else 0.
-    pub fn prim(&self) -> u32 {
-        self.prim
+        Self::new(&[(s, 0, n, rims)]).expect("one face")
     }
 
     /// The faces: `(surface, unit normal of the light's side)`.
-    pub fn faces(&self) -> &[(u32, DVec3)] {
-        &self.faces[..self.n_faces]
+    pub fn faces(&self) -> impl Iterator<Item = (u32, DVec3)> + '_ {
+        self.faces[..self.n_faces].iter().map(|f| (f.surface, f.n))
+    }
+
+    /// The face that direction `d` (any length) from the light meets at
+    /// once: the first whose plane it crosses inside the face, seen from
+    /// `p + e b`; ties go to the first listed.
+    #[inline]
+    fn met(&self, d: DVec3) -> Option<&Face> {
+        let mut best: Option<(f64, &Face)> = None;
+        for f in &self.faces[..self.n_faces] {
+            let dn = f.n.dot(d);
+            let bn = f.n.dot(self.b);
+            if dn >= 0.0 || bn <= 0.0 {
+                continue;
+            }
+            // Where the ray from b crosses the face's plane, relative to
+            // the light, in units of e.
+            let s = bn / -dn;
+            let x = self.b + s * d;
+            if f.edges[..f.n_edges].iter().all(|e| e.dot(x) >= 0.0)
+                && best.is_none_or(|(t, _)| s < t)
+            {
+                best = Some((s, f));
+            }
+        }
+        best.map(|(_, f)| f)
     }
 
     /// The surface and the unit normal of the face that direction `d` (any
@@ -116,61 +151,38 @@ impl LightSeat {
     /// `None` where `d` leaves the light freely.
     #[inline]
     pub fn meets(&self, d: DVec3) -> Option<(u32, DVec3)> {
-        let faces = self.faces();
-        match self.joint {
-            Joint::One => {
-                let (s, n) = faces[0];
-                (n.dot(d) < 0.0 && self.rims[..self.n_rims].iter().all(|e| e.dot(d) > 0.0))
-                    .then_some((s, n))
-            }
-            // Into the solid's cone: crossing every face's plane, it enters
-            // through the one crossed last, the least steep.
-            Joint::Solid => faces
-                .iter()
-                .all(|(_, n)| n.dot(d) < 0.0)
-                .then(|| Self::steepest(faces, d, false)),
-            // Out of any face: the first crossed, the steepest.
-            Joint::Room => faces
-                .iter()
-                .any(|(_, n)| n.dot(d) < 0.0)
-                .then(|| Self::steepest(faces, d, true)),
-        }
+        self.met(d).map(|f| (f.surface, f.n))
+    }
+
+    /// [`Self::meets`] with the face's primitive (a mesh's triangle; 0
+    /// otherwise).
+    #[inline]
+    pub fn meets_prim(&self, d: DVec3) -> Option<(u32, DVec3, u32)> {
+        self.met(d).map(|f| (f.surface, f.n, f.prim))
     }
 
     /// Whether point `x` lies where the light at `p` cannot reach it
     /// straight: behind the seat.
     #[inline]
     pub fn hides(&self, p: DVec3, x: DVec3) -> bool {
-        self.meets(x - p).is_some()
+        self.met(x - p).is_some()
     }
 
-    /// The surface that a direction `d` which leaves freely ([`Self::meets`]
-    /// is `None`) leaves (for [`crate::scene::Scene::intersect`]'s `from`):
-    /// the face it points out of most (a box's face it leaves is never met
-    /// again at the light; one it enters it meets at its exit).
+    /// The surface and primitive that a direction `d` which leaves freely
+    /// ([`Self::meets`] is `None`) leaves (for
+    /// [`crate::scene::Scene::intersect`]'s `from`): the face it points out
+    /// of most (a box's face it leaves is never met again at the light; one
+    /// it enters it meets at its exit).
     #[inline]
-    pub fn leaves(&self, d: DVec3) -> u32 {
-        let faces = self.faces();
-        let mut best = faces[0];
-        for &f in &faces[1..] {
-            if f.1.dot(d) > best.1.dot(d) {
+    pub fn leaves(&self, d: DVec3) -> (u32, u32) {
+        let faces = &self.faces[..self.n_faces];
+        let mut best = &faces[0];
+        for f in &faces[1..] {
+            if f.n.dot(d) > best.n.dot(d) {
                 best = f;
             }
         }
-        best.0
-    }
-
-    /// Of the faces, the one with the most negative (`most`) or least
-    /// negative `n . d`, first in order on ties.
-    fn steepest(faces: &[(u32, DVec3)], d: DVec3, most: bool) -> (u32, DVec3) {
-        let mut best = faces[0];
-        for &f in &faces[1..] {
-            let (a, b) = (f.1.dot(d), best.1.dot(d));
-            if (most && a < b) || (!most && a > b) {
-                best = f;
-            }
-        }
-        best
+        (best.surface, best.prim)
     }
 }
 
@@ -183,7 +195,7 @@ mod tests {
         let s = LightSeat::flat(3, DVec3::Z, &[]);
         assert_eq!(s.meets(DVec3::new(0.3, 0.1, -0.2)), Some((3, DVec3::Z)));
         assert_eq!(s.meets(DVec3::new(0.3, 0.1, 0.2)), None);
-        assert_eq!(s.leaves(DVec3::new(0.3, 0.1, 0.2)), 3);
+        assert_eq!(s.leaves(DVec3::new(0.3, 0.1, 0.2)), (3, 0));
     }
 
     #[test]
@@ -204,7 +216,12 @@ mod tests {
         // A desk's top (normal +z) and front (normal -y) faces.
         let top = (10, DVec3::Z);
         let front = (11, -DVec3::Y);
-        let desk = LightSeat::box_faces(&[top, front], true);
+        // Each face extends into the desk across the other's edge.
+        let desk = LightSeat::new(&[
+            (10, 0, DVec3::Z, &[DVec3::Y]),
+            (11, 0, -DVec3::Y, &[-DVec3::Z]),
+        ])
+        .unwrap();
         // Up over the desk, down in front of it: free.
         assert_eq!(desk.meets(DVec3::new(0.0, 1.0, 1.0)), None);
         assert_eq!(desk.meets(DVec3::new(0.0, -1.0, -1.0)), None);
@@ -212,16 +229,40 @@ mod tests {
         // first, above the top, and enters through the top.
         assert_eq!(desk.meets(DVec3::new(0.0, 1.0, -0.1)), Some(top));
         assert_eq!(desk.meets(DVec3::new(0.0, 0.1, -1.0)), Some(front));
-        assert_eq!(desk.leaves(DVec3::new(0.0, 1.0, 1.0)), 10);
-        assert_eq!(desk.leaves(DVec3::new(0.0, -1.0, -1.0)), 11);
+        assert_eq!(desk.leaves(DVec3::new(0.0, 1.0, 1.0)), (10, 0));
+        assert_eq!(desk.leaves(DVec3::new(0.0, -1.0, -1.0)), (11, 0));
         // A room's ceiling (normal -z) and wall x = 0 (normal +x).
         let ceiling = (20, -DVec3::Z);
         let wall = (21, DVec3::X);
-        let room = LightSeat::box_faces(&[wall, ceiling], false);
+        let room = LightSeat::new(&[
+            (21, 0, DVec3::X, &[-DVec3::Z]),
+            (20, 0, -DVec3::Z, &[DVec3::X]),
+        ])
+        .unwrap();
         assert_eq!(room.meets(DVec3::new(1.0, 0.0, -1.0)), None);
         // Out through the wall only, or first through the wall.
         assert_eq!(room.meets(DVec3::new(-1.0, 0.0, -1.0)), Some(wall));
         assert_eq!(room.meets(DVec3::new(-1.0, 0.0, 0.1)), Some(wall));
         assert_eq!(room.meets(DVec3::new(-0.1, 0.0, 1.0)), Some(ceiling));
+    }
+
+    #[test]
+    fn a_room_corner_of_three_faces_and_a_rug_rim_on_the_floor() {
+        // The corner x = y = z = 0 of a room: each wall extends along the
+        // other two axes.
+        let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+        let corner =
+            LightSeat::new(&[(0, 0, x, &[y, z]), (1, 0, y, &[x, z]), (2, 0, z, &[x, y])]).unwrap();
+        assert_eq!(corner.meets(DVec3::new(1.0, 2.0, 3.0)), None);
+        assert_eq!(corner.meets(DVec3::new(-1.0, 2.0, 3.0)), Some((0, x)));
+        // Out through two walls: the first crossed, the steeper.
+        assert_eq!(corner.meets(DVec3::new(-2.0, -1.0, 3.0)), Some((0, x)));
+        assert_eq!(corner.meets(DVec3::new(-1.0, -2.0, 3.0)), Some((1, y)));
+        // A rug (x > 0) on the floor, the light on its rim: down over the
+        // rug it meets the rug (listed first), down beyond it the floor.
+        let rug = LightSeat::new(&[(5, 0, z, &[x]), (6, 0, z, &[])]).unwrap();
+        assert_eq!(rug.meets(DVec3::new(0.5, 0.0, -1.0)), Some((5, z)));
+        assert_eq!(rug.meets(DVec3::new(-0.5, 0.0, -1.0)), Some((6, z)));
+        assert_eq!(rug.meets(DVec3::new(-0.5, 0.0, 1.0)), None);
     }
 }
