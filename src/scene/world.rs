@@ -894,31 +894,6 @@ impl Scene {
         through
     }
 
-    /// The surface that point `p` lies on (within the shapes' on-surface
-    /// tolerance; flat shapes, spheres, boxes and meshes, within `MESH_REL`
-    /// of a mesh's size), with the unit normal of its reflecting side (the
-    /// geometric normal when both sides reflect) and the primitive (a
-    /// mesh's triangle; 0 otherwise).
-    fn surface_at(&self, p: DVec3) -> Option<(u32, DVec3, u32)> {
-        let side = |s: u32, ng: DVec3| {
-            let n = match self.surfaces[s as usize].sides {
-                Sides::Back => -ng,
-                Sides::Front | Sides::Both => ng,
-            };
-            (s, n, 0)
-        };
-        if let Some(&(s, ng)) = self.surfaces_through(p).first() {
-            return Some(side(s, ng));
-        }
-        self.meshes.iter().find_map(|(m, s)| {
-            let tol = MESH_REL * (m.bounds().1 - m.bounds().0).length();
-            m.triangle_at(p, tol).map(|tri| {
-                let (s, n, _) = side(*s, m.normal(tri));
-                (s, n, tri)
-            })
-        })
-    }
-
     /// Whether the scene has meshes or spherical-harmonic objects (see
     /// [`Self::snap_to_surface`]).
     pub fn has_curved_shapes(&self) -> bool {
@@ -931,7 +906,7 @@ impl Scene {
     /// of the mesh's size (along the triangle's normal), or onto a
     /// spherical-harmonic surface it lies within `MESH_REL` of the radius
     /// of (radially), where it is farther than rounding from it; `p`
-    /// itself otherwise. [`Self::surface_at`] counts such a point
+    /// itself otherwise. [`Self::on_surface`] counts such a point
     /// as on the mesh, but rays and shadow tests pass a triangle only where
     /// their end lies on its plane to rounding ([`Ends`]), so a point 1e-9 m
     /// below a mesh room's floor would lie under it (before the rule of
@@ -1199,6 +1174,7 @@ impl Scene {
             Sides::Back => -ng,
             Sides::Front | Sides::Both => ng,
         };
+        let both = |s: u32| self.surfaces[s as usize].sides == Sides::Both;
         let mut faces: Vec<(u32, u32, DVec3, Vec<DVec3>)> = Vec::new();
         for (s, ng) in self.surfaces_through(p) {
             let edges = match self.surfaces[s as usize].shape {
@@ -1236,17 +1212,22 @@ impl Scene {
                 faces.push((*s, tri, reflecting(*s, n), edges));
             }
         }
-        let faces: Vec<(u32, u32, DVec3, &[DVec3])> = faces
+        let faces: Vec<light_seat::SeatFace<'_>> = faces
             .iter()
-            .map(|(s, prim, n, e)| (*s, *prim, *n, e.as_slice()))
+            .map(|(s, prim, n, e)| (*s, *prim, *n, e.as_slice(), both(*s)))
             .collect();
         LightSeat::new(&faces)
     }
 
     /// Whether point `p` lies on a surface (within the shapes' on-surface
-    /// tolerance; see [`Self::light_surface`] for the tolerance's use).
+    /// tolerances, a mesh's triangles within `MESH_REL` of its size; see
+    /// [`Self::light_surface`] for the tolerance's use).
     pub fn on_surface(&self, p: DVec3) -> bool {
-        self.surface_at(p).is_some()
+        !self.surfaces_through(p).is_empty()
+            || self.meshes.iter().any(|(m, _)| {
+                let tol = MESH_REL * (m.bounds().1 - m.bounds().0).length();
+                m.triangle_at(p, tol).is_some()
+            })
     }
 
     /// The surfaces point-like light `k` stands on, if any ([`LightSeat`]).

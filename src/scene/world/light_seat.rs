@@ -39,10 +39,6 @@
 
 use glam::DVec3;
 
-/// Most faces a seat holds (a mesh vertex where many triangles meet keeps
-/// the first ones).
-const MAX_FACES: usize = 8;
-
 /// One face through the light.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Face {
@@ -59,66 +55,82 @@ struct Face {
 
 /// The faces a point-like light stands on ([`Self::new`]) and the
 /// bisector its limit is taken along.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct LightSeat {
-    faces: [Face; MAX_FACES],
-    n_faces: usize,
+    faces: Vec<Face>,
     /// Unit bisector of the faces' reflecting normals.
     b: DVec3,
 }
 
+/// One face offered to [`LightSeat::new`]: `(surface, primitive, unit
+/// normal of its reflecting side (the geometric one where both sides
+/// reflect), in-plane unit vectors into the face across its edges through
+/// the light (at most two; none in its interior), whether both sides
+/// reflect)`.
+pub type SeatFace<'a> = (u32, u32, DVec3, &'a [DVec3], bool);
+
 impl LightSeat {
-    /// A seat on `faces`: each `(surface, primitive, unit normal of the
-    /// side the light stands on, in-plane unit vectors into the face across
-    /// its edges through the light (at most two; none in its interior))`;
-    /// `None` without faces.
-    pub fn new(faces: &[(u32, u32, DVec3, &[DVec3])]) -> Option<Self> {
+    /// A seat on those of `faces` the light can stand in front of all at
+    /// once; `None` without faces. One-sided faces come first, interiors
+    /// before rims, then two-sided ones turned to the side of those; a face
+    /// is kept where the bisector of the kept normals with its own stays in
+    /// front of each of them. So a face lying against another and facing the
+    /// other way (a cabinet's bottom on the floor, its back against a
+    /// wall, a two-sided picture whose normal points into its wall) does
+    /// not take the light to its side: summed with the other's normal it
+    /// cancelled it, and the light lost what it sent into the floor or the
+    /// wall (a reviewer's find).
+    pub fn new(faces: &[SeatFace<'_>]) -> Option<Self> {
         let first = faces.first()?;
-        let empty = Face {
-            surface: first.0,
-            prim: first.1,
-            n: first.2,
-            edges: [DVec3::ZERO; 2],
-            n_edges: 0,
-        };
-        let mut seat = Self {
-            faces: [empty; MAX_FACES],
-            n_faces: 0,
-            b: DVec3::ZERO,
-        };
-        // Each distinct normal once in the bisector (the two triangles of
-        // a mesh's quad, a rug on the floor).
+        // The order faces are offered in: one-sided before two-sided, and
+        // a face's interior before its rims (the floor before a cabinet's
+        // bottom edge on it, whatever the order of the scene file).
+        let mut order: Vec<usize> = (0..faces.len()).collect();
+        order.sort_by_key(|&k| (faces[k].4, faces[k].3.len()));
+        // The side each face is kept with, if kept.
+        let mut side: Vec<Option<DVec3>> = vec![None; faces.len()];
         let mut normals: Vec<DVec3> = Vec::new();
-        for &(surface, prim, n, edges) in faces.iter().take(MAX_FACES) {
-            let k = edges.len().min(2);
-            let mut e = [DVec3::ZERO; 2];
-            e[..k].copy_from_slice(&edges[..k]);
-            seat.faces[seat.n_faces] = Face {
-                surface,
-                prim,
-                n,
-                edges: e,
-                n_edges: k,
+        for k in order {
+            let (_, _, n, _, both) = faces[k];
+            let n = match normals.iter().sum::<DVec3>().normalize_or_zero() {
+                b if both && n.dot(b) < 0.0 => -n,
+                _ => n,
             };
-            seat.n_faces += 1;
-            if !normals.iter().any(|m| m.dot(n) > 1.0 - 1e-12) {
-                normals.push(n);
+            let fresh = !normals.iter().any(|m| m.dot(n) > 1.0 - 1e-12);
+            let b = (normals.iter().sum::<DVec3>() + if fresh { n } else { DVec3::ZERO })
+                .normalize_or_zero();
+            if normals.iter().chain([&n]).all(|m| m.dot(b) > 1e-9) {
+                if fresh {
+                    normals.push(n);
+                }
+                side[k] = Some(n);
             }
         }
-        seat.b = normals.iter().sum::<DVec3>().normalize_or(first.2);
-        Some(seat)
-    }
-
-    /// A light on one surface `s` with the unit normal `n` of its side,
-    /// on the rim of a flat shape where `rims` (in-plane unit vectors into
-    /// the shape, at most two) are given.
-    pub fn flat(s: u32, n: DVec3, rims: &[DVec3]) -> Self {
-        Self::new(&[(s, 0, n, rims)]).expect("one face")
+        // Kept faces in the order given (a rug listed before the floor it
+        // lies on is met first where both are).
+        let kept = faces
+            .iter()
+            .zip(&side)
+            .filter_map(|(&(surface, prim, _, edges, _), n)| {
+                let k = edges.len().min(2);
+                let mut e = [DVec3::ZERO; 2];
+                e[..k].copy_from_slice(&edges[..k]);
+                n.map(|n| Face {
+                    surface,
+                    prim,
+                    n,
+                    edges: e,
+                    n_edges: k,
+                })
+            })
+            .collect();
+        let b = normals.iter().sum::<DVec3>().normalize_or(first.2);
+        Some(Self { faces: kept, b })
     }
 
     /// The faces: `(surface, unit normal of the light's side)`.
     pub fn faces(&self) -> impl Iterator<Item = (u32, DVec3)> + '_ {
-        self.faces[..self.n_faces].iter().map(|f| (f.surface, f.n))
+        self.faces.iter().map(|f| (f.surface, f.n))
     }
 
     /// The face that direction `d` (any length) from the light meets at
@@ -127,7 +139,7 @@ impl LightSeat {
     #[inline]
     fn met(&self, d: DVec3) -> Option<&Face> {
         let mut best: Option<(f64, &Face)> = None;
-        for f in &self.faces[..self.n_faces] {
+        for f in &self.faces {
             let dn = f.n.dot(d);
             let bn = f.n.dot(self.b);
             if dn >= 0.0 || bn <= 0.0 {
@@ -175,7 +187,7 @@ impl LightSeat {
     /// it enters it meets at its exit).
     #[inline]
     pub fn leaves(&self, d: DVec3) -> (u32, u32) {
-        let faces = &self.faces[..self.n_faces];
+        let faces = &self.faces;
         let mut best = &faces[0];
         for f in &faces[1..] {
             if f.n.dot(d) > best.n.dot(d) {
@@ -190,9 +202,15 @@ impl LightSeat {
 mod tests {
     use super::*;
 
+    /// A light on one surface `s` with the unit normal `n` of its side,
+    /// on the rim of a flat shape where `rims` are given.
+    fn flat(s: u32, n: DVec3, rims: &[DVec3]) -> LightSeat {
+        LightSeat::new(&[(s, 0, n, rims, false)]).unwrap()
+    }
+
     #[test]
     fn a_flat_seat_darkens_its_back_half_space() {
-        let s = LightSeat::flat(3, DVec3::Z, &[]);
+        let s = flat(3, DVec3::Z, &[]);
         assert_eq!(s.meets(DVec3::new(0.3, 0.1, -0.2)), Some((3, DVec3::Z)));
         assert_eq!(s.meets(DVec3::new(0.3, 0.1, 0.2)), None);
         assert_eq!(s.leaves(DVec3::new(0.3, 0.1, 0.2)), (3, 0));
@@ -201,12 +219,12 @@ mod tests {
     #[test]
     fn a_rim_darkens_only_directions_through_the_shape() {
         // On the edge u = 0 of a rectangle in z = 0 lying at x > 0.
-        let s = LightSeat::flat(1, DVec3::Z, &[DVec3::X]);
+        let s = flat(1, DVec3::Z, &[DVec3::X]);
         assert!(s.hides(DVec3::ZERO, DVec3::new(0.5, 0.0, -1.0)));
         assert!(!s.hides(DVec3::ZERO, DVec3::new(-0.5, 0.0, -1.0)));
         assert!(!s.hides(DVec3::ZERO, DVec3::new(0.5, 0.0, 1.0)));
         // A corner: both edges.
-        let c = LightSeat::flat(1, DVec3::Z, &[DVec3::X, DVec3::Y]);
+        let c = flat(1, DVec3::Z, &[DVec3::X, DVec3::Y]);
         assert!(c.hides(DVec3::ZERO, DVec3::new(0.5, 0.5, -1.0)));
         assert!(!c.hides(DVec3::ZERO, DVec3::new(0.5, -0.5, -1.0)));
     }
@@ -218,8 +236,8 @@ mod tests {
         let front = (11, -DVec3::Y);
         // Each face extends into the desk across the other's edge.
         let desk = LightSeat::new(&[
-            (10, 0, DVec3::Z, &[DVec3::Y]),
-            (11, 0, -DVec3::Y, &[-DVec3::Z]),
+            (10, 0, DVec3::Z, &[DVec3::Y], false),
+            (11, 0, -DVec3::Y, &[-DVec3::Z], false),
         ])
         .unwrap();
         // Up over the desk, down in front of it: free.
@@ -235,8 +253,8 @@ mod tests {
         let ceiling = (20, -DVec3::Z);
         let wall = (21, DVec3::X);
         let room = LightSeat::new(&[
-            (21, 0, DVec3::X, &[-DVec3::Z]),
-            (20, 0, -DVec3::Z, &[DVec3::X]),
+            (21, 0, DVec3::X, &[-DVec3::Z], false),
+            (20, 0, -DVec3::Z, &[DVec3::X], false),
         ])
         .unwrap();
         assert_eq!(room.meets(DVec3::new(1.0, 0.0, -1.0)), None);
@@ -251,8 +269,12 @@ mod tests {
         // The corner x = y = z = 0 of a room: each wall extends along the
         // other two axes.
         let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
-        let corner =
-            LightSeat::new(&[(0, 0, x, &[y, z]), (1, 0, y, &[x, z]), (2, 0, z, &[x, y])]).unwrap();
+        let corner = LightSeat::new(&[
+            (0, 0, x, &[y, z], false),
+            (1, 0, y, &[x, z], false),
+            (2, 0, z, &[x, y], false),
+        ])
+        .unwrap();
         assert_eq!(corner.meets(DVec3::new(1.0, 2.0, 3.0)), None);
         assert_eq!(corner.meets(DVec3::new(-1.0, 2.0, 3.0)), Some((0, x)));
         // Out through two walls: the first crossed, the steeper.
@@ -260,9 +282,32 @@ mod tests {
         assert_eq!(corner.meets(DVec3::new(-1.0, -2.0, 3.0)), Some((1, y)));
         // A rug (x > 0) on the floor, the light on its rim: down over the
         // rug it meets the rug (listed first), down beyond it the floor.
-        let rug = LightSeat::new(&[(5, 0, z, &[x]), (6, 0, z, &[])]).unwrap();
+        let rug = LightSeat::new(&[(5, 0, z, &[x], false), (6, 0, z, &[], false)]).unwrap();
         assert_eq!(rug.meets(DVec3::new(0.5, 0.0, -1.0)), Some((5, z)));
         assert_eq!(rug.meets(DVec3::new(-0.5, 0.0, -1.0)), Some((6, z)));
         assert_eq!(rug.meets(DVec3::new(-0.5, 0.0, 1.0)), None);
+    }
+
+    #[test]
+    fn a_face_against_another_facing_away_does_not_take_the_light() {
+        let (y, z) = (DVec3::Y, DVec3::Z);
+        // The floor (+z), a cabinet's bottom on it (-z) and its front (-y),
+        // the light on the front's foot: down in front of the cabinet it
+        // meets the floor.
+        let foot = LightSeat::new(&[
+            (0, 0, z, &[], false),
+            (1, 0, -z, &[y], false),
+            (2, 0, -y, &[z], false),
+        ])
+        .unwrap();
+        assert_eq!(foot.faces().count(), 2);
+        assert_eq!(foot.meets(DVec3::new(0.0, -1.0, -1.0)), Some((0, z)));
+        assert_eq!(foot.meets(DVec3::new(0.0, 1.0, 0.5)), Some((2, -y)));
+        assert_eq!(foot.meets(DVec3::new(0.0, -1.0, 1.0)), None);
+        // A two-sided rug whose normal points down into the floor, listed
+        // first: turned up, to the floor's side.
+        let rug = LightSeat::new(&[(5, 0, -z, &[], true), (6, 0, z, &[], false)]).unwrap();
+        assert_eq!(rug.meets(DVec3::new(0.3, 0.0, 1.0)), None);
+        assert!(rug.meets(DVec3::new(0.3, 0.0, -1.0)).is_some());
     }
 }
