@@ -171,25 +171,6 @@ fn a_light_on_a_rooms_edge_or_corner_keeps_its_light_in_the_room() {
     );
 }
 
-/// `ROOM` as six rectangles facing in, with its reflectances.
-fn room_of_rectangles() -> String {
-    let rect = |c: [f64; 3], e1: [f64; 3], e2: [f64; 3], rho: f64| {
-        format!(
-            "[[surface]]\ntype = \"rectangle\"\ncorner = {c:?}\nedge1 = {e1:?}\nedge2 = {e2:?}\n\
-             material = {{ type = \"lambertian\", reflectance = {rho} }}\n"
-        )
-    };
-    [
-        rect([0.0, 0.0, 0.0], [6.0, 0.0, 0.0], [0.0, 4.0, 0.0], 0.5),
-        rect([0.0, 0.0, 2.8], [0.0, 4.0, 0.0], [6.0, 0.0, 0.0], 0.2),
-        rect([0.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 2.8], 0.85),
-        rect([6.0, 0.0, 0.0], [0.0, 0.0, 2.8], [0.0, 4.0, 0.0], 0.5),
-        rect([0.0, 0.0, 0.0], [0.0, 0.0, 2.8], [6.0, 0.0, 0.0], 0.5),
-        rect([0.0, 4.0, 0.0], [6.0, 0.0, 0.0], [0.0, 0.0, 2.8], 0.5),
-    ]
-    .concat()
-}
-
 /// A light in a corner or on an edge of a room built of rectangles or of a
 /// mesh stands on every face there: seated on the first face alone, it
 /// sent the light it aimed through the others out of the room (7.2 lx
@@ -197,7 +178,8 @@ fn room_of_rectangles() -> String {
 #[test]
 fn a_light_on_an_edge_of_a_room_of_rectangles_or_a_mesh_stands_on_every_face() {
     let e = 1e-7;
-    let rooms = room_of_rectangles();
+    // `ROOM` with its reflectances.
+    let rooms = common::rectangle_room([6.0, 4.0, 2.8], [0.5, 0.2, 0.85, 0.5, 0.5, 0.5]);
     same_as_just_off(
         &rooms,
         DVec3::new(0.0, 0.0, 2.8),
@@ -215,17 +197,12 @@ fn a_light_on_an_edge_of_a_room_of_rectangles_or_a_mesh_stands_on_every_face() {
     // One mesh, one material, counter-clockwise seen from inside: each
     // wall's corner lies on one or both triangles of its quad.
     let dir = tempfile::tempdir().unwrap();
-    let obj = dir.path().join("room.obj");
-    std::fs::write(
-        &obj,
+    let mesh = common::front_mesh(
+        dir.path(),
+        "room.obj",
         "v 0 0 0\nv 6 0 0\nv 0 4 0\nv 6 4 0\nv 0 0 2.8\nv 6 0 2.8\nv 0 4 2.8\nv 6 4 2.8\n\
          f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n",
-    )
-    .unwrap();
-    let mesh = format!(
-        "[[surface]]\ntype = \"mesh\"\nfile = {:?}\nsides = \"front\"\n\
-         material = {{ type = \"lambertian\", reflectance = 0.5 }}\n",
-        obj.display().to_string()
+        0.5,
     );
     same_as_just_off(
         &mesh,
@@ -296,22 +273,17 @@ fn a_lamp_on_a_desks_edge_hides_only_the_desk() {
 #[test]
 fn a_lamp_on_a_mesh_desks_edge_hides_only_the_desk() {
     let dir = tempfile::tempdir().unwrap();
-    let obj = dir.path().join("desk.obj");
-    std::fs::write(
-        &obj,
-        "v 1 1 0\nv 2.6 1 0\nv 2.6 1.8 0\nv 1 1.8 0\nv 1 1 0.75\nv 2.6 1 0.75\nv 2.6 1.8 0.75\nv 1 1.8 0.75\n\
-         f 5 6 7 8\nf 1 4 3 2\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n",
-    )
-    .unwrap();
     let desk = DESK
         .split("[[surface]]\ntype = \"box\"")
         .next()
         .unwrap()
         .to_string()
-        + &format!(
-            "[[surface]]\ntype = \"mesh\"\nfile = {:?}\nsides = \"front\"\n\
-             material = {{ type = \"lambertian\", reflectance = 0.7 }}\n",
-            obj.display().to_string()
+        + &common::front_mesh(
+            dir.path(),
+            "desk.obj",
+            "v 1 1 0\nv 2.6 1 0\nv 2.6 1.8 0\nv 1 1.8 0\nv 1 1 0.75\nv 2.6 1 0.75\nv 2.6 1.8 0.75\nv 1 1.8 0.75\n\
+             f 5 6 7 8\nf 1 4 3 2\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n",
+            0.7,
         );
     let p = DVec3::new(1.8, 1.0, 0.75);
     let lit = [

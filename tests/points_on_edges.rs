@@ -42,25 +42,6 @@ normals = "outward"
 material = { type = "lambertian", reflectance = 0.8 }
 "#;
 
-/// The room as six rectangles facing in.
-fn rectangles() -> String {
-    let rect = |c: [f64; 3], e1: [f64; 3], e2: [f64; 3]| {
-        format!(
-            "[[surface]]\ntype = \"rectangle\"\ncorner = {c:?}\nedge1 = {e1:?}\nedge2 = {e2:?}\n\
-             material = {{ type = \"lambertian\", reflectance = 0.5 }}\n"
-        )
-    };
-    [
-        rect([0.0, 0.0, 0.0], [4.0, 0.0, 0.0], [0.0, 3.0, 0.0]),
-        rect([0.0, 0.0, 2.5], [0.0, 3.0, 0.0], [4.0, 0.0, 0.0]),
-        rect([0.0, 0.0, 0.0], [0.0, 3.0, 0.0], [0.0, 0.0, 2.5]),
-        rect([4.0, 0.0, 0.0], [0.0, 0.0, 2.5], [0.0, 3.0, 0.0]),
-        rect([0.0, 0.0, 0.0], [0.0, 0.0, 2.5], [4.0, 0.0, 0.0]),
-        rect([0.0, 3.0, 0.0], [4.0, 0.0, 0.0], [0.0, 0.0, 2.5]),
-    ]
-    .concat()
-}
-
 /// The room as one mesh, counter-clockwise seen from inside.
 const ROOM_OBJ: &str = "v 0 0 0\nv 4 0 0\nv 0 3 0\nv 4 3 0\nv 0 0 2.5\nv 4 0 2.5\nv 0 3 2.5\nv 4 3 2.5\n\
 f 1 2 4\nf 1 4 3\nf 5 7 8\nf 5 8 6\nf 1 5 6\nf 1 6 2\nf 3 4 8\nf 3 8 7\nf 1 3 7\nf 1 7 5\nf 2 6 8\nf 2 8 4\n";
@@ -141,7 +122,10 @@ fn points_on_edges_and_corners_read_the_limit_from_their_side() {
     let boxed = scene(BOX_ROOM, dir.path());
     let want = illuminance(&boxed, &off, 11);
     agree("box room", &illuminance(&boxed, &on, 12), &want, bound);
-    let rects = scene(&rectangles(), dir.path());
+    let rects = scene(
+        &common::rectangle_room([4.0, 3.0, 2.5], [0.5; 6]),
+        dir.path(),
+    );
     agree("rectangles", &illuminance(&rects, &on, 13), &want, bound);
     let mesh = scene(
         "[[surface]]\ntype = \"mesh\"\nfile = \"room.obj\"\nsides = \"front\"\n\

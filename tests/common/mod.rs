@@ -140,3 +140,40 @@ pub fn share_through_memory(shards: usize) -> lumest::run::Share {
         all
     }))
 }
+
+/// A room `[0, a] x [0, b] x [0, c]` as six Lambertian rectangles facing
+/// in (scene text): floor, ceiling, x = 0, x = a, y = 0, y = b, with the
+/// reflectances `rho` in that order.
+pub fn rectangle_room([a, b, c]: [f64; 3], rho: [f64; 6]) -> String {
+    let faces = [
+        ([0.0, 0.0, 0.0], [a, 0.0, 0.0], [0.0, b, 0.0]),
+        ([0.0, 0.0, c], [0.0, b, 0.0], [a, 0.0, 0.0]),
+        ([0.0, 0.0, 0.0], [0.0, b, 0.0], [0.0, 0.0, c]),
+        ([a, 0.0, 0.0], [0.0, 0.0, c], [0.0, b, 0.0]),
+        ([0.0, 0.0, 0.0], [0.0, 0.0, c], [a, 0.0, 0.0]),
+        ([0.0, b, 0.0], [a, 0.0, 0.0], [0.0, 0.0, c]),
+    ];
+    faces
+        .iter()
+        .zip(rho)
+        .map(|((o, e1, e2), r)| {
+            format!(
+                "[[surface]]\ntype = \"rectangle\"\ncorner = {o:?}\nedge1 = {e1:?}\nedge2 = {e2:?}\n\
+                 material = {{ type = \"lambertian\", reflectance = {r} }}\n"
+            )
+        })
+        .collect()
+}
+
+/// Scene text of a one-sided mesh surface (reflecting on the
+/// counter-clockwise side) of reflectance `rho`, its OBJ text written to
+/// `dir/name`.
+pub fn front_mesh(dir: &std::path::Path, name: &str, obj: &str, rho: f64) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, obj).unwrap();
+    format!(
+        "[[surface]]\ntype = \"mesh\"\nfile = {:?}\nsides = \"front\"\n\
+         material = {{ type = \"lambertian\", reflectance = {rho} }}\n",
+        path.display().to_string()
+    )
+}
