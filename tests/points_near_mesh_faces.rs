@@ -17,34 +17,12 @@ use lumest::estimator::Receivers;
 use lumest::scene::{Scene, parse};
 use lumest::tally::sidak_bound;
 
-const CABINET_OBJ: &str = "v 1 1 0\nv 2 1 0\nv 2 2 0\nv 1 2 0\nv 1 1 1\nv 2 1 1\nv 2 2 1\nv 1 2 1\n\
-f 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
-const FLOOR_OBJ: &str = "v -5 -5 0\nv 5 -5 0\nv 5 5 0\nv -5 5 0\nf 1 2 3\nf 1 3 4\n";
 const LIGHT: &str = r#"
 [[light]]
 type = "point"
 position = [0.0, 1.5, 2.0]
 intensity = 100
 "#;
-
-fn meshes(dir: &std::path::Path) -> Scene {
-    std::fs::write(dir.join("cab.obj"), CABINET_OBJ).unwrap();
-    std::fs::write(dir.join("floor.obj"), FLOOR_OBJ).unwrap();
-    let text = format!(
-        r#"
-[[surface]]
-type = "mesh"
-file = "cab.obj"
-material = {{ type = "lambertian", reflectance = 0.5 }}
-
-[[surface]]
-type = "mesh"
-file = "floor.obj"
-material = {{ type = "lambertian", reflectance = 0.5 }}
-{LIGHT}"#
-    );
-    parse(&text, &dir.join("meshes.toml")).unwrap()
-}
 
 fn shapes() -> Scene {
     let text = format!(
@@ -100,7 +78,7 @@ fn reflected(
 #[test]
 fn a_point_beside_a_mesh_face_reads_its_light() {
     let dir = tempfile::tempdir().unwrap();
-    let mesh = meshes(dir.path());
+    let mesh = common::cabinet_on_floor_meshes(dir.path());
     let shapes = shapes();
     // Floor points 1e-8, 1e-9 and 1e-10 m from the cabinet's side, and a
     // point 1e-10 m from it at half its height.

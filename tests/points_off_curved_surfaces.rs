@@ -187,37 +187,7 @@ flux = {flux}
 #[test]
 fn a_point_on_one_mesh_beside_another_stays_on_its_own() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("cab.obj"),
-        "v 1 1 0\nv 2 1 0\nv 2 2 0\nv 1 2 0\nv 1 1 1\nv 2 1 1\nv 2 2 1\nv 1 2 1\n\
-         f 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.path().join("floor.obj"),
-        "v -5 -5 0\nv 5 -5 0\nv 5 5 0\nv -5 5 0\nf 1 2 3\nf 1 3 4\n",
-    )
-    .unwrap();
-    let scene = parse(
-        r#"
-[[surface]]
-type = "mesh"
-file = "cab.obj"
-material = { type = "lambertian", reflectance = 0.5 }
-
-[[surface]]
-type = "mesh"
-file = "floor.obj"
-material = { type = "lambertian", reflectance = 0.5 }
-
-[[light]]
-type = "point"
-position = [0.0, 1.5, 2.0]
-intensity = 100
-"#,
-        &dir.path().join("two.toml"),
-    )
-    .unwrap();
+    let scene = common::cabinet_on_floor_meshes(dir.path());
     let on_floor = DVec3::new(0.9999999999, 1.5, 0.0);
     assert_eq!(scene.snap_to_surface(on_floor, DVec3::Z), on_floor);
     let below = DVec3::new(0.9999999999, 1.5, -2e-9);

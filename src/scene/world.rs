@@ -1699,8 +1699,10 @@ impl Scene {
                     // start lies on it and may lie just outside the others,
                     // which `intersect` then meets from outside.
                     _ if on_surface && b.classify(ray.o) == Inside::On => (0..6)
-                        .map(|f| (f, b.face_plane(f).signed_distance(ray.o).abs()))
-                        .filter(|&(f, _)| b.face_plane(f).side(ray.o) == 0)
+                        .filter_map(|f| {
+                            let pl = b.face_plane(f);
+                            (pl.side(ray.o) == 0).then(|| (f, pl.signed_distance(ray.o).abs()))
+                        })
                         .min_by(|x, y| x.1.total_cmp(&y.1))
                         .map(|(f, _)| f),
                     _ => None,

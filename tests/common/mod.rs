@@ -177,3 +177,40 @@ pub fn front_mesh(dir: &std::path::Path, name: &str, obj: &str, rho: f64) -> Str
         path.display().to_string()
     )
 }
+
+/// A 1 m cube cabinet mesh `[1, 2]^2 x [0, 1]` (no bottom) standing on a
+/// 10 m x 10 m floor mesh at z = 0, both two-sided, reflectance 0.5, and a
+/// 100 cd point light at (0, 1.5, 2); the OBJ files written into `dir`.
+pub fn cabinet_on_floor_meshes(dir: &std::path::Path) -> lumest::scene::Scene {
+    std::fs::write(
+        dir.join("cab.obj"),
+        "v 1 1 0\nv 2 1 0\nv 2 2 0\nv 1 2 0\nv 1 1 1\nv 2 1 1\nv 2 2 1\nv 1 2 1\n\
+         f 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("floor.obj"),
+        "v -5 -5 0\nv 5 -5 0\nv 5 5 0\nv -5 5 0\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    lumest::scene::parse(
+        r#"
+[[surface]]
+type = "mesh"
+file = "cab.obj"
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+type = "mesh"
+file = "floor.obj"
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[light]]
+type = "point"
+position = [0.0, 1.5, 2.0]
+intensity = 100
+"#,
+        &dir.join("two.toml"),
+    )
+    .unwrap()
+}
