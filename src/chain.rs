@@ -44,6 +44,12 @@ pub struct Collision {
     /// Collision number: 1 for the first hit after emission. Light reflected
     /// here and scored at a point is of reflection order `order`.
     pub order: u32,
+    /// The point-like light whose seat this collision lies at (light it
+    /// sent into a surface it stands on, met at its own position,
+    /// [`Scene::light_surface`]), if any: what it reflects leaves from just
+    /// in front of the seat, so a point behind the seat does not see it
+    /// ([`Scene::behind_light_surface`]), as it does not see the light.
+    pub seat: Option<u32>,
 }
 
 /// Parameters of the random walk.
@@ -200,18 +206,22 @@ pub fn trace_ex<F: FnMut(&Collision)>(
     let seat = scene.light_surface(k_light);
     let mut on_surface = seat.is_some();
     while q > 0.0 {
+        let mut at_seat = false;
         let next = if from_emitter {
             from_emitter = false;
             scene.first_hit_from(ray.o, ray.d)
         } else if let Some(seat) = seat.filter(|_| on_surface) {
             match seat.meets_prim(ray.d) {
-                Some((s, n, prim)) => Some(Hit {
-                    t: 0.0,
-                    p: ray.o,
-                    n,
-                    surface: s,
-                    prim,
-                }),
+                Some((s, n, prim)) => {
+                    at_seat = true;
+                    Some(Hit {
+                        t: 0.0,
+                        p: ray.o,
+                        n,
+                        surface: s,
+                        prim,
+                    })
+                }
                 None => {
                     on_surface = false;
                     scene.intersect(&ray, Some(seat.leaves(ray.d)))
@@ -259,6 +269,7 @@ pub fn trace_ex<F: FnMut(&Collision)>(
             surface: hit.surface,
             prim: hit.prim,
             order,
+            seat: at_seat.then_some(k_light as u32),
         });
         if params.max_order.is_some_and(|m| order >= m) {
             end = ChainEnd::Truncated;

@@ -83,6 +83,7 @@ fn kernel_rate(n: usize, portable: bool, held: bool) -> anyhow::Result<f64> {
                 surface: 1,
                 prim: 0,
                 order: 1,
+                seat: None,
             };
             scores += if held {
                 rec.score_held(&scene, &c, 0, &mut acc_all, false, &mut hold)

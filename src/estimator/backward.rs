@@ -719,7 +719,11 @@ fn join_pool<F: FnMut(u32, f64)>(
             continue;
         }
         tests += 1;
-        if !scene.visible(h.p, from, y.p) {
+        // (A collision at a light's seat hides from points behind the seat.)
+        if y.seat
+            .is_some_and(|l| scene.behind_light_surface(l as usize, h.p))
+            || !scene.visible(h.p, from, y.p)
+        {
             continue;
         }
         let w = v / d2.sqrt(); // from y towards x

@@ -1353,6 +1353,9 @@ impl Receivers {
         let (x, n) = (c.p, c.n);
         let (xm, x_inside, open, shapes_open) = collision_context(scene, list, x);
         let nc = list.n_const;
+        // A collision at a light's seat scores per pair: points behind the
+        // seat do not see it (`score_general`).
+        let open = open && c.seat.is_none();
         match material.constant_brdf() {
             Some(f) if open && shapes_open && counting => {
                 score_open::<true>(list, x, n, c.q * f, &mut acc[..nc], &mut near[..nc])
@@ -1464,6 +1467,7 @@ impl Receivers {
         let list = &self.lists[li];
         let material = &scene.surfaces[c.surface as usize].material;
         if list.n_const > open_kernel::BLOCK
+            && c.seat.is_none()
             && let Some(f) = material.constant_brdf()
         {
             let (xm, x_inside, open, shapes_open) = collision_context(scene, list, c.p);
@@ -1565,7 +1569,12 @@ impl Receivers {
                 }
                 let (dx, dp) = (pl.signed_distance(c.p), pl.signed_distance(p_img));
                 let m = pl.project(c.p + (p_img - c.p) * (dx / (dx - dp)));
-                if !pane.contains(m) || !scene.visible(c.p, from, m) || !scene.visible(m, None, p) {
+                if !pane.contains(m)
+                    || c.seat
+                        .is_some_and(|l| scene.behind_light_surface(l as usize, m))
+                    || !scene.visible(c.p, from, m)
+                    || !scene.visible(m, None, p)
+                {
                     continue;
                 }
                 let wo = (p_img - c.p).normalize();
@@ -1614,6 +1623,8 @@ impl Receivers {
             let d2 = (p - c.p).length_squared();
             if g == 0.0
                 || d2 < list.eps2[k]
+                || c.seat
+                    .is_some_and(|l| scene.behind_light_surface(l as usize, p))
                 || (!planes_only && {
                     let inside = x_inside & list.inside[k];
                     if list.occ_start.is_empty() {
