@@ -20,6 +20,7 @@
 //! [`Sides`] names; the other side is black. Every surface is opaque.
 
 mod light_seat;
+mod mesh_lit_side;
 mod nearest;
 mod occluders;
 mod panes;
@@ -337,6 +338,9 @@ pub struct Scene {
     /// Per light: the surfaces a point-like light lies on, if any, with
     /// the unit normals of the sides it belongs to (see [`Scene::light_surface`]).
     light_surface: Vec<Option<LightSeat>>,
+    /// Per mesh: which side of it the lights are on, found on first use
+    /// ([`mesh_lit_side`]).
+    mesh_lit_side: mesh_lit_side::MeshLitSide,
     /// How direct light is summed over the sources ([`Self::set_direct_lights`]).
     direct_lights: crate::light::array::DirectLights,
     /// The light array over all sources (RIS candidates per pick set), when
@@ -522,6 +526,7 @@ impl Scene {
             light_pick: None,
             total_power: 0.0,
             light_surface: Vec::new(),
+            mesh_lit_side: Default::default(),
             direct_lights: crate::light::array::DirectLights::Auto,
             light_array: None,
             ris_candidates: crate::light::array::RIS_CANDIDATES,
@@ -749,6 +754,7 @@ impl Scene {
             })
             .collect();
         self.lights = lights;
+        self.mesh_lit_side = Default::default();
         self.light_pick = light_pick;
         self.total_power = total_power;
         self.refresh_light_array();
@@ -993,7 +999,9 @@ impl Scene {
     /// it belongs to: its value is the limit from there. On a surface, a
     /// receiver belongs to the side its normal faces (the reflecting side
     /// where its normal lies along a one-sided surface; along a two-sided
-    /// one, no side: it sees past the sheet on both, as before); a
+    /// face of a closed mesh, the side the lights are on,
+    /// [`mesh_lit_side`]; along another two-sided one, no side: it sees
+    /// past the sheet on both, as before); a
     /// surface through the point itself it would see edge-on, and so
     /// count no light from it, where a point beside it sees it over a part
     /// of its hemisphere, `pi L (1 - cos a) / 2` for a normal at `a` to the
@@ -1014,9 +1022,9 @@ impl Scene {
     /// it is), lies on nothing, or faces a black side
     /// ([`Self::faces_black_side`]: flagged as it is).
     pub fn lift_to_its_side(&self, p: DVec3, n: DVec3) -> DVec3 {
-        // The side of surface `s` (geometric normal `ng`) the point belongs
-        // to, if any.
-        let side = |s: u32, ng: DVec3| -> Option<DVec3> {
+        // The side of surface `s` (geometric normal `ng`; the `i`-th mesh's
+        // triangle, if on one) the point belongs to, if any.
+        let side = |s: u32, ng: DVec3, mesh: Option<usize>| -> Option<DVec3> {
             let c = n.dot(ng);
             if c.abs() > 1e-12 {
                 return Some(ng * c.signum());
@@ -1024,22 +1032,31 @@ impl Scene {
             match self.surfaces[s as usize].sides {
                 Sides::Back => Some(-ng),
                 Sides::Front => Some(ng),
-                // Edge-on to a sheet that reflects on both sides (a
-                // partition screen through a work-plane grid): neither side
-                // is the point's, which sees both halves of the room past
-                // the sheet, as before.
-                Sides::Both => None,
+                // Edge-on to a closed mesh that reflects on both sides: the
+                // side its lights are on ([`mesh_lit_side`]). Edge-on to a
+                // sheet (a partition screen through a work-plane grid):
+                // neither side is the point's, which sees both halves of
+                // the room past the sheet, as before.
+                Sides::Both => mesh.and_then(|i| {
+                    let out = self.lights_outside_mesh(i)?;
+                    let outward = if self.meshes[i].0.wound_outward() {
+                        ng
+                    } else {
+                        -ng
+                    };
+                    Some(if out { outward } else { -outward })
+                }),
             }
         };
         // The faces to leave: (surface, mesh triangle or `u32::MAX`, side).
         let mut faces: Vec<(u32, u32, DVec3)> = Vec::new();
         for (s, ng) in self.surfaces_through(p) {
-            faces.extend(side(s, ng).map(|m| (s, u32::MAX, m)));
+            faces.extend(side(s, ng, None).map(|m| (s, u32::MAX, m)));
         }
-        for (m, s) in &self.meshes {
+        for (i, (m, s)) in self.meshes.iter().enumerate() {
             for (tri, v) in m.triangles_through(p, m.on_tolerance(p)) {
                 let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
-                faces.extend(side(*s, ng).map(|m| (*s, tri, m)));
+                faces.extend(side(*s, ng, Some(i)).map(|m| (*s, tri, m)));
             }
         }
         if faces.iter().all(|f| n.dot(f.2) >= 1.0 - 1e-12) || self.faces_black_side(p, n) {
