@@ -213,6 +213,62 @@ fn a_light_on_an_edge_of_a_room_of_rectangles_or_a_mesh_stands_on_every_face() {
     );
 }
 
+/// A room given as one closed mesh that reflects on both sides (the
+/// default), wound either way (outward is the usual OBJ convention): a
+/// light on its ceiling or in its corner stands inside the room, the
+/// scene's enclosure (nothing lies outside it). Wound outward it stood
+/// outside, on the geometric normal's side, and the room read 0 lx
+/// everywhere, with no error and no flag. And a lamp on the top of a
+/// two-sided cabinet mesh standing in that room stands outside the cabinet.
+#[test]
+fn a_light_on_a_two_sided_mesh_stands_inside_the_room_and_outside_the_cabinet() {
+    let e = 1e-7;
+    let dir = tempfile::tempdir().unwrap();
+    let inward = "v 0 0 0\nv 6 0 0\nv 0 4 0\nv 6 4 0\nv 0 0 2.8\nv 6 0 2.8\nv 0 4 2.8\nv 6 4 2.8\n\
+                  f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n";
+    let outward = "v 0 0 0\nv 6 0 0\nv 0 4 0\nv 6 4 0\nv 0 0 2.8\nv 6 0 2.8\nv 0 4 2.8\nv 6 4 2.8\n\
+                   f 3 4 2 1\nf 6 8 7 5\nf 2 6 5 1\nf 7 8 4 3\nf 5 7 3 1\nf 4 8 6 2\n";
+    let two_sided = |name: &str, obj: &str, rho: f64| {
+        std::fs::write(dir.path().join(name), obj).unwrap();
+        format!(
+            "[[surface]]\ntype = \"mesh\"\nfile = {:?}\n\
+             material = {{ type = \"lambertian\", reflectance = {rho} }}\n",
+            dir.path().join(name).display().to_string()
+        )
+    };
+    for (name, obj) in [("in.obj", inward), ("out.obj", outward)] {
+        let room = two_sided(name, obj, 0.5);
+        same_as_just_off(
+            &room,
+            DVec3::new(3.0, 2.0, 2.8),
+            DVec3::new(3.0, 2.0, 2.8 - e),
+            &room_points(),
+            1..=2,
+        );
+        same_as_just_off(
+            &room,
+            DVec3::new(0.0, 0.0, 2.8),
+            DVec3::new(e, e, 2.8 - e),
+            &room_points(),
+            3..=6,
+        );
+    }
+    let room = two_sided("out.obj", outward, 0.5);
+    let cabinet = two_sided(
+        "cabinet.obj",
+        "v 1 1 0\nv 2 1 0\nv 1 2 0\nv 2 2 0\nv 1 1 1\nv 2 1 1\nv 1 2 1\nv 2 2 1\n\
+         f 3 4 2 1\nf 6 8 7 5\nf 2 6 5 1\nf 7 8 4 3\nf 5 7 3 1\nf 4 8 6 2\n",
+        0.8,
+    );
+    same_as_just_off(
+        &format!("{room}{cabinet}"),
+        DVec3::new(1.5, 1.5, 1.0),
+        DVec3::new(1.5, 1.5, 1.0 + e),
+        &room_points(),
+        1..=2,
+    );
+}
+
 /// A desk (a box with outward normals) on a black floor, a grey ceiling
 /// above: a lamp on its top front edge.
 const DESK: &str = r#"

@@ -60,6 +60,17 @@ pub fn side(mesh: &Mesh, q: DVec3) -> Side {
     }
 }
 
+/// [`side`] without the check of the points around an inside point: for
+/// a point known to lie off the surface (a light not on the mesh), which
+/// may lie closer to it than that check's millionth of the mesh's size.
+pub fn side_off_surface(mesh: &Mesh, q: DVec3) -> Side {
+    if !mesh.is_closed() {
+        return Side::Unknown;
+    }
+    let (lo, hi) = mesh.bounds();
+    rays(mesh, q, 1e-9 * (hi - lo).length())
+}
+
 /// Points checked around an inside point: directions of a Fibonacci
 /// sphere, whose widest gap (about 28 degrees from any direction to the
 /// nearest) is narrower than the widest cap the outside of a reflex corner
@@ -149,6 +160,29 @@ mod tests {
         let m = cube(true);
         assert!(!m.is_closed());
         assert_eq!(side(&m, DVec3::splat(0.5)), Side::Unknown);
+        assert_eq!(side_off_surface(&m, DVec3::splat(0.5)), Side::Unknown);
+    }
+
+    /// A point 1e-7 off a face (of a cube of size 1.7): [`side`]'s points
+    /// around it reach across the face, the rays alone do not.
+    #[test]
+    fn points_just_off_a_face() {
+        let m = cube(false);
+        let (inside, outside) = (
+            DVec3::new(0.5, 0.5, 1.0 - 1e-7),
+            DVec3::new(0.5, 0.5, 1.0 + 1e-7),
+        );
+        assert_eq!(side(&m, inside), Side::Unknown);
+        assert_eq!(side_off_surface(&m, inside), Side::Inside);
+        assert_eq!(side_off_surface(&m, outside), Side::Outside);
+        assert_eq!(
+            side_off_surface(&m, DVec3::new(0.2, 0.7, 1e-7)),
+            Side::Inside
+        );
+        assert_eq!(
+            side_off_surface(&m, DVec3::new(0.2, 1.0 + 1e-7, 0.3)),
+            Side::Outside
+        );
     }
 
     /// Against a second rule that shares no code: a point inside the

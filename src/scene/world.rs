@@ -653,6 +653,11 @@ impl Scene {
 
     /// Bounding box \[m\] of the finite shapes (`None`: there are none).
     pub fn finite_bounds(&self) -> Option<(DVec3, DVec3)> {
+        self.finite_bounds_except_mesh(None)
+    }
+
+    /// [`Self::finite_bounds`] leaving the `skip`-th mesh out.
+    fn finite_bounds_except_mesh(&self, skip: Option<usize>) -> Option<(DVec3, DVec3)> {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         let mut add = |a: DVec3, b: DVec3| {
@@ -673,9 +678,11 @@ impl Scene {
         for (b, _) in &self.boxes {
             add(b.lo, b.hi);
         }
-        for (m, _) in &self.meshes {
-            let (a, b) = m.bounds();
-            add(a, b);
+        for (i, (m, _)) in self.meshes.iter().enumerate() {
+            if Some(i) != skip {
+                let (a, b) = m.bounds();
+                add(a, b);
+            }
         }
         for (o, _) in &self.shs {
             let r = DVec3::splat(o.bounds().1);
@@ -743,18 +750,18 @@ impl Scene {
         let total_power: f64 = lights.iter().map(Light::power).sum();
         let powers: Vec<f64> = lights.iter().map(Light::power).collect();
         let light_pick = crate::sampling::alias::AliasTable::new(&powers);
-        self.light_surface = lights
-            .iter()
-            .map(|l| {
+        self.lights = lights;
+        self.mesh_lit_side = Default::default();
+        self.light_surface = (0..self.lights.len())
+            .map(|k| {
+                let l = &self.lights[k];
                 if l.is_point_like() {
-                    self.seat_at(l.position())
+                    self.seat_at(l.position(), Some(k))
                 } else {
                     None
                 }
             })
             .collect();
-        self.lights = lights;
-        self.mesh_lit_side = Default::default();
         self.light_pick = light_pick;
         self.total_power = total_power;
         self.refresh_light_array();
@@ -1183,10 +1190,11 @@ impl Scene {
     /// The seat of a light at `p` ([`LightSeat`]): every face through `p`
     /// (within the shapes' on-surface tolerances; a mesh's triangles within
     /// `MESH_REL` of its size), each with the unit normal of its reflecting
-    /// side (the geometric normal's where both reflect) and its edges
-    /// through `p`: a box's other faces there, a rectangle's or disc's
-    /// rim, a triangle's sides.
-    fn seat_at(&self, p: DVec3) -> Option<LightSeat> {
+    /// side (the geometric normal's where both reflect, but on a closed
+    /// mesh: the side the lights other than `light` are on,
+    /// [`mesh_lit_side`]) and its edges through `p`: a box's other faces
+    /// there, a rectangle's or disc's rim, a triangle's sides.
+    fn seat_at(&self, p: DVec3, light: Option<usize>) -> Option<LightSeat> {
         let reflecting = |s: u32, ng: DVec3| match self.surfaces[s as usize].sides {
             Sides::Back => -ng,
             Sides::Front | Sides::Both => ng,
@@ -1209,10 +1217,23 @@ impl Scene {
             };
             faces.push((s, 0, reflecting(s, ng), edges));
         }
-        for (m, s) in &self.meshes {
+        for (i, (m, s)) in self.meshes.iter().enumerate() {
             let tol = MESH_REL * (m.bounds().1 - m.bounds().0).length();
-            for (tri, v) in m.triangles_through(p, tol) {
+            // A closed two-sided mesh: the side the other lights are on, or
+            // the inside of the scene's enclosure ([`mesh_lit_side`]).
+            let through = m.triangles_through(p, tol);
+            let along = if !through.is_empty() && both(*s) && m.is_closed() {
+                let outward = m.wound_outward();
+                self.lit_side_of_mesh(i, light).map(|out| out == outward)
+            } else {
+                None
+            };
+            for (tri, v) in through {
                 let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+                let n = match along {
+                    Some(false) => -n,
+                    _ => n,
+                };
                 // Into the triangle across each side whose line passes
                 // within `tol` of `p`.
                 let edges = (0..3)
@@ -1249,7 +1270,8 @@ impl Scene {
 
     /// The surfaces point-like light `k` stands on, if any ([`LightSeat`]).
     /// **Rule**: a light exactly on a surface belongs to its reflecting
-    /// side (the geometric normal's side when both reflect), as if it stood
+    /// side (the geometric normal's side when both reflect; on a closed
+    /// two-sided mesh the side [`mesh_lit_side`] finds), as if it stood
     /// just in front of it: light it emits into the surface meets the
     /// surface at once, at the light's position, and points behind the
     /// surface do not see it. The answer is thus continuous as the light
@@ -1511,7 +1533,7 @@ impl Scene {
     /// surface it sees it at its feet (`t = 0`, the reflecting side);
     /// otherwise [`Self::first_hit_from`].
     pub fn observer_hit(&self, o: DVec3, d: DVec3) -> Option<Hit> {
-        if let Some(seat) = self.seat_at(o)
+        if let Some(seat) = self.seat_at(o, None)
             && let Some((surface, n, prim)) = seat.meets_prim(d)
         {
             return Some(Hit {
