@@ -80,14 +80,16 @@ fn same_as_just_off(
 ) {
     let cfg = |seed| common::chains_cfg(400_000, seed, 2);
     let s_on = scene(surfaces, on);
-    let n = s_on.light_surface(0).map_or(0, |s| s.faces().count());
+    // The light under test is the scene's last.
+    let k = s_on.lights.len() - 1;
+    let n = s_on.light_surface(k).map_or(0, |s| s.faces().count());
     assert!(
         faces_on.contains(&n),
         "the light at {on} stands on {n} face(s), not {faces_on:?}"
     );
     let s_off = scene(surfaces, off);
     assert!(
-        s_off.light_surface(0).is_none(),
+        s_off.light_surface(k).is_none(),
         "{off} is off the surfaces"
     );
     let r_on = run(
@@ -253,7 +255,43 @@ fn a_light_on_a_two_sided_mesh_stands_inside_the_room_and_outside_the_cabinet() 
             3..=6,
         );
     }
+    // With a sun outside and a lamp inside (lights on both sides of the
+    // ceiling), or a ground plane under the room, the ceiling lamp stays
+    // inside (it stood outside: the room read a quarter of its light with
+    // the sun, 0 lx on the plane).
     let room = two_sided("out.obj", outward, 0.5);
+    let sun_and_lamp = "[[light]]\ntype = \"distant\"\ndirection = [-0.5, 0.2, -0.8]\n\
+                        illuminance = 10\n[[light]]\ntype = \"point\"\n\
+                        position = [4.5, 3, 1.5]\nintensity = 50\n";
+    let ground = "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+                  material = { type = \"lambertian\", reflectance = 0.3 }\n";
+    for extra in [sun_and_lamp, ground] {
+        same_as_just_off(
+            &format!("{room}{extra}"),
+            DVec3::new(3.0, 2.0, 2.8),
+            DVec3::new(3.0, 2.0, 2.8 - e),
+            &room_points(),
+            1..=2,
+        );
+    }
+    // The room and a cabinet in one OBJ, both wound outward: the cabinet's
+    // inside lies within two shells. A lamp on the cabinet stands outside
+    // it (it stood inside, and the room read 0 lx).
+    let nested = two_sided(
+        "nested.obj",
+        &format!(
+            "{outward}v 1 1 0\nv 2 1 0\nv 1 2 0\nv 2 2 0\nv 1 1 1\nv 2 1 1\nv 1 2 1\nv 2 2 1\n\
+             f 11 12 10 9\nf 14 16 15 13\nf 10 14 13 9\nf 15 16 12 11\nf 13 15 11 9\nf 12 16 14 10\n"
+        ),
+        0.5,
+    );
+    same_as_just_off(
+        &nested,
+        DVec3::new(1.5, 1.5, 1.0),
+        DVec3::new(1.5, 1.5, 1.0 + e),
+        &room_points(),
+        1..=2,
+    );
     let cabinet = two_sided(
         "cabinet.obj",
         "v 1 1 0\nv 2 1 0\nv 1 2 0\nv 2 2 0\nv 1 1 1\nv 2 1 1\nv 1 2 1\nv 2 2 1\n\

@@ -720,7 +720,7 @@ impl Job {
         if let Some(&first) = receivers.lifted().first() {
             let (file, line) = origin[first as usize];
             eprintln!(
-                "lumest: {} point(s) lie on a surface they do not face along (on an edge or a corner; first {file}:{line}): each reads the limit from the side its normal faces (the surface's reflecting side where the normal lies along it, the lights' side of a closed two-sided mesh)",
+                "lumest: {} point(s) lie on a surface they do not face along (on an edge or a corner; first {file}:{line}): each reads the limit from the side its normal faces (the surface's reflecting side where the normal lies along it, the lit side of a closed two-sided mesh)",
                 receivers.lifted().len()
             );
         }

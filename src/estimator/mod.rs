@@ -534,7 +534,9 @@ impl Receivers {
         // not finite and normals that are not unit are refused below as
         // they are.
         // The direct part is taken where a point is seated (snapped, not
-        // lifted): it is continuous there, and exact.
+        // lifted): it is continuous there, and exact; but what hides a
+        // light is seen from where it was lifted to (a floor point at a
+        // room mesh's wall foot does not see the sun through the wall).
         let mut lifted = Vec::new();
         let mut seated = Vec::with_capacity(receivers.len());
         let placed: Vec<Receiver> = receivers
@@ -581,7 +583,7 @@ impl Receivers {
             !l.is_point_like() && !matches!(l, Light::Distant(dl) if dl.collimated())
         };
         for (j, rec) in receivers.iter().enumerate() {
-            let (p, n) = (seated[j], rec.n);
+            let (p, n, lifted_to) = (seated[j], rec.n, rec.p);
             if !(p.is_finite() && n.is_finite() && (n.length() - 1.0).abs() < 1e-9) {
                 return Err(ReceiverError {
                     index: j,
@@ -678,8 +680,8 @@ impl Receivers {
                 }
                 if let Light::Distant(dl) = l {
                     // Lit where the ray towards the sun leaves the scene.
-                    if scene.first_hit_from(p, -dl.d).is_none() {
-                        let glass = scene.pane_transmittance_ray(p, -dl.d, false);
+                    if scene.first_hit_from(lifted_to, -dl.d).is_none() {
+                        let glass = scene.pane_transmittance_ray(lifted_to, -dl.d, false);
                         direct[j] += glass
                             * match rec.response {
                                 Response::Illuminance => dl.direct_illuminance(n),
@@ -702,10 +704,11 @@ impl Receivers {
                 // (or in it) and nothing else can hide it, so its centre
                 // decides its visibility.
                 let seen = scene.side_mask(l.position()).sees(masks[j])
-                    && !scene.behind_light_surface(k, p)
-                    && (scene.planes_only() || !scene.blocked_by_shapes(l.position(), None, p, 0));
+                    && !scene.behind_light_surface(k, lifted_to)
+                    && (scene.planes_only()
+                        || !scene.blocked_by_shapes(l.position(), None, lifted_to, 0));
                 if seen {
-                    let glass = scene.pane_transmittance(l.position(), p);
+                    let glass = scene.pane_transmittance(l.position(), lifted_to);
                     direct[j] += glass
                         * match (rec.response, l) {
                             (Response::Illuminance, _) => l.direct_illuminance(p, n),

@@ -154,9 +154,6 @@ pub struct Mesh {
     core: std::sync::OnceLock<Option<super::mesh_core::Core>>,
     /// Whether every edge joins two triangles, once each way, found on first use.
     closed: std::sync::OnceLock<bool>,
-    /// Whether the triangles' normals point out of the solid (a closed
-    /// mesh's signed volume is positive), found on first use.
-    outward: std::sync::OnceLock<bool>,
 }
 
 /// The mesh's summary, with a hash of every vertex and triangle: the
@@ -414,7 +411,6 @@ impl Mesh {
             bvh,
             core: std::sync::OnceLock::new(),
             closed: std::sync::OnceLock::new(),
-            outward: std::sync::OnceLock::new(),
         })
     }
 
@@ -425,27 +421,6 @@ impl Mesh {
         *self
             .closed
             .get_or_init(|| super::mesh_core::closed(&self.triangles))
-    }
-
-    /// Whether a closed mesh's triangles are wound so that their normals
-    /// (counter-clockwise) point out of the solid it bounds: its signed
-    /// volume, `sum a . (b x c) / 6` over the triangles, is positive (the
-    /// divergence theorem). Meaningless for an open mesh.
-    pub fn wound_outward(&self) -> bool {
-        *self.outward.get_or_init(|| {
-            // About the bounds' centre, so that far-off coordinates do not
-            // cancel the sum's digits.
-            let c = 0.5 * (self.lo + self.hi);
-            let six_v: f64 = self
-                .triangles
-                .iter()
-                .map(|t| {
-                    let [a, b, d] = t.map(|i| self.vertices[i as usize] - c);
-                    a.dot(b.cross(d))
-                })
-                .sum();
-            six_v > 0.0
-        })
     }
 
     /// The core of a closed mesh: a box inside the solid, whose crossing by
@@ -1423,15 +1398,6 @@ mod tests {
             .sum();
         let exact = 4.0 / 3.0 * PI * 8.0;
         assert!((vol / exact - 1.0).abs() < 2e-3, "{vol} vs {exact}");
-        // Wound outward, moved far off (the sum is taken about the centre);
-        // every triangle turned: inward.
-        let far = m
-            .clone()
-            .transformed(DVec3::splat(1e7), DMat3::IDENTITY, 1.0);
-        assert!(m.wound_outward() && far.wound_outward());
-        let turned: Vec<[u32; 3]> = m.triangles().iter().map(|t| [t[0], t[2], t[1]]).collect();
-        let inward = Mesh::from_triangles(m.vertices().to_vec(), turned).unwrap();
-        assert!(inward.is_closed() && !inward.wound_outward());
         assert!(star_blob(1, 10, bumpy).is_err());
         let e = star_blob(4, 8, |t, _| 1.0 - t).unwrap_err().to_string();
         assert!(e.contains("not positive"), "{e}");

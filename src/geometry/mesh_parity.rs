@@ -71,6 +71,36 @@ pub fn side_off_surface(mesh: &Mesh, q: DVec3) -> Side {
     rays(mesh, q, 1e-9 * (hi - lo).length())
 }
 
+/// The winding number of closed `mesh` at `q` \[m\], a point off its
+/// surface: the signed crossings of a ray from `q` to infinity (+1 for each
+/// triangle left through its front, see [`Mesh::signed_crossings`]), the
+/// same along each of the six rays (`None` where they disagree: `q` on
+/// the surface or a ray through an edge; or an open mesh). 0 outside every
+/// shell; inside `k` nested shells wound outward, `k` (wound inward, `-k`).
+/// Each ray starts a billionth of the mesh's size beyond `q`.
+pub fn winding(mesh: &Mesh, q: DVec3) -> Option<i64> {
+    if !mesh.is_closed() {
+        return None;
+    }
+    let (lo, hi) = mesh.bounds();
+    let eps = 1e-9 * (hi - lo).length();
+    if (lo - q).max(q - hi).max_element() > eps {
+        return Some(0);
+    }
+    let mut w = None;
+    for d in DIRS {
+        let d = DVec3::from_array(d).normalize();
+        for d in [d, -d] {
+            let s = mesh.signed_crossings(q, d, eps);
+            if w.is_some_and(|w| w != s) {
+                return None;
+            }
+            w = Some(s);
+        }
+    }
+    w
+}
+
 /// Points checked around an inside point: directions of a Fibonacci
 /// sphere, whose widest gap (about 28 degrees from any direction to the
 /// nearest) is narrower than the widest cap the outside of a reflex corner
@@ -161,6 +191,36 @@ mod tests {
         assert!(!m.is_closed());
         assert_eq!(side(&m, DVec3::splat(0.5)), Side::Unknown);
         assert_eq!(side_off_surface(&m, DVec3::splat(0.5)), Side::Unknown);
+    }
+
+    /// Nested shells in one mesh: a cube in a cube, both wound outward, and
+    /// the inner one turned inward.
+    #[test]
+    fn winding_numbers_of_nested_shells() {
+        use crate::geometry::mesh_core::{TEST_CUBE_FACES, test_cube};
+        let outer = test_cube(4.0, DVec3::splat(-2.0));
+        let inner = test_cube(1.0, DVec3::ZERO);
+        let mut v = outer.vertices().to_vec();
+        v.extend_from_slice(inner.vertices());
+        let shift = |f: &[u32; 3], turn: bool| {
+            let f = f.map(|i| i + 8);
+            if turn { [f[0], f[2], f[1]] } else { f }
+        };
+        for turn in [false, true] {
+            let mut t = TEST_CUBE_FACES.to_vec();
+            t.extend(TEST_CUBE_FACES.iter().map(|f| shift(f, turn)));
+            let m = Mesh::from_triangles(v.clone(), t).unwrap();
+            assert!(m.is_closed());
+            let inside_inner = if turn { 0 } else { 2 };
+            assert_eq!(winding(&m, DVec3::splat(0.5)), Some(inside_inner));
+            assert_eq!(winding(&m, DVec3::new(1.5, 0.5, 0.5)), Some(1));
+            assert_eq!(winding(&m, DVec3::new(0.5, 0.5, 1.0 + 1e-7)), Some(1));
+            assert_eq!(winding(&m, DVec3::splat(3.0)), Some(0));
+            assert_eq!(winding(&m, DVec3::new(0.0, 0.0, 2.1)), Some(0));
+            // On a face: the rays disagree.
+            assert_eq!(winding(&m, DVec3::new(0.5, 0.5, 1.0)), None);
+        }
+        assert_eq!(winding(&cube(true), DVec3::splat(0.5)), None);
     }
 
     /// A point 1e-7 off a face (of a cube of size 1.7): [`side`]'s points

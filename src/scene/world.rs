@@ -653,46 +653,44 @@ impl Scene {
 
     /// Bounding box \[m\] of the finite shapes (`None`: there are none).
     pub fn finite_bounds(&self) -> Option<(DVec3, DVec3)> {
-        self.finite_bounds_except_mesh(None)
+        self.shape_bounds_except_mesh(usize::MAX)
+            .into_iter()
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 
-    /// [`Self::finite_bounds`] leaving the `skip`-th mesh out.
-    fn finite_bounds_except_mesh(&self, skip: Option<usize>) -> Option<(DVec3, DVec3)> {
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        let mut add = |a: DVec3, b: DVec3| {
-            lo = lo.min(a.min(b));
-            hi = hi.max(a.max(b));
-        };
+    /// The bounds \[m\] of each finite shape (the disc and sphere's boxes
+    /// of their radius) but the `skip`-th mesh.
+    fn shape_bounds_except_mesh(&self, skip: usize) -> Vec<(DVec3, DVec3)> {
+        let mut all = Vec::new();
         for (r, _) in &self.rects {
-            for p in [r.o, r.o + r.e1, r.o + r.e2, r.o + r.e1 + r.e2] {
-                add(p, p);
-            }
+            let cs = [r.o, r.o + r.e1, r.o + r.e2, r.o + r.e1 + r.e2];
+            all.push((
+                cs.iter().fold(DVec3::INFINITY, |m, &c| m.min(c)),
+                cs.iter().fold(DVec3::NEG_INFINITY, |m, &c| m.max(c)),
+            ));
         }
         for (d, _) in &self.discs {
-            add(d.plane.p - DVec3::splat(d.r), d.plane.p + DVec3::splat(d.r));
+            all.push((d.plane.p - DVec3::splat(d.r), d.plane.p + DVec3::splat(d.r)));
         }
         for (s, _) in &self.spheres {
-            add(s.c - DVec3::splat(s.r), s.c + DVec3::splat(s.r));
+            all.push((s.c - DVec3::splat(s.r), s.c + DVec3::splat(s.r)));
         }
         for (b, _) in &self.boxes {
-            add(b.lo, b.hi);
+            all.push((b.lo, b.hi));
         }
         for (i, (m, _)) in self.meshes.iter().enumerate() {
-            if Some(i) != skip {
-                let (a, b) = m.bounds();
-                add(a, b);
+            if i != skip {
+                all.push(m.bounds());
             }
         }
         for (o, _) in &self.shs {
             let r = DVec3::splat(o.bounds().1);
-            add(o.center() - r, o.center() + r);
+            all.push((o.center() - r, o.center() + r));
         }
         for pane in &self.panes {
-            let (a, b) = pane.bounds();
-            add(a, b);
+            all.push(pane.bounds());
         }
-        lo.x.is_finite().then_some((lo, hi))
+        all
     }
 
     /// Fit the start regions of the lights at infinity
@@ -1006,7 +1004,7 @@ impl Scene {
     /// it belongs to: its value is the limit from there. On a surface, a
     /// receiver belongs to the side its normal faces (the reflecting side
     /// where its normal lies along a one-sided surface; along a two-sided
-    /// face of a closed mesh, the side the lights are on,
+    /// face of a closed mesh, the side of the region with light,
     /// [`mesh_lit_side`]; along another two-sided one, no side: it sees
     /// past the sheet on both, as before); a
     /// surface through the point itself it would see edge-on, and so
@@ -1030,8 +1028,8 @@ impl Scene {
     /// ([`Self::faces_black_side`]: flagged as it is).
     pub fn lift_to_its_side(&self, p: DVec3, n: DVec3) -> DVec3 {
         // The side of surface `s` (geometric normal `ng`; the `i`-th mesh's
-        // triangle, if on one) the point belongs to, if any.
-        let side = |s: u32, ng: DVec3, mesh: Option<usize>| -> Option<DVec3> {
+        // triangle of corners `v`, if on one) the point belongs to, if any.
+        let side = |s: u32, ng: DVec3, tri: Option<(usize, &[DVec3; 3])>| -> Option<DVec3> {
             let c = n.dot(ng);
             if c.abs() > 1e-12 {
                 return Some(ng * c.signum());
@@ -1039,20 +1037,13 @@ impl Scene {
             match self.surfaces[s as usize].sides {
                 Sides::Back => Some(-ng),
                 Sides::Front => Some(ng),
-                // Edge-on to a closed mesh that reflects on both sides: the
-                // side its lights are on ([`mesh_lit_side`]). Edge-on to a
-                // sheet (a partition screen through a work-plane grid):
-                // neither side is the point's, which sees both halves of
-                // the room past the sheet, as before.
-                Sides::Both => mesh.and_then(|i| {
-                    let out = self.lights_outside_mesh(i)?;
-                    let outward = if self.meshes[i].0.wound_outward() {
-                        ng
-                    } else {
-                        -ng
-                    };
-                    Some(if out { outward } else { -outward })
-                }),
+                // Edge-on to a face of a closed mesh that reflects on both
+                // sides: the side of the region with light
+                // ([`mesh_lit_side`]). Edge-on to a sheet (a partition
+                // screen through a work-plane grid): neither side is the
+                // point's, which sees both halves of the room past the
+                // sheet, as before.
+                Sides::Both => tri.and_then(|(i, v)| self.lit_side_of_face(i, v, ng, None)),
             }
         };
         // The faces to leave: (surface, mesh triangle or `u32::MAX`, side).
@@ -1063,7 +1054,7 @@ impl Scene {
         for (i, (m, s)) in self.meshes.iter().enumerate() {
             for (tri, v) in m.triangles_through(p, m.on_tolerance(p)) {
                 let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
-                faces.extend(side(*s, ng, Some(i)).map(|m| (*s, tri, m)));
+                faces.extend(side(*s, ng, Some((i, &v))).map(|m| (*s, tri, m)));
             }
         }
         if faces.iter().all(|f| n.dot(f.2) >= 1.0 - 1e-12) || self.faces_black_side(p, n) {
@@ -1191,7 +1182,7 @@ impl Scene {
     /// (within the shapes' on-surface tolerances; a mesh's triangles within
     /// `MESH_REL` of its size), each with the unit normal of its reflecting
     /// side (the geometric normal's where both reflect, but on a closed
-    /// mesh: the side the lights other than `light` are on,
+    /// mesh: the side of the region with light, `light` itself left out,
     /// [`mesh_lit_side`]) and its edges through `p`: a box's other faces
     /// there, a rectangle's or disc's rim, a triangle's sides.
     fn seat_at(&self, p: DVec3, light: Option<usize>) -> Option<LightSeat> {
@@ -1219,20 +1210,13 @@ impl Scene {
         }
         for (i, (m, s)) in self.meshes.iter().enumerate() {
             let tol = MESH_REL * (m.bounds().1 - m.bounds().0).length();
-            // A closed two-sided mesh: the side the other lights are on, or
-            // the inside of the scene's enclosure ([`mesh_lit_side`]).
-            let through = m.triangles_through(p, tol);
-            let along = if !through.is_empty() && both(*s) && m.is_closed() {
-                let outward = m.wound_outward();
-                self.lit_side_of_mesh(i, light).map(|out| out == outward)
-            } else {
-                None
-            };
-            for (tri, v) in through {
-                let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
-                let n = match along {
-                    Some(false) => -n,
-                    _ => n,
+            for (tri, v) in m.triangles_through(p, tol) {
+                let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+                // A closed two-sided mesh: the side of the region with
+                // light, other than this light's ([`mesh_lit_side`]).
+                let n = match both(*s) {
+                    true => self.lit_side_of_face(i, &v, ng, light).unwrap_or(ng),
+                    false => ng,
                 };
                 // Into the triangle across each side whose line passes
                 // within `tol` of `p`.

@@ -1,36 +1,43 @@
-//! Which side of a closed mesh the light is on: the side a receiver
-//! edge-on to one of its two-sided faces belongs to
-//! ([`Scene::lift_to_its_side`]), and the side a light standing on one of
-//! them belongs to ([`Scene::light_surface`]).
+//! Which side of a face of a closed two-sided mesh a point on it belongs
+//! to: the side a receiver edge-on to the face is lifted to
+//! ([`Scene::lift_to_its_side`]), and the side a light standing on it
+//! stands on ([`Scene::light_surface`]).
 //!
-//! A closed mesh cuts space in two, and no light crosses it: the region
-//! without a light is dark on both of a two-sided face's sides. A point on
-//! such a face that faces along it (a floor point at the foot of a room
-//! mesh's wall, facing up; a point on a cabinet mesh's side, facing up)
-//! is the limit from the lit region. Evaluated on the face it saw past it
-//! on both sides, as past a sheet, and so counted the dark half: a room
-//! mesh's wall foot read 7.84 against 10.33 lx a micrometre into the room,
-//! a two-sided cabinet mesh's side 58.4 against 67.8 lx beside it.
+//! A closed mesh cuts space into regions, told apart by their winding
+//! numbers ([`mesh_parity::winding`]: 0 outside, 1 inside one shell wound
+//! outward, 2 inside a cabinet modelled in the same OBJ as its room), and
+//! no light crosses it. Two-sided, it reflects into both regions at each
+//! face, but where one of them holds no light it is dark. So:
 //!
-//! The lights that can be placed (off the mesh; lights at infinity lie
-//! outside) decide; where none can (every light stands on the mesh: a
-//! room mesh's ceiling luminaires), the mesh is taken as the enclosure of
-//! the scene where nothing else lies outside its bounds (no plane, no
-//! other shape), else as an object in it. A light on the ceiling of a
-//! two-sided room mesh wound outward (the usual OBJ convention) stood
-//! outside the room, on the geometric normal's side, and lit nothing in
-//! it (0 lx everywhere, with no error and no flag).
+//! 1. where the scene's other content (lights off the mesh, lights at
+//!    infinity, other shapes, planes clear of the mesh's bounds) lies in
+//!    the region on one side of the face only, that side (a lamp on a
+//!    cabinet in a room; a floor point at a cabinet mesh's foot);
+//! 2. else (content on both sides, or none) the side of the smaller
+//!    nonzero winding number: inside the outermost shell (a luminaire on
+//!    the ceiling of a room given as an OBJ, with or without a sun outside
+//!    or a ground plane under it), outside an inner one (a lamp on a
+//!    cabinet modelled in the room's OBJ).
+//!
+//! A point evaluated on the face saw past it on both sides, as past a
+//! sheet, and so counted the dark side: a room mesh's wall foot read 7.84
+//! against 10.33 lx a micrometre into the room. A light on the ceiling of
+//! a two-sided room mesh wound outward (the usual OBJ convention) stood
+//! outside, on the geometric normal's side, and the room read 0 lx
+//! everywhere, with no error and no flag. Rule 2 takes a lamp on a lone
+//! closed object with nothing else in the scene (or only a ground plane
+//! touching it) as inside the object: give such a lamp a height.
 
 use super::{MESH_REL, Scene};
 use crate::geometry::mesh::Mesh;
-use crate::geometry::mesh_parity::{self, Side};
-use crate::light::Light;
+use crate::geometry::mesh_parity;
 use glam::DVec3;
 
 /// Per mesh of a scene, found on first use and kept until the lights
-/// change: [`Scene::lit_side_of_mesh`] over all the lights.
+/// change: the winding numbers of the regions that hold the scene's content
+/// ([`Scene::content_windings`] over all the lights).
 #[derive(Clone, Default)]
-pub(super) struct MeshLitSide(std::sync::OnceLock<Vec<std::sync::OnceLock<Option<bool>>>>);
+pub(super) struct MeshLitSide(std::sync::OnceLock<Vec<std::sync::OnceLock<Vec<i64>>>>);
 
 /// Found on demand, so it is left out of the scene's `Debug` text (which
 /// names a run in its state files, and must not depend on what a run
@@ -42,74 +49,101 @@ impl std::fmt::Debug for MeshLitSide {
 }
 
 impl Scene {
-    /// [`Self::lit_side_of_mesh`] of the `i`-th mesh over all the lights,
-    /// kept.
-    pub(super) fn lights_outside_mesh(&self, i: usize) -> Option<bool> {
-        let all = self
-            .mesh_lit_side
-            .0
-            .get_or_init(|| (0..self.meshes.len()).map(|_| Default::default()).collect());
-        *all[i].get_or_init(|| self.lit_side_of_mesh(i, None))
-    }
-
-    /// Whether the light of the scene lies outside (`Some(true)`) or inside
-    /// (`Some(false)`) its `i`-th mesh, leaving light `except` out
-    /// ([module docs](self)); `None` for an open mesh or lights on both
-    /// sides.
-    pub(super) fn lit_side_of_mesh(&self, i: usize, except: Option<usize>) -> Option<bool> {
+    /// The unit normal of the side a point on triangle `tri` (corners `v`,
+    /// geometric normal `ng`) of the `i`-th mesh belongs to, leaving light
+    /// `except` out of the content ([module docs](self)); `None` for an
+    /// open mesh or where the sides' winding numbers cannot be found.
+    pub(super) fn lit_side_of_face(
+        &self,
+        i: usize,
+        v: &[DVec3; 3],
+        ng: DVec3,
+        except: Option<usize>,
+    ) -> Option<DVec3> {
         let m = &self.meshes[i].0;
         if !m.is_closed() {
             return None;
         }
-        let mut outside = None;
+        // Off the face's middle, a millionth of the mesh's size each way.
+        let c = (v[0] + v[1] + v[2]) / 3.0;
+        let h = 1e-6 * size(m);
+        let (wp, wm) = (
+            mesh_parity::winding(m, c + h * ng)?,
+            mesh_parity::winding(m, c - h * ng)?,
+        );
+        let plus = |content: &[i64]| match (content.contains(&wp), content.contains(&wm)) {
+            (true, false) => true,
+            (false, true) => false,
+            _ => match (wp.abs(), wm.abs()) {
+                (0, _) => false,
+                (_, 0) => true,
+                (a, b) => a < b,
+            },
+        };
+        let plus = match except {
+            None => {
+                let all = self
+                    .mesh_lit_side
+                    .0
+                    .get_or_init(|| (0..self.meshes.len()).map(|_| Default::default()).collect());
+                plus(all[i].get_or_init(|| self.content_windings(i, None)))
+            }
+            Some(_) => plus(&self.content_windings(i, except)),
+        };
+        Some(if plus { ng } else { -ng })
+    }
+
+    /// The winding numbers of the `i`-th mesh (closed) at the scene's
+    /// content, light `except` left out: each light off the mesh at its
+    /// position, lights at infinity and planes clear of the mesh's bounds
+    /// outside (0), each other finite shape at its bounds' centre, or
+    /// outside where its bounds reach beyond the mesh's. Sorted, each once.
+    fn content_windings(&self, i: usize, except: Option<usize>) -> Vec<i64> {
+        let m = &self.meshes[i].0;
+        let (lo, hi) = m.bounds();
+        let tol = MESH_REL * size(m);
+        let (lo, hi) = (lo - DVec3::splat(tol), hi + DVec3::splat(tol));
+        let mut w = Vec::new();
         for (k, l) in self.lights.iter().enumerate() {
             if Some(k) == except {
                 continue;
             }
-            let out = match light_side(m, l) {
-                Side::Outside => true,
-                Side::Inside => false,
-                Side::Unknown => continue,
-            };
-            if outside.is_some_and(|o| o != out) {
-                return None;
+            if l.is_directional() {
+                w.push(0);
+            } else if m.triangle_at(l.position(), tol).is_none() {
+                w.extend(mesh_parity::winding(m, l.position()));
             }
-            outside = Some(out);
         }
-        Some(outside.unwrap_or_else(|| self.anything_outside_mesh(i)))
-    }
-
-    /// Whether a plane, or a finite shape other than the `i`-th mesh
-    /// reaching beyond its bounds, lies in the scene.
-    fn anything_outside_mesh(&self, i: usize) -> bool {
-        if !self.planes.is_empty() {
-            return true;
+        // A plane that meets the bounds (a ground plane under a room mesh)
+        // is not counted: it may be the mesh's own floor.
+        let corners = (0..8).map(|k| {
+            DVec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            )
+        });
+        for pl in &self.planes {
+            let sides: Vec<f64> = corners.clone().map(|q| pl.n.dot(q - pl.p)).collect();
+            if sides.iter().all(|&d| d > 0.0) || sides.iter().all(|&d| d < 0.0) {
+                w.push(0);
+            }
         }
-        let (lo, hi) = self.meshes[i].0.bounds();
-        let pad = DVec3::splat(MESH_REL * (hi - lo).length());
-        self.finite_bounds_except_mesh(Some(i))
-            .is_some_and(|(a, b)| {
-                (a - (lo - pad)).min_element() < 0.0 || (hi + pad - b).min_element() < 0.0
-            })
+        for (a, b) in self.shape_bounds_except_mesh(i) {
+            if (a - lo).min_element() < 0.0 || (hi - b).min_element() < 0.0 {
+                w.push(0);
+            } else {
+                w.extend(mesh_parity::winding(m, 0.5 * (a + b)));
+            }
+        }
+        w.sort_unstable();
+        w.dedup();
+        w
     }
 }
 
-/// The side of closed mesh `m` that light `l` lies on: outside for a light
-/// at infinity; `Unknown` for one on the mesh.
-fn light_side(m: &Mesh, l: &Light) -> Side {
-    if l.is_directional() {
-        return Side::Outside;
-    }
-    let p = l.position();
-    match mesh_parity::side(m, p) {
-        Side::Unknown => {
-            let (lo, hi) = m.bounds();
-            if m.triangle_at(p, MESH_REL * (hi - lo).length()).is_some() {
-                Side::Unknown
-            } else {
-                mesh_parity::side_off_surface(m, p)
-            }
-        }
-        s => s,
-    }
+/// The length of a mesh's bounds' diagonal \[m\].
+fn size(m: &Mesh) -> f64 {
+    let (lo, hi) = m.bounds();
+    (hi - lo).length()
 }
