@@ -750,11 +750,14 @@ impl Scene {
         let light_pick = crate::sampling::alias::AliasTable::new(&powers);
         self.lights = lights;
         self.mesh_lit_side = Default::default();
-        self.light_surface = (0..self.lights.len())
-            .map(|k| {
-                let l = &self.lights[k];
+        // (The seats read the lights: a seat on a closed two-sided mesh
+        // takes the side of the region the other content is in.)
+        self.light_surface = self
+            .lights
+            .iter()
+            .map(|l| {
                 if l.is_point_like() {
-                    self.seat_at(l.position(), Some(k))
+                    self.seat_at(l.position())
                 } else {
                     None
                 }
@@ -1043,7 +1046,7 @@ impl Scene {
                 // screen through a work-plane grid): neither side is the
                 // point's, which sees both halves of the room past the
                 // sheet, as before.
-                Sides::Both => tri.and_then(|(i, v)| self.lit_side_of_face(i, v, ng, None)),
+                Sides::Both => tri.and_then(|(i, v)| self.lit_side_of_face(i, v, ng)),
             }
         };
         // The faces to leave: (surface, mesh triangle or `u32::MAX`, side).
@@ -1117,11 +1120,18 @@ impl Scene {
     /// reaching the region.
     pub fn faces_black_side(&self, p: DVec3, n: DVec3) -> bool {
         let through = self.surfaces_through(p);
-        // Whether light can be in the region beyond a black side.
+        // Whether light can be in the region beyond a black side. A light
+        // standing on a surface is in the region its seat faces (a
+        // downlight on a room box's ceiling is inside the room).
         let reaches = |inside: &dyn Fn(DVec3) -> bool, infinite: bool| {
-            self.lights.iter().any(|l| match l {
+            self.lights.iter().enumerate().any(|(k, l)| match l {
                 _ if l.is_directional() => infinite,
-                _ if l.is_point_like() => inside(l.position()),
+                _ if l.is_point_like() => {
+                    let c = l.position();
+                    inside(self.light_surface(k).map_or(c, |seat| {
+                        c + 1e-6 * c.abs().max_element().max(1.0) * seat.bisector()
+                    }))
+                }
                 _ => true,
             })
         };
@@ -1182,10 +1192,10 @@ impl Scene {
     /// (within the shapes' on-surface tolerances; a mesh's triangles within
     /// `MESH_REL` of its size), each with the unit normal of its reflecting
     /// side (the geometric normal's where both reflect, but on a closed
-    /// mesh: the side of the region with light, `light` itself left out,
-    /// [`mesh_lit_side`]) and its edges through `p`: a box's other faces
+    /// mesh: the side of the region with light, [`mesh_lit_side`]) and its
+    /// edges through `p`: a box's other faces
     /// there, a rectangle's or disc's rim, a triangle's sides.
-    fn seat_at(&self, p: DVec3, light: Option<usize>) -> Option<LightSeat> {
+    fn seat_at(&self, p: DVec3) -> Option<LightSeat> {
         let reflecting = |s: u32, ng: DVec3| match self.surfaces[s as usize].sides {
             Sides::Back => -ng,
             Sides::Front | Sides::Both => ng,
@@ -1213,9 +1223,9 @@ impl Scene {
             for (tri, v) in m.triangles_through(p, tol) {
                 let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
                 // A closed two-sided mesh: the side of the region with
-                // light, other than this light's ([`mesh_lit_side`]).
+                // light ([`mesh_lit_side`]).
                 let n = match both(*s) {
-                    true => self.lit_side_of_face(i, &v, ng, light).unwrap_or(ng),
+                    true => self.lit_side_of_face(i, &v, ng).unwrap_or(ng),
                     false => ng,
                 };
                 // Into the triangle across each side whose line passes
@@ -1517,7 +1527,7 @@ impl Scene {
     /// surface it sees it at its feet (`t = 0`, the reflecting side);
     /// otherwise [`Self::first_hit_from`].
     pub fn observer_hit(&self, o: DVec3, d: DVec3) -> Option<Hit> {
-        if let Some(seat) = self.seat_at(o, None)
+        if let Some(seat) = self.seat_at(o)
             && let Some((surface, n, prim)) = seat.meets_prim(d)
         {
             return Some(Hit {

@@ -128,6 +128,12 @@ impl LightSeat {
         Some(Self { faces: kept, b })
     }
 
+    /// The unit bisector of the faces' reflecting normals: the light stands
+    /// just off its position along it.
+    pub fn bisector(&self) -> DVec3 {
+        self.b
+    }
+
     /// The faces: `(surface, unit normal of the light's side)`.
     pub fn faces(&self) -> impl Iterator<Item = (u32, DVec3)> + '_ {
         self.faces.iter().map(|f| (f.surface, f.n))

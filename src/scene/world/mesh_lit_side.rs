@@ -9,7 +9,7 @@
 //! no light crosses it. Two-sided, it reflects into both regions at each
 //! face, but where one of them holds no light it is dark. So:
 //!
-//! 1. where the scene's other content (lights off the mesh, lights at
+//! 1. where the scene's content (lights off the mesh, lights at
 //!    infinity, other shapes, planes clear of the mesh's bounds) lies in
 //!    the region on one side of the face only, that side (a lamp on a
 //!    cabinet in a room; a floor point at a cabinet mesh's foot);
@@ -35,7 +35,7 @@ use glam::DVec3;
 
 /// Per mesh of a scene, found on first use and kept until the lights
 /// change: the winding numbers of the regions that hold the scene's content
-/// ([`Scene::content_windings`] over all the lights).
+/// ([`Scene::content_windings`]).
 #[derive(Clone, Default)]
 pub(super) struct MeshLitSide(std::sync::OnceLock<Vec<std::sync::OnceLock<Vec<i64>>>>);
 
@@ -49,17 +49,13 @@ impl std::fmt::Debug for MeshLitSide {
 }
 
 impl Scene {
-    /// The unit normal of the side a point on triangle `tri` (corners `v`,
-    /// geometric normal `ng`) of the `i`-th mesh belongs to, leaving light
-    /// `except` out of the content ([module docs](self)); `None` for an
-    /// open mesh or where the sides' winding numbers cannot be found.
-    pub(super) fn lit_side_of_face(
-        &self,
-        i: usize,
-        v: &[DVec3; 3],
-        ng: DVec3,
-        except: Option<usize>,
-    ) -> Option<DVec3> {
+    /// The unit normal of the side a point on a triangle (corners `v`,
+    /// geometric normal `ng`) of the `i`-th mesh belongs to ([module
+    /// docs](self)); `None` for an open mesh or where the sides' winding
+    /// numbers cannot be found. A light standing on the mesh is no content
+    /// of it (it lies on the surface), so a light's own seat is found with
+    /// the same content as a receiver's side.
+    pub(super) fn lit_side_of_face(&self, i: usize, v: &[DVec3; 3], ng: DVec3) -> Option<DVec3> {
         let m = &self.meshes[i].0;
         if !m.is_closed() {
             return None;
@@ -71,7 +67,12 @@ impl Scene {
             mesh_parity::winding(m, c + h * ng)?,
             mesh_parity::winding(m, c - h * ng)?,
         );
-        let plus = |content: &[i64]| match (content.contains(&wp), content.contains(&wm)) {
+        let all = self
+            .mesh_lit_side
+            .0
+            .get_or_init(|| (0..self.meshes.len()).map(|_| Default::default()).collect());
+        let content = all[i].get_or_init(|| self.content_windings(i));
+        let plus = match (content.contains(&wp), content.contains(&wm)) {
             (true, false) => true,
             (false, true) => false,
             _ => match (wp.abs(), wm.abs()) {
@@ -80,37 +81,24 @@ impl Scene {
                 (a, b) => a < b,
             },
         };
-        let plus = match except {
-            None => {
-                let all = self
-                    .mesh_lit_side
-                    .0
-                    .get_or_init(|| (0..self.meshes.len()).map(|_| Default::default()).collect());
-                plus(all[i].get_or_init(|| self.content_windings(i, None)))
-            }
-            Some(_) => plus(&self.content_windings(i, except)),
-        };
         Some(if plus { ng } else { -ng })
     }
 
     /// The winding numbers of the `i`-th mesh (closed) at the scene's
-    /// content, light `except` left out: each light off the mesh at its
+    /// content: each light off the mesh at its
     /// position, lights at infinity and planes clear of the mesh's bounds
     /// outside (0), each other finite shape at its bounds' centre, or
     /// outside where its bounds reach beyond the mesh's. Sorted, each once.
-    fn content_windings(&self, i: usize, except: Option<usize>) -> Vec<i64> {
+    fn content_windings(&self, i: usize) -> Vec<i64> {
         let m = &self.meshes[i].0;
         let (lo, hi) = m.bounds();
         let tol = MESH_REL * size(m);
         let (lo, hi) = (lo - DVec3::splat(tol), hi + DVec3::splat(tol));
         let mut w = Vec::new();
-        for (k, l) in self.lights.iter().enumerate() {
-            if Some(k) == except {
-                continue;
-            }
+        for l in &self.lights {
             if l.is_directional() {
                 w.push(0);
-            } else if m.triangle_at(l.position(), tol).is_none() {
+            } else if m.triangles_through(l.position(), tol).is_empty() {
                 w.extend(mesh_parity::winding(m, l.position()));
             }
         }
