@@ -46,8 +46,9 @@ pub struct Collision {
     pub order: u32,
     /// The point-like light whose seat this collision lies at (light it
     /// sent into a surface it stands on, met at its own position,
-    /// [`Scene::light_surface`]), if any: what it reflects leaves from just
-    /// in front of the seat, so a point behind the seat does not see it
+    /// [`Scene::light_surface`]), if any, where the seat holds more than
+    /// one face: what it reflects leaves from just in front of the seat,
+    /// so a point behind the seat does not see it
     /// ([`Scene::behind_light_surface`]), as it does not see the light.
     pub seat: Option<u32>,
 }
@@ -269,7 +270,9 @@ pub fn trace_ex<F: FnMut(&Collision)>(
             surface: hit.surface,
             prim: hit.prim,
             order,
-            seat: at_seat.then_some(k_light as u32),
+            // (On one face, the collision's own cosine hides what the seat
+            // does: the scores take the fast kernels.)
+            seat: (at_seat && seat.is_some_and(|s| !s.single_face())).then_some(k_light as u32),
         });
         if params.max_order.is_some_and(|m| order >= m) {
             end = ChainEnd::Truncated;

@@ -134,6 +134,13 @@ impl LightSeat {
         self.b
     }
 
+    /// Whether the light stands on one face only: a collision there hides
+    /// nothing from a point that its own cosine does not (the face's back
+    /// half-space), so [`Self::hides`] need not be asked of its scores.
+    pub fn single_face(&self) -> bool {
+        self.faces.len() == 1
+    }
+
     /// The faces: `(surface, unit normal of the light's side)`.
     pub fn faces(&self) -> impl Iterator<Item = (u32, DVec3)> + '_ {
         self.faces.iter().map(|f| (f.surface, f.n))
