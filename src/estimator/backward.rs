@@ -719,11 +719,17 @@ fn join_pool<F: FnMut(u32, f64)>(
             continue;
         }
         tests += 1;
-        // (A collision at a light's seat hides from points behind the seat.)
-        if y.seat
-            .is_some_and(|l| scene.behind_light_surface(l as usize, h.p))
-            || !scene.visible(h.p, from, y.p)
-        {
+        // A collision at a light's seat hides from points behind the seat,
+        // and is seen from just off it (`Scene::light_shadow_origin`).
+        let seen = match y.seat {
+            Some(l) => {
+                let l = l as usize;
+                !scene.behind_light_surface(l, h.p)
+                    && scene.visible(h.p, from, scene.light_shadow_origin(l))
+            }
+            None => scene.visible(h.p, from, y.p),
+        };
+        if !seen {
             continue;
         }
         let w = v / d2.sqrt(); // from y towards x

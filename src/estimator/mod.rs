@@ -582,6 +582,9 @@ impl Receivers {
             let l = &scene.lights[*k];
             !l.is_point_like() && !matches!(l, Light::Distant(dl) if dl.collimated())
         };
+        let shadow_origin: Vec<DVec3> = (0..scene.lights.len())
+            .map(|k| scene.light_shadow_origin(k))
+            .collect();
         for (j, rec) in receivers.iter().enumerate() {
             let (p, n, lifted_to) = (seated[j], rec.n, rec.p);
             if !(p.is_finite() && n.is_finite() && (n.length() - 1.0).abs() < 1e-9) {
@@ -706,7 +709,7 @@ impl Receivers {
                 let seen = scene.side_mask(l.position()).sees(masks[j])
                     && !scene.behind_light_surface(k, lifted_to)
                     && (scene.planes_only()
-                        || !scene.blocked_by_shapes(l.position(), None, lifted_to, 0));
+                        || !scene.blocked_by_shapes(shadow_origin[k], None, lifted_to, 0));
                 if seen {
                     let glass = scene.pane_transmittance(l.position(), lifted_to);
                     direct[j] += glass
@@ -1546,7 +1549,10 @@ impl Receivers {
         let acc = &mut acc[list.offset..list.offset + list.idx.len()];
         let frame = Frame::from_normal(c.n);
         let wi = frame.to_local(c.wi);
-        let from = Some((c.surface, c.prim));
+        let (origin, from) = match c.seat {
+            Some(k) => (scene.light_shadow_origin(k as usize), None),
+            None => (c.p, Some((c.surface, c.prim))),
+        };
         let mut count = 0;
         for pane in scene.panes() {
             let pl = pane.plane();
@@ -1575,7 +1581,7 @@ impl Receivers {
                 if !pane.contains(m)
                     || c.seat
                         .is_some_and(|l| scene.behind_light_surface(l as usize, m))
-                    || !scene.visible(c.p, from, m)
+                    || !scene.visible(origin, from, m)
                     || !scene.visible(m, None, p)
                 {
                     continue;
@@ -1610,7 +1616,12 @@ impl Receivers {
         let frame = Frame::from_normal(c.n);
         let wi = frame.to_local(c.wi);
         let planes_only = scene.planes_only();
-        let from = Some((c.surface, c.prim));
+        // Shadow tests from the collision, or from just off a light's seat
+        // for a collision there (`Scene::light_shadow_origin`).
+        let (origin, from) = match c.seat {
+            Some(k) => (scene.light_shadow_origin(k as usize), None),
+            None => (c.p, Some((c.surface, c.prim))),
+        };
         let cell = list.cells.as_ref().map(|g| g.row(c.p));
         for k in range {
             if !xm.sees(list.masks[k]) {
@@ -1631,15 +1642,15 @@ impl Receivers {
                 || (!planes_only && {
                     let inside = x_inside & list.inside[k];
                     if list.occ_start.is_empty() {
-                        scene.blocked_by_shapes(c.p, from, p, inside)
+                        scene.blocked_by_shapes(origin, from, p, inside)
                     } else {
                         let occ =
                             &list.occ[list.occ_start[k] as usize..list.occ_start[k + 1] as usize];
                         match cell {
                             Some(row) => {
-                                scene.blocked_in_cell(c.p, from, p, inside, occ, row[k], d2)
+                                scene.blocked_in_cell(origin, from, p, inside, occ, row[k], d2)
                             }
-                            None => scene.blocked_by_occluders(c.p, from, p, inside, occ, d2),
+                            None => scene.blocked_by_occluders(origin, from, p, inside, occ, d2),
                         }
                     }
                 })
