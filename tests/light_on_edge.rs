@@ -139,6 +139,15 @@ material = { type = "lambertian", reflectance = 0.5 }
 faces = { x_min = { type = "lambertian", reflectance = 0.85 }, z_max = { type = "lambertian", reflectance = 0.2 } }
 "#;
 
+/// `ROOM` as one mesh, counter-clockwise seen from inside (each wall's
+/// corner on one or both triangles of its quad).
+const ROOM_OBJ_IN: &str = "v 0 0 0\nv 6 0 0\nv 0 4 0\nv 6 4 0\nv 0 0 2.8\nv 6 0 2.8\nv 0 4 2.8\nv 6 4 2.8\n\
+    f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n";
+
+/// A cabinet `[1, 2]^2 x [0, 1]` as one mesh wound outward.
+const CABINET_OBJ_OUT: &str = "v 1 1 0\nv 2 1 0\nv 1 2 0\nv 2 2 0\nv 1 1 1\nv 2 1 1\nv 1 2 1\nv 2 2 1\n\
+    f 3 4 2 1\nf 6 8 7 5\nf 2 6 5 1\nf 7 8 4 3\nf 5 7 3 1\nf 4 8 6 2\n";
+
 fn room_points() -> Vec<(DVec3, DVec3)> {
     vec![
         (DVec3::new(3.0, 2.0, 0.0), DVec3::Z),
@@ -199,13 +208,7 @@ fn a_light_on_an_edge_of_a_room_of_rectangles_or_a_mesh_stands_on_every_face() {
     // One mesh, one material, counter-clockwise seen from inside: each
     // wall's corner lies on one or both triangles of its quad.
     let dir = tempfile::tempdir().unwrap();
-    let mesh = common::front_mesh(
-        dir.path(),
-        "room.obj",
-        "v 0 0 0\nv 6 0 0\nv 0 4 0\nv 6 4 0\nv 0 0 2.8\nv 6 0 2.8\nv 0 4 2.8\nv 6 4 2.8\n\
-         f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n",
-        0.5,
-    );
+    let mesh = common::front_mesh(dir.path(), "room.obj", ROOM_OBJ_IN, 0.5);
     same_as_just_off(
         &mesh,
         DVec3::new(0.0, 0.0, 2.8),
@@ -226,10 +229,8 @@ fn a_light_on_an_edge_of_a_room_of_rectangles_or_a_mesh_stands_on_every_face() {
 fn a_light_on_a_two_sided_mesh_stands_inside_the_room_and_outside_the_cabinet() {
     let e = 1e-7;
     let dir = tempfile::tempdir().unwrap();
-    let inward = "v 0 0 0\nv 6 0 0\nv 0 4 0\nv 6 4 0\nv 0 0 2.8\nv 6 0 2.8\nv 0 4 2.8\nv 6 4 2.8\n\
-                  f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n";
-    let outward = "v 0 0 0\nv 6 0 0\nv 0 4 0\nv 6 4 0\nv 0 0 2.8\nv 6 0 2.8\nv 0 4 2.8\nv 6 4 2.8\n\
-                   f 3 4 2 1\nf 6 8 7 5\nf 2 6 5 1\nf 7 8 4 3\nf 5 7 3 1\nf 4 8 6 2\n";
+    // Wound outward: the usual OBJ convention.
+    let (inward, outward) = (ROOM_OBJ_IN, common::rewound_obj(ROOM_OBJ_IN));
     let two_sided = |name: &str, obj: &str, rho: f64| {
         std::fs::write(dir.path().join(name), obj).unwrap();
         format!(
@@ -238,7 +239,7 @@ fn a_light_on_a_two_sided_mesh_stands_inside_the_room_and_outside_the_cabinet() 
             dir.path().join(name).display().to_string()
         )
     };
-    for (name, obj) in [("in.obj", inward), ("out.obj", outward)] {
+    for (name, obj) in [("in.obj", inward), ("out.obj", outward.as_str())] {
         let room = two_sided(name, obj, 0.5);
         same_as_just_off(
             &room,
@@ -259,7 +260,7 @@ fn a_light_on_a_two_sided_mesh_stands_inside_the_room_and_outside_the_cabinet() 
     // ceiling), or a ground plane under the room, the ceiling lamp stays
     // inside (it stood outside: the room read a quarter of its light with
     // the sun, 0 lx on the plane).
-    let room = two_sided("out.obj", outward, 0.5);
+    let room = two_sided("out.obj", &outward, 0.5);
     let sun_and_lamp = "[[light]]\ntype = \"distant\"\ndirection = [-0.5, 0.2, -0.8]\n\
                         illuminance = 10\n[[light]]\ntype = \"point\"\n\
                         position = [4.5, 3, 1.5]\nintensity = 50\n";
@@ -279,10 +280,7 @@ fn a_light_on_a_two_sided_mesh_stands_inside_the_room_and_outside_the_cabinet() 
     // it (it stood inside, and the room read 0 lx).
     let nested = two_sided(
         "nested.obj",
-        &format!(
-            "{outward}v 1 1 0\nv 2 1 0\nv 1 2 0\nv 2 2 0\nv 1 1 1\nv 2 1 1\nv 1 2 1\nv 2 2 1\n\
-             f 11 12 10 9\nf 14 16 15 13\nf 10 14 13 9\nf 15 16 12 11\nf 13 15 11 9\nf 12 16 14 10\n"
-        ),
+        &format!("{outward}{}", common::shifted_obj(CABINET_OBJ_OUT, 8)),
         0.5,
     );
     same_as_just_off(
@@ -292,12 +290,7 @@ fn a_light_on_a_two_sided_mesh_stands_inside_the_room_and_outside_the_cabinet() 
         &room_points(),
         1..=2,
     );
-    let cabinet = two_sided(
-        "cabinet.obj",
-        "v 1 1 0\nv 2 1 0\nv 1 2 0\nv 2 2 0\nv 1 1 1\nv 2 1 1\nv 1 2 1\nv 2 2 1\n\
-         f 3 4 2 1\nf 6 8 7 5\nf 2 6 5 1\nf 7 8 4 3\nf 5 7 3 1\nf 4 8 6 2\n",
-        0.8,
-    );
+    let cabinet = two_sided("cabinet.obj", CABINET_OBJ_OUT, 0.8);
     same_as_just_off(
         &format!("{room}{cabinet}"),
         DVec3::new(1.5, 1.5, 1.0),
@@ -495,13 +488,7 @@ fn a_light_on_a_shelfs_back_rim_reflects_from_the_wall_above_the_shelf() {
 #[test]
 fn a_lamp_on_a_mesh_cabinets_corner_lights_points_in_line_with_its_sides() {
     let dir = tempfile::tempdir().unwrap();
-    let cabinet = common::front_mesh(
-        dir.path(),
-        "cabinet.obj",
-        "v 1 1 0\nv 2 1 0\nv 1 2 0\nv 2 2 0\nv 1 1 1\nv 2 1 1\nv 1 2 1\nv 2 2 1\n\
-         f 3 4 2 1\nf 6 8 7 5\nf 2 6 5 1\nf 7 8 4 3\nf 5 7 3 1\nf 4 8 6 2\n",
-        0.8,
-    );
+    let cabinet = common::front_mesh(dir.path(), "cabinet.obj", CABINET_OBJ_OUT, 0.8);
     let p = DVec3::new(2.0, 2.0, 1.0);
     let s = scene(&format!("{ROOM}{cabinet}"), p);
     let lit = [

@@ -55,32 +55,6 @@ f 1 2 4\nf 1 4 3\nf 5 7 8\nf 5 8 6\nf 1 5 6\nf 1 6 2\nf 3 4 8\nf 3 8 7\nf 1 3 7\
 const CABINET_OBJ: &str = "v 1 1 0\nv 2 1 0\nv 1 2 0\nv 2 2 0\nv 1 1 1\nv 2 1 1\nv 1 2 1\nv 2 2 1\n\
 f 1 2 4\nf 1 4 3\nf 5 7 8\nf 5 8 6\nf 1 5 6\nf 1 6 2\nf 3 4 8\nf 3 8 7\nf 1 3 7\nf 1 7 5\nf 2 6 8\nf 2 8 4\n";
 
-/// OBJ text with every triangle wound the other way.
-fn rewound(obj: &str) -> String {
-    obj.lines()
-        .map(|l| match l.split_whitespace().collect::<Vec<_>>()[..] {
-            ["f", a, b, c] => format!("f {a} {c} {b}\n"),
-            _ => format!("{l}\n"),
-        })
-        .collect()
-}
-
-/// OBJ text with every face's vertex indices moved up by `k`.
-fn shifted(obj: &str, k: u32) -> String {
-    obj.lines()
-        .map(|l| match l.strip_prefix("f ") {
-            Some(f) => {
-                let f: Vec<String> = f
-                    .split_whitespace()
-                    .map(|i| (i.parse::<u32>().unwrap() + k).to_string())
-                    .collect();
-                format!("f {}\n", f.join(" "))
-            }
-            None => format!("{l}\n"),
-        })
-        .collect()
-}
-
 fn scene(text: &str, dir: &std::path::Path) -> Scene {
     parse(&format!("{text}{LIGHT}"), &dir.join("room.toml")).unwrap()
 }
@@ -188,7 +162,7 @@ fn points_on_edges_and_corners_read_the_limit_from_their_side() {
     // counted the dark outside: 33.56 against 39.22 lx at a wall's foot.
     for (name, obj) in [
         ("in.obj", ROOM_OBJ.to_string()),
-        ("out.obj", rewound(ROOM_OBJ)),
+        ("out.obj", common::rewound_obj(ROOM_OBJ)),
     ] {
         std::fs::write(dir.path().join(name), obj).unwrap();
         let mesh = scene(
@@ -214,7 +188,11 @@ fn points_on_edges_and_corners_read_the_limit_from_their_side() {
     );
     // A closed two-sided cabinet mesh: a point at its foot and one on its
     // side facing up belong outside it, where the light is.
-    std::fs::write(dir.path().join("cabinet.obj"), rewound(CABINET_OBJ)).unwrap();
+    std::fs::write(
+        dir.path().join("cabinet.obj"),
+        common::rewound_obj(CABINET_OBJ),
+    )
+    .unwrap();
     let cab = scene(
         &format!(
             "{BOX_ROOM}[[surface]]\ntype = \"mesh\"\nfile = \"cabinet.obj\"\n\
@@ -238,7 +216,10 @@ fn points_on_edges_and_corners_read_the_limit_from_their_side() {
     // room's air, where the light is (they were lifted into the cabinet).
     std::fs::write(
         dir.path().join("both.obj"),
-        rewound(&format!("{ROOM_OBJ}{}", shifted(CABINET_OBJ, 8))),
+        common::rewound_obj(&format!(
+            "{ROOM_OBJ}{}",
+            common::shifted_obj(CABINET_OBJ, 8)
+        )),
     )
     .unwrap();
     let both = scene(

@@ -214,3 +214,32 @@ intensity = 100
     )
     .unwrap()
 }
+
+/// OBJ text with every face wound the other way.
+pub fn rewound_obj(obj: &str) -> String {
+    obj.lines()
+        .map(|l| match l.strip_prefix("f ") {
+            Some(f) => {
+                let f: Vec<&str> = f.split_whitespace().rev().collect();
+                format!("f {}\n", f.join(" "))
+            }
+            None => format!("{l}\n"),
+        })
+        .collect()
+}
+
+/// OBJ text with every face's vertex indices moved up by `k`.
+pub fn shifted_obj(obj: &str, k: u32) -> String {
+    obj.lines()
+        .map(|l| match l.strip_prefix("f ") {
+            Some(f) => {
+                let f: Vec<String> = f
+                    .split_whitespace()
+                    .map(|i| (i.parse::<u32>().unwrap() + k).to_string())
+                    .collect();
+                format!("f {}\n", f.join(" "))
+            }
+            None => format!("{l}\n"),
+        })
+        .collect()
+}
