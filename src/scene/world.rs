@@ -340,8 +340,8 @@ pub struct Scene {
     light_surface: Vec<Option<LightSeat>>,
     /// Per light: [`Self::light_shadow_origin`].
     shadow_origin: Vec<DVec3>,
-    /// Per mesh: which side of it the lights are on, found on first use
-    /// ([`mesh_lit_side`]).
+    /// Per mesh: the winding numbers of the regions that hold the scene's
+    /// content, found on first use ([`mesh_lit_side`]).
     mesh_lit_side: mesh_lit_side::MeshLitSide,
     /// How direct light is summed over the sources ([`Self::set_direct_lights`]).
     direct_lights: crate::light::array::DirectLights,
@@ -1085,9 +1085,7 @@ impl Scene {
             return p;
         }
         // The move must leave every one of them: along one it would slide
-        // on it, out of the room. Where the sum of the sides does not (a
-        // face lying against another, facing the other way), the point
-        // stays where it is.
+        // on it, out of the room.
         let bounds = self
             .finite_bounds()
             .map_or(0.0, |(lo, hi)| lo.abs().max(hi.abs()).max_element());
