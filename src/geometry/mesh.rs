@@ -423,6 +423,15 @@ impl Mesh {
             .get_or_init(|| super::mesh_core::closed(&self.triangles))
     }
 
+    /// Whether the mesh is closed as a surface (every edge joins exactly
+    /// two triangles) but not consistently wound: some neighbours run
+    /// their shared edge the same way, so it has no inside
+    /// ([`Self::is_closed`] is false) and one of the two faces' sides is
+    /// wrong.
+    pub fn is_closed_but_unevenly_wound(&self) -> bool {
+        !self.is_closed() && super::mesh_core::closed_unoriented(&self.triangles)
+    }
+
     /// The core of a closed mesh: a box inside the solid, whose crossing by
     /// a shadow segment proves it blocked ([`super::mesh_core`]); `None`
     /// for an open mesh. Found on the first call (a few passes over the
@@ -1401,6 +1410,21 @@ mod tests {
         assert!(star_blob(1, 10, bumpy).is_err());
         let e = star_blob(4, 8, |t, _| 1.0 - t).unwrap_err().to_string();
         assert!(e.contains("not positive"), "{e}");
+    }
+
+    /// A closed blob, the same with one triangle turned, and with one
+    /// left out (open).
+    #[test]
+    fn uneven_winding_is_told_from_an_open_mesh() {
+        let m = star_blob(6, 8, bumpy).unwrap();
+        assert!(m.is_closed() && !m.is_closed_but_unevenly_wound());
+        let mut t = m.triangles().to_vec();
+        t[3] = [t[3][0], t[3][2], t[3][1]];
+        let turned = Mesh::from_triangles(m.vertices().to_vec(), t.clone()).unwrap();
+        assert!(!turned.is_closed() && turned.is_closed_but_unevenly_wound());
+        t.remove(3);
+        let open = Mesh::from_triangles(m.vertices().to_vec(), t).unwrap();
+        assert!(!open.is_closed() && !open.is_closed_but_unevenly_wound());
     }
 
     #[test]

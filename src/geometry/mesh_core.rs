@@ -118,6 +118,19 @@ pub(crate) fn closed(triangles: &[[u32; 3]]) -> bool {
     !edges.is_empty() && edges.values().all(|&(n, d)| n == 2 && d == 0)
 }
 
+/// Whether every edge joins exactly two triangles, whichever way each
+/// runs: a closed surface, wound consistently or not.
+pub(crate) fn closed_unoriented(triangles: &[[u32; 3]]) -> bool {
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * triangles.len());
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    !edges.is_empty() && edges.values().all(|&n| n == 2)
+}
+
 /// The largest box `c +- s half` (s in (0, 1]) that no triangle's box
 /// meets, shrunk to [`KEEP`] of it, if `c` is inside.
 fn grow(c: DVec3, half: DVec3, boxes: &[(DVec3, DVec3)], corners: &[[DVec3; 3]]) -> Option<Core> {

@@ -238,6 +238,17 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
             ));
         }
     }
+    let uneven: Vec<String> = scene
+        .unevenly_wound_meshes()
+        .into_iter()
+        .map(String::from)
+        .collect();
+    for name in uneven {
+        let note = format!(
+            "WARNING: mesh `{name}` is closed but not wound consistently (some neighbouring triangles run their shared edge the same way): it has no inside, so which side of it light belongs to is taken from each triangle's own winding, and a light or point exactly on it may stand on the wrong side (a light on the ceiling can light the outside only); give every face the same orientation"
+        );
+        scene.notes.push(note);
+    }
     if !desc.portal.is_empty() {
         let mut list = Vec::with_capacity(desc.portal.len());
         for p in &desc.portal {

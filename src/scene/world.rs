@@ -1157,6 +1157,16 @@ impl Scene {
         p
     }
 
+    /// The names of the meshes that are closed surfaces but not
+    /// consistently wound ([`Mesh::is_closed_but_unevenly_wound`]).
+    pub fn unevenly_wound_meshes(&self) -> Vec<&str> {
+        self.meshes
+            .iter()
+            .filter(|(m, _)| m.is_closed_but_unevenly_wound())
+            .map(|(_, s)| self.surfaces[*s as usize].name.as_str())
+            .collect()
+    }
+
     /// Whether `q` lies inside a box or sphere that reflects only outward
     /// (a solid), or outside one that reflects only inward (a room): a
     /// region of the scene no light there can reach.
