@@ -46,11 +46,10 @@ pub fn side(mesh: &Mesh, q: DVec3) -> Side {
         return Side::Unknown;
     }
     let (lo, hi) = mesh.bounds();
-    let size = (hi - lo).length();
-    match rays(mesh, q, 1e-9 * size) {
+    match rays(mesh, q) {
         Side::Inside => {
-            let h = 1e-6 * size;
-            if (0..NEAR).all(|k| rays(mesh, q + h * fibonacci(k), 1e-9 * size) == Side::Inside) {
+            let h = 1e-6 * (hi - lo).length();
+            if (0..NEAR).all(|k| rays(mesh, q + h * fibonacci(k)) == Side::Inside) {
                 Side::Inside
             } else {
                 Side::Unknown
@@ -58,17 +57,6 @@ pub fn side(mesh: &Mesh, q: DVec3) -> Side {
         }
         other => other,
     }
-}
-
-/// [`side`] without the check of the points around an inside point: for
-/// a point known to lie off the surface (a light not on the mesh), which
-/// may lie closer to it than that check's millionth of the mesh's size.
-pub fn side_off_surface(mesh: &Mesh, q: DVec3) -> Side {
-    if !mesh.is_closed() {
-        return Side::Unknown;
-    }
-    let (lo, hi) = mesh.bounds();
-    rays(mesh, q, 1e-9 * (hi - lo).length())
 }
 
 /// The winding number of closed `mesh` at `q` \[m\], a point off its
@@ -115,25 +103,14 @@ fn fibonacci(k: usize) -> DVec3 {
     DVec3::new(r * c, r * s, z)
 }
 
-/// The six rays' verdict at `q`, starting `eps` \[m\] beyond it.
-fn rays(mesh: &Mesh, q: DVec3, eps: f64) -> Side {
-    let (lo, hi) = mesh.bounds();
-    // Beyond the bounds (by more than the start's hair): outside.
-    if (lo - q).max(q - hi).max_element() > eps {
-        return Side::Outside;
-    }
-    let mut sums = [0i64; 6];
-    for (k, d) in DIRS.iter().enumerate() {
-        let d = DVec3::from_array(*d).normalize();
-        sums[2 * k] = mesh.signed_crossings(q, d, eps);
-        sums[2 * k + 1] = mesh.signed_crossings(q, -d, eps);
-    }
-    if sums.iter().all(|&s| s == 0) {
-        Side::Outside
-    } else if sums.iter().all(|&s| s == sums[0]) && sums[0].abs() == 1 {
-        Side::Inside
-    } else {
-        Side::Unknown
+/// The six rays' verdict at `q` ([`winding`]): outside where they all
+/// cross as often each way, inside where each leaves one shell more than
+/// it enters, else unknown.
+fn rays(mesh: &Mesh, q: DVec3) -> Side {
+    match winding(mesh, q) {
+        Some(0) => Side::Outside,
+        Some(1 | -1) => Side::Inside,
+        _ => Side::Unknown,
     }
 }
 
@@ -190,7 +167,7 @@ mod tests {
         let m = cube(true);
         assert!(!m.is_closed());
         assert_eq!(side(&m, DVec3::splat(0.5)), Side::Unknown);
-        assert_eq!(side_off_surface(&m, DVec3::splat(0.5)), Side::Unknown);
+        assert_eq!(winding(&m, DVec3::splat(0.5)), None);
     }
 
     /// Nested shells in one mesh: a cube in a cube, both wound outward, and
@@ -224,25 +201,19 @@ mod tests {
     }
 
     /// A point 1e-7 off a face (of a cube of size 1.7): [`side`]'s points
-    /// around it reach across the face, the rays alone do not.
+    /// around it reach across the face, the winding number's rays do not.
     #[test]
     fn points_just_off_a_face() {
         let m = cube(false);
-        let (inside, outside) = (
-            DVec3::new(0.5, 0.5, 1.0 - 1e-7),
-            DVec3::new(0.5, 0.5, 1.0 + 1e-7),
-        );
+        let inside = DVec3::new(0.5, 0.5, 1.0 - 1e-7);
         assert_eq!(side(&m, inside), Side::Unknown);
-        assert_eq!(side_off_surface(&m, inside), Side::Inside);
-        assert_eq!(side_off_surface(&m, outside), Side::Outside);
+        assert_eq!(winding(&m, inside).map(i64::abs), Some(1));
+        assert_eq!(winding(&m, DVec3::new(0.5, 0.5, 1.0 + 1e-7)), Some(0));
         assert_eq!(
-            side_off_surface(&m, DVec3::new(0.2, 0.7, 1e-7)),
-            Side::Inside
+            winding(&m, DVec3::new(0.2, 0.7, 1e-7)).map(i64::abs),
+            Some(1)
         );
-        assert_eq!(
-            side_off_surface(&m, DVec3::new(0.2, 1.0 + 1e-7, 0.3)),
-            Side::Outside
-        );
+        assert_eq!(winding(&m, DVec3::new(0.2, 1.0 + 1e-7, 0.3)), Some(0));
     }
 
     /// Against a second rule that shares no code: a point inside the

@@ -291,6 +291,15 @@ impl std::fmt::Display for SceneSummary {
 /// shadowed by it, at any scale ([`Ends`]).
 const MESH_REL: f64 = 1e-9;
 
+/// The least step \[m\] off the surfaces at `p` that a point lifted off
+/// them ([`Scene::lift_to_its_side`]) or a seated light's shadow origin
+/// ([`Scene::light_shadow_origin`]) takes: 1e-8 of the scale of the
+/// coordinates (`scale`, [`Scene::coordinate_scale`], or `p`'s own), 100
+/// times the tolerances of boxes and 1000 times those of flat shapes.
+fn step_off_surface(p: DVec3, scale: f64) -> f64 {
+    1e-8 * p.abs().max_element().max(scale).max(1e-6)
+}
+
 /// Largest number of infinite planes the bit-mask visibility supports.
 pub const MAX_PLANES: usize = 64;
 
@@ -696,6 +705,13 @@ impl Scene {
         all
     }
 
+    /// The largest coordinate magnitude of the finite shapes \[m\] (0
+    /// without any): the scale of [`step_off_surface`].
+    fn coordinate_scale(&self) -> f64 {
+        self.finite_bounds()
+            .map_or(0.0, |(lo, hi)| lo.abs().max(hi.abs()).max_element())
+    }
+
     /// Fit the start regions of the lights at infinity
     /// ([`crate::light::StartRegion`]) to the finite shapes, the planes and
     /// `points` \[m\] (the receivers, when known: with infinite planes the
@@ -766,18 +782,15 @@ impl Scene {
                 }
             })
             .collect();
-        let scale = self
-            .finite_bounds()
-            .map_or(0.0, |(lo, hi)| lo.abs().max(hi.abs()).max_element());
+        let scale = self.coordinate_scale();
         self.shadow_origin = self
             .lights
             .iter()
             .zip(&self.light_surface)
             .map(|(l, seat)| {
                 let c = l.position();
-                seat.as_ref().map_or(c, |seat| {
-                    c + 1e-8 * c.abs().max_element().max(scale).max(1e-6) * seat.bisector()
-                })
+                seat.as_ref()
+                    .map_or(c, |seat| c + step_off_surface(c, scale) * seat.bisector())
             })
             .collect();
         self.light_pick = light_pick;
@@ -1086,10 +1099,7 @@ impl Scene {
         }
         // The move must leave every one of them: along one it would slide
         // on it, out of the room.
-        let bounds = self
-            .finite_bounds()
-            .map_or(0.0, |(lo, hi)| lo.abs().max(hi.abs()).max_element());
-        let delta0 = 1e-8 * p.abs().max_element().max(bounds).max(1e-6);
+        let delta0 = step_off_surface(p, self.coordinate_scale());
         let along = |faces: &[(u32, u32, DVec3)]| {
             let u = faces.iter().map(|f| f.2).sum::<DVec3>().normalize_or_zero();
             faces.iter().all(|f| u.dot(f.2) >= 1e-3).then_some(u)
