@@ -122,6 +122,17 @@ fn same_as_just_off(
             total(&r_on, j),
             total(&r_off, j)
         );
+        // Every point here is in the open room, lit and settled: no flag
+        // excuses it (a light on a room mesh's corner once flagged the
+        // whole room `enclosed`).
+        for (side, r) in [("on", &r_on), ("off", &r_off)] {
+            let flag = r.tallies.diagnostics(j, r.direct[j]).flag();
+            assert_eq!(
+                flag, "ok",
+                "point {j} {:?}, light {side}: flagged {flag}",
+                point.0
+            );
+        }
     }
 }
 

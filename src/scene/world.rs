@@ -2018,7 +2018,15 @@ impl Scene {
                 let (lo, hi) = m.bounds();
                 (lo - *c).max(*c - hi).max_element() > *r && side(m, *c) == Side::Outside
             }
-            _ if l.is_point_like() => side(m, l.position()) == Side::Outside,
+            // A light on the surface (`seat_at`'s tolerance) is held: a
+            // box-shaped room mesh's corner reads outside by the parity's
+            // rays, all of which leave along its edges and faces.
+            _ if l.is_point_like() => {
+                let (lo, hi) = m.bounds();
+                let tol = MESH_REL * (hi - lo).length();
+                m.triangles_through(l.position(), tol).is_empty()
+                    && side(m, l.position()) == Side::Outside
+            }
             _ => false,
         };
         (0..self.meshes.len() as u32)
