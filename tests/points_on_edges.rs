@@ -77,20 +77,28 @@ fn illuminance(scene: &Scene, points: &[(DVec3, DVec3)], seed: u64) -> Vec<(f64,
         .collect()
 }
 
-/// Check `got` against `want` point by point; `bound` the z bound.
+/// Check `got` against `want` point by point; `bound` the z bound; every
+/// row `ok`.
 fn agree(what: &str, got: &[(f64, f64, String)], want: &[(f64, f64, String)], bound: f64) {
-    agree_flagged(what, got, want, bound, "ok", &[3]);
+    agree_flagged(what, got, want, bound, "ok", &[]);
+}
+
+/// [`agree`] at the five points `on` of the rooms (or their neighbours
+/// off the surfaces), rows 2 and 3 `ok` or `sparse` (see
+/// [`agree_flagged`]).
+fn agree_on(what: &str, got: &[(f64, f64, String)], want: &[(f64, f64, String)], bound: f64) {
+    agree_flagged(what, got, want, bound, "ok", &[2, 3]);
 }
 
 /// [`agree`], every row carrying the flag `expected`, or `sparse` at the
-/// rows `facing_along` (points facing along a surface, see below).
+/// rows `sparse_rows` (see below for why).
 fn agree_flagged(
     what: &str,
     got: &[(f64, f64, String)],
     want: &[(f64, f64, String)],
     bound: f64,
     expected: &str,
-    facing_along: &[usize],
+    sparse_rows: &[usize],
 ) {
     for (j, (g, w)) in got.iter().zip(want).enumerate() {
         let se = g.1.hypot(w.1);
@@ -98,12 +106,17 @@ fn agree_flagged(
         assert!(0.02 * w.0 > bound * se, "{what} {j}: se {se} on {}", w.0);
         let z = (g.0 - w.0) / se;
         assert!(z.abs() < bound, "{what} {j}: {g:?} against {w:?}, z = {z}");
-        // A point facing along a surface (the floor point facing along the
-        // floor, a point on a cabinet's side facing up) reads half its light
-        // from the surface within micrometres of it, which few of a short
-        // run's samples reach: `sparse` is the flag it may carry, on the
-        // surface and a micrometre off alike.
-        let allowed = |f: &str| f == expected || (facing_along.contains(&j) && f == "sparse");
+        // `sparse` is the flag two kinds of rows may carry, on the surface
+        // and a micrometre off alike. A point facing along a surface (the
+        // floor point facing along the floor, a point on a cabinet's side
+        // facing up) reads half its light from the surface within
+        // micrometres of it, which few of a short run's samples reach. And
+        // the wall's foot far from the light (row 2 of the rooms): its near
+        // part's paths come within reach of the light's core in a few runs
+        // only, and then fewer than 10 times (`Diagnostics::near_reach`):
+        // 4 of 30 seeds in the box room flag it, in this build and the one
+        // before (the seeds here once all missed it).
+        let allowed = |f: &str| f == expected || (sparse_rows.contains(&j) && f == "sparse");
         assert!(
             allowed(&g.2) && allowed(&w.2),
             "{what} {j}: {} / {}",
@@ -144,18 +157,18 @@ fn points_on_edges_and_corners_read_the_limit_from_their_side() {
     let bound = sidak_bound(1e-3, 5 * on.len() + 15, None);
     let boxed = scene(BOX_ROOM, dir.path());
     let want = illuminance(&boxed, &off, 11);
-    agree("box room", &illuminance(&boxed, &on, 12), &want, bound);
+    agree_on("box room", &illuminance(&boxed, &on, 12), &want, bound);
     let rects = scene(
         &common::rectangle_room([4.0, 3.0, 2.5], [0.5; 6]),
         dir.path(),
     );
-    agree("rectangles", &illuminance(&rects, &on, 13), &want, bound);
+    agree_on("rectangles", &illuminance(&rects, &on, 13), &want, bound);
     let mesh = scene(
         "[[surface]]\ntype = \"mesh\"\nfile = \"room.obj\"\nsides = \"front\"\n\
          material = { type = \"lambertian\", reflectance = 0.5 }\n",
         dir.path(),
     );
-    agree("mesh room", &illuminance(&mesh, &on, 14), &want, bound);
+    agree_on("mesh room", &illuminance(&mesh, &on, 14), &want, bound);
     // The same closed mesh reflecting on both sides (the default), wound
     // either way: a point edge-on to a wall belongs to the side the light
     // is on. It saw past the wall on both sides, as past a sheet, and
@@ -173,7 +186,7 @@ fn points_on_edges_and_corners_read_the_limit_from_their_side() {
             dir.path(),
         );
         let what = format!("two-sided mesh room {name}");
-        agree(&what, &illuminance(&mesh, &on, 14), &want, bound);
+        agree_on(&what, &illuminance(&mesh, &on, 14), &want, bound);
     }
     // A cabinet on the floor: a floor point at its foot facing up sees its
     // side over a quarter of the sphere.
@@ -286,12 +299,15 @@ fn points_on_edges_and_corners_read_the_limit_from_their_side() {
         )
         .unwrap()
     };
+    // (Row 0 is the floor point facing along the floor: `sparse` may mark it.)
     let edge_on = [on[3], on[4]];
-    agree(
+    agree_flagged(
         "downlight on the ceiling",
         &illuminance(&ceiling(2.5), &edge_on, 25),
         &illuminance(&ceiling(2.5 - 1e-7), &edge_on, 26),
         bound,
+        "ok",
+        &[0],
     );
     // The same far from the origin (map coordinates): the light stands
     // just inside the room, not 5 m off it (a light on a surface was moved
