@@ -60,11 +60,12 @@ pub struct ChainParams {
     pub rr_weight: f64,
     /// Stop after this many collisions (biased truncation, for studies only).
     pub max_order: Option<u32>,
-    /// Backward paths (the backward estimator and the near part of the
-    /// near/far split) add, at each vertex, a light-guided connection
+    /// Backward paths add, at each vertex, a light-guided connection
     /// combined with the BRDF-sampled next vertex by multiple importance
-    /// sampling ([`crate::backward`]); `false` leaves plain next-event
-    /// estimation. Light-tracing chains do not use it.
+    /// sampling ([`crate::backward`]): the backward estimator's at every
+    /// vertex, the near part's of the near/far split where the vertex's
+    /// region reaches nearer a light than its radius; `false` leaves plain
+    /// next-event estimation. Light-tracing chains do not use it.
     pub guide: bool,
 }
 

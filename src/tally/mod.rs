@@ -64,9 +64,8 @@
 //!   check applies once some vertex was *exposed* to a core (the split
 //!   radius there was the receiver's radius `R`, not `d / 2`, and the core
 //!   met the region within it, whose light the path must fetch itself
-//!   instead of the pool; with `d / 2` the recursion halves its way to the
-//!   core and the light-guided connection fetches the core's first
-//!   bounce, as at `r = 1e4`). Near a point source the light
+//!   instead of the pool; with `d / 2` the core lies beyond the region and
+//!   its light comes from the pool, as at `r = 1e4`). Near a point source the light
 //!   the path fetches grows like `1/d^3` down to that scale, so paths that
 //!   never enter a core miss it: at `r = 100 m` between planes with
 //!   `rho1 rho2 = 0.99` and `--near-radius 50`, 42 % of `E` comes from
