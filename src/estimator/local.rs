@@ -82,6 +82,9 @@ struct LocalWork<'a> {
     /// near part's reach count ([`crate::tally::Diagnostics::near_reach`]);
     /// empty without the split.
     reach: Vec<(DVec3, f64)>,
+    /// Some light's emission is peaked: the near part's vertices all make
+    /// light-guided connections ([`backward::peaked_lights`]).
+    peaked: bool,
 }
 
 impl<'a> LocalWork<'a> {
@@ -104,6 +107,7 @@ impl<'a> LocalWork<'a> {
             scene,
             receivers,
             reach,
+            peaked: backward::peaked_lights(scene),
         }
     }
 
@@ -217,6 +221,7 @@ impl<'a> LocalWork<'a> {
                         grazing,
                         pool: pool.as_ref(),
                         reach: &self.reach,
+                        peaked: self.peaked,
                     };
                     let walk =
                         backward::trace(scene, rec, frame, cfg, &mut rng, &path, |order, v| {

@@ -179,6 +179,7 @@ pub fn allocate(scene: &crate::scene::Scene, receivers: &Receivers, cfg: &RunCon
     }
     // The near part: each receiver's paths on streams of its own, as sums
     // of the values, their squares and the rays, over paths `s0..s1`.
+    let peaked = backward::peaked_lights(scene);
     let paths = |j: usize, s0: u64, s1: u64| -> [f64; 3] {
         let (grazing, vertex_r) = receivers.near_path_setup(j);
         let path = PathSetup {
@@ -187,6 +188,7 @@ pub fn allocate(scene: &crate::scene::Scene, receivers: &Receivers, cfg: &RunCon
             grazing,
             pool: Some(&pool),
             reach: &[],
+            peaked,
         };
         let (rec, frame) = (&receivers.receivers()[j], &receivers.frames()[j]);
         let mut sums = [0.0; 3];

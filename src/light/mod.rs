@@ -313,6 +313,26 @@ pub struct EmissionSample {
 }
 
 impl Light {
+    /// How peaked the emission from the light's centre is: its largest
+    /// intensity over its mean, `4 pi I_max / Phi` (1 for points and
+    /// spheres, about 4 for a downlight of cosine distribution, 80-800 for
+    /// spots of 25 to 8 degrees); `None` for lights that emit from no
+    /// centre (area sources, luminous openings, lights at infinity) or
+    /// emit nothing.
+    pub fn peakedness(&self) -> Option<f64> {
+        let (i_max, power) = match self {
+            Light::Point { .. } | Light::Sphere { .. } => return Some(1.0),
+            Light::Gonio {
+                dist,
+                opening: None,
+                ..
+            } => (dist.max_intensity(), dist.power()),
+            Light::Spot(sp) => (sp.i0, sp.power()),
+            _ => return None,
+        };
+        (power > 0.0).then(|| 4.0 * PI * i_max / power)
+    }
+
     /// Total emitted luminous flux \[lm\]: `4 pi I` for points and spheres.
     pub fn power(&self) -> f64 {
         match self {
