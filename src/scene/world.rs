@@ -1178,8 +1178,10 @@ impl Scene {
     }
 
     /// Whether `q` lies inside a box or sphere that reflects only outward
-    /// (a solid), or outside one that reflects only inward (a room): a
-    /// region of the scene no light there can reach.
+    /// (a solid), or outside one that reflects only inward (a room), or in
+    /// a region of a closed mesh that holds no light
+    /// ([`Self::in_dark_mesh_region`]: a cabinet mesh's inside): a region
+    /// of the scene no light there can reach.
     fn in_dark_solid(&self, q: DVec3) -> bool {
         let dark = |s: u32, at: Inside| match self.surfaces[s as usize].sides {
             Sides::Front => at == Inside::In,
@@ -1188,6 +1190,7 @@ impl Scene {
         };
         self.boxes.iter().any(|(b, s)| dark(*s, b.classify(q)))
             || self.spheres.iter().any(|(sp, s)| dark(*s, sp.classify(q)))
+            || self.in_dark_mesh_region(q)
     }
 
     /// Whether a receiver at `p` with unit normal `n` lies on the boundary

@@ -67,11 +67,7 @@ impl Scene {
             mesh_parity::winding(m, c + h * ng)?,
             mesh_parity::winding(m, c - h * ng)?,
         );
-        let all = self
-            .mesh_lit_side
-            .0
-            .get_or_init(|| (0..self.meshes.len()).map(|_| Default::default()).collect());
-        let content = all[i].get_or_init(|| self.content_windings(i));
+        let content = self.content_of(i);
         let plus = match (content.contains(&wp), content.contains(&wm)) {
             (true, false) => true,
             (false, true) => false,
@@ -82,6 +78,54 @@ impl Scene {
             },
         };
         Some(if plus { ng } else { -ng })
+    }
+
+    /// Whether `q` lies in a region of a closed mesh that holds no light
+    /// (its winding number is none of the lights': a cabinet mesh's
+    /// inside, the outside of a room mesh with every light inside and no
+    /// sky). No light crosses a closed mesh, whichever sides reflect.
+    /// `false` where that cannot be told: an open mesh, a light standing on
+    /// the mesh (its seat decides its side), an area light or a sphere
+    /// light reaching into the mesh's bounds, a winding number not found.
+    pub(super) fn in_dark_mesh_region(&self, q: DVec3) -> bool {
+        use crate::light::Light;
+        self.meshes.iter().any(|(m, _)| {
+            if !m.is_closed() {
+                return false;
+            }
+            let (lo, hi) = m.bounds();
+            let tol = MESH_REL * size(m);
+            let mut lit = Vec::new();
+            for l in &self.lights {
+                let at = match l {
+                    _ if l.is_directional() => {
+                        lit.push(0);
+                        continue;
+                    }
+                    Light::Sphere { c, r, .. } if (lo - *c).max(*c - hi).max_element() > *r => *c,
+                    _ if l.is_point_like() => l.position(),
+                    _ => return false,
+                };
+                if !m.triangles_through(at, tol).is_empty() {
+                    return false;
+                }
+                match mesh_parity::winding(m, at) {
+                    Some(w) => lit.push(w),
+                    None => return false,
+                }
+            }
+            mesh_parity::winding(m, q).is_some_and(|w| !lit.contains(&w))
+        })
+    }
+
+    /// The `i`-th mesh's content windings ([`Self::content_windings`]),
+    /// found once.
+    fn content_of(&self, i: usize) -> &[i64] {
+        let all = self
+            .mesh_lit_side
+            .0
+            .get_or_init(|| (0..self.meshes.len()).map(|_| Default::default()).collect());
+        all[i].get_or_init(|| self.content_windings(i))
     }
 
     /// The winding numbers of the `i`-th mesh (closed) at the scene's
