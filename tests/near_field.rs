@@ -292,11 +292,7 @@ fn a_near_part_reaching_the_source_is_guided() {
     let rec = Receivers::new(&case.scene, &pts).unwrap();
     let cfg = |guide| RunConfig {
         near: (0.3, 64),
-        chain: lumest::chain::ChainParams {
-            guide,
-            ..lumest::chain::ChainParams::default()
-        },
-        ..chains_cfg(100_000, 7, 0)
+        ..guided_cfg(guide, 7)
     };
     let on = run(&case.scene, &rec, &cfg(true), &mut |_| true);
     let off = run(&case.scene, &rec, &cfg(false), &mut |_| true);
@@ -360,13 +356,7 @@ intensity = 10000.0
         (DVec3::new(0.05, 2.3, 0.001), DVec3::Z),
     ];
     let rec = Receivers::new(&scene, &pts).unwrap();
-    let cfg = |guide| RunConfig {
-        chain: lumest::chain::ChainParams {
-            guide,
-            ..lumest::chain::ChainParams::default()
-        },
-        ..chains_cfg(100_000, 2, 0)
-    };
+    let cfg = |guide| guided_cfg(guide, 2);
     let on = run(&scene, &rec, &cfg(true), &mut |_| true);
     let off = run(&scene, &rec, &cfg(false), &mut |_| true);
     let bound = sidak_bound(1e-3, pts.len(), None);
@@ -392,5 +382,17 @@ intensity = 10000.0
             "ok",
             "point {j}"
         );
+    }
+}
+
+/// 100,000 chains of seed `seed`, the backward paths with light-guided
+/// connections (`guide`) or without.
+fn guided_cfg(guide: bool, seed: u64) -> RunConfig {
+    RunConfig {
+        chain: lumest::chain::ChainParams {
+            guide,
+            ..lumest::chain::ChainParams::default()
+        },
+        ..chains_cfg(100_000, seed, 0)
     }
 }
