@@ -1107,28 +1107,48 @@ impl Scene {
         let u = match along(&faces) {
             Some(u) => u,
             None => {
-                // A face lying against another, facing the other way (a
+                // Faces lying against others, facing the other way (a
                 // cabinet's bottom face on the floor, for a point at the
-                // cabinet's foot facing along the floor): left out where
-                // that alone gives a move off the others into a region that
-                // is not dark (inside a solid box or sphere, outside a room
-                // box); else the point stays where it is. It read 3.22
-                // against 9.29 lx, flagged `enclosed` (a reviewer's find).
-                let without = |side: DVec3| -> Vec<(u32, u32, DVec3)> {
+                // cabinet's foot facing along the floor; and its side
+                // against a wall, at the corner there): the faces of one
+                // side, else of two, are left out where that gives a move
+                // off the others into a region that is not dark (inside a
+                // solid box or sphere, outside a room box, a closed mesh's
+                // region that holds no light); the first such, in the order
+                // of the sides, where several do (two cabinets side by side:
+                // in front of either); else the point stays where it is. It
+                // read 3.22 against 9.29 lx, flagged `enclosed` (a
+                // reviewer's find).
+                let without = |drop: &[DVec3]| -> Vec<(u32, u32, DVec3)> {
                     faces
                         .iter()
                         .copied()
-                        .filter(|f| f.2.dot(side) < 1.0 - 1e-12)
+                        .filter(|f| drop.iter().all(|d| f.2.dot(*d) < 1.0 - 1e-12))
                         .collect()
                 };
-                let mut fits = faces.iter().map(|f| f.2).filter(|&side| {
-                    along(&without(side)).is_some_and(|u| !self.in_dark_solid(p + delta0 * u))
+                // Each side once: several triangles of a mesh's bottom face
+                // through the point (a corner on its diagonal, a tessellated
+                // face) are one side.
+                let mut sides: Vec<DVec3> = Vec::new();
+                for f in &faces {
+                    if !sides.iter().any(|s| s.dot(f.2) >= 1.0 - 1e-12) {
+                        sides.push(f.2);
+                    }
+                }
+                let k = sides.len();
+                let drops = (0..k).map(|i| vec![sides[i]]).chain(
+                    (0..k)
+                        .flat_map(|i| (i + 1..k).map(move |j| (i, j)))
+                        .map(|(i, j)| vec![sides[i], sides[j]]),
+                );
+                let fit = drops.into_iter().find_map(|drop| {
+                    let rest = without(&drop);
+                    along(&rest)
+                        .filter(|&u| !rest.is_empty() && !self.in_dark_solid(p + delta0 * u))
+                        .map(|u| (rest, u))
                 });
-                let (Some(side), None) = (fits.next(), fits.next()) else {
-                    return p;
-                };
-                faces = without(side);
-                let Some(u) = along(&faces) else { return p };
+                let Some((rest, u)) = fit else { return p };
+                faces = rest;
                 u
             }
         };

@@ -84,26 +84,36 @@ impl Scene {
     /// (its winding number is none of the lights': a cabinet mesh's
     /// inside, the outside of a room mesh with every light inside and no
     /// sky). No light crosses a closed mesh, whichever sides reflect.
-    /// `false` where that cannot be told: an open mesh, a light standing on
-    /// the mesh (its seat decides its side), an area light or a sphere
-    /// light reaching into the mesh's bounds, a winding number not found.
+    /// A light standing on surfaces counts from just off its seat, in the
+    /// region it lights ([`Scene::light_shadow_origin`]: a downlight on a
+    /// room mesh's ceiling is inside), a sphere light by its centre where
+    /// its ball keeps clear of the mesh. `false` where that cannot be
+    /// told: an open mesh, an area light, a sphere light touching the
+    /// mesh, a winding number not found.
     pub(super) fn in_dark_mesh_region(&self, q: DVec3) -> bool {
         use crate::light::Light;
         self.meshes.iter().any(|(m, _)| {
             if !m.is_closed() {
                 return false;
             }
-            let (lo, hi) = m.bounds();
             let tol = MESH_REL * size(m);
             let mut lit = Vec::new();
-            for l in &self.lights {
+            for (k, l) in self.lights.iter().enumerate() {
                 let at = match l {
                     _ if l.is_directional() => {
                         lit.push(0);
                         continue;
                     }
-                    Light::Sphere { c, r, .. } if (lo - *c).max(*c - hi).max_element() > *r => *c,
-                    _ if l.is_point_like() => l.position(),
+                    Light::Sphere { c, r, .. } => {
+                        if !m.triangles_through(*c, *r + tol).is_empty() {
+                            return false;
+                        }
+                        *c
+                    }
+                    _ if l.is_point_like() => match self.light_surface(k) {
+                        Some(_) => self.light_shadow_origin(k),
+                        None => l.position(),
+                    },
                     _ => return false,
                 };
                 if !m.triangles_through(at, tol).is_empty() {
