@@ -1055,9 +1055,10 @@ impl Scene {
     /// too) that leaves every one of those surfaces. Where that sum does not
     /// point off every one of them (a cabinet's bottom face lying on the
     /// floor, facing down: sliding along a surface took a point out of the
-    /// room, a reviewer's find), the faces of one side are left out if
-    /// that alone gives a move off the others into a region that is not
-    /// dark ([`Self::in_dark_solid`]), else the point stays; `p` itself also
+    /// room, a reviewer's find), the faces of one side, else of two, are
+    /// left out where that gives a move off the others into a region that
+    /// is not dark ([`Self::in_dark_solid`]; the first such), else the
+    /// point stays; `p` itself also
     /// where it faces along every normal (a floor point facing up: exact as
     /// it is), lies on nothing, or faces a black side
     /// ([`Self::faces_black_side`]: flagged as it is) and is edge-on to
