@@ -1057,8 +1057,9 @@ impl Scene {
     /// floor, facing down: sliding along a surface took a point out of the
     /// room, a reviewer's find), the faces of one side, else of two, are
     /// left out where that gives a move off the others into a region that
-    /// is not dark ([`Self::in_dark_solid`]; the first such), else the
-    /// point stays; `p` itself also
+    /// is not dark ([`Self::in_dark_solid`]; the first such where all lead
+    /// into the same region, [`Self::region_key`]), else the point stays;
+    /// `p` itself also
     /// where it faces along every normal (a floor point facing up: exact as
     /// it is), lies on nothing, or faces a black side
     /// ([`Self::faces_black_side`]: flagged as it is) and is edge-on to
