@@ -291,6 +291,12 @@ impl std::fmt::Display for SceneSummary {
 /// shadowed by it, at any scale ([`Ends`]).
 const MESH_REL: f64 = 1e-9;
 
+/// How far \[m\] a point may lie from a mesh's triangle and be on it:
+/// `MESH_REL` of the mesh's size (its bounds' diagonal).
+fn on_mesh_tol(m: &crate::geometry::mesh::Mesh) -> f64 {
+    MESH_REL * (m.bounds().1 - m.bounds().0).length()
+}
+
 /// The least step \[m\] off the surfaces at `p` that a point lifted off
 /// them ([`Scene::lift_to_its_side`]) or a seated light's shadow origin
 /// ([`Scene::light_shadow_origin`]) takes: 1e-8 of the scale of the
@@ -1396,7 +1402,7 @@ impl Scene {
             faces.push((s, 0, reflecting(s, ng), edges));
         }
         for (i, (m, s)) in self.meshes.iter().enumerate() {
-            let tol = MESH_REL * (m.bounds().1 - m.bounds().0).length();
+            let tol = on_mesh_tol(m);
             for (tri, v) in m.triangles_through(p, tol) {
                 let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
                 // A closed two-sided mesh: the side of the region with
@@ -1434,7 +1440,7 @@ impl Scene {
     pub fn on_surface(&self, p: DVec3) -> bool {
         !self.surfaces_through(p).is_empty()
             || self.meshes.iter().any(|(m, _)| {
-                let tol = MESH_REL * (m.bounds().1 - m.bounds().0).length();
+                let tol = on_mesh_tol(m);
                 m.triangle_at(p, tol).is_some()
             })
     }
@@ -1941,7 +1947,7 @@ impl Scene {
                 // and back, which rounding would meet again at t ~ 1e-17,
                 // on either side); a triangle its start lies off, however
                 // near, it meets.
-                let near = MESH_REL * (m.bounds().1 - m.bounds().0).length();
+                let near = on_mesh_tol(m);
                 let ends = |skip| Ends {
                     skip,
                     near,
@@ -2115,9 +2121,7 @@ impl Scene {
             // box-shaped room mesh's corner reads outside by the parity's
             // rays, all of which leave along its edges and faces.
             _ if l.is_point_like() => {
-                let (lo, hi) = m.bounds();
-                let tol = MESH_REL * (hi - lo).length();
-                m.triangles_through(l.position(), tol).is_empty()
+                m.triangles_through(l.position(), on_mesh_tol(m)).is_empty()
                     && side(m, l.position()) == Side::Outside
             }
             _ => false,

@@ -28,7 +28,7 @@
 //! closed object with nothing else in the scene (or only a ground plane
 //! touching it) as inside the object: give such a lamp a height.
 
-use super::{MESH_REL, Scene};
+use super::{Scene, on_mesh_tol};
 use crate::geometry::mesh::Mesh;
 use crate::geometry::mesh_parity;
 use glam::DVec3;
@@ -96,7 +96,7 @@ impl Scene {
             if !m.is_closed() {
                 return false;
             }
-            let tol = MESH_REL * size(m);
+            let tol = on_mesh_tol(m);
             let mut lit = Vec::new();
             for (k, l) in self.lights.iter().enumerate() {
                 let at = match l {
@@ -146,7 +146,7 @@ impl Scene {
     fn content_windings(&self, i: usize) -> Vec<i64> {
         let m = &self.meshes[i].0;
         let (lo, hi) = m.bounds();
-        let tol = MESH_REL * size(m);
+        let tol = on_mesh_tol(m);
         let (lo, hi) = (lo - DVec3::splat(tol), hi + DVec3::splat(tol));
         let mut w = Vec::new();
         for l in &self.lights {
