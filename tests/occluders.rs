@@ -473,3 +473,190 @@ fn mesh_core_changes_no_bit() {
     assert_eq!(a, b, "with the core, without");
     assert_lists_match_tree(closed, &points, 12_000, 17);
 }
+
+/// A room with the office's sculpture (`blob.obj`, closed, 25,280
+/// triangles) and an open folded sheet (a height field seen from the side,
+/// tilted: silhouettes inside its outline, and a border).
+fn mesh_views_room() -> Scene {
+    let dir = std::env::temp_dir().join(format!(
+        "lumest-mesh-views-{}-{:?}",
+        std::process::id(),
+        std::thread::current().id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/blob.obj"),
+        dir.join("blob.obj"),
+    )
+    .unwrap();
+    let n = 40;
+    let mut v = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
+            v.push(DVec3::new(x, y, 0.25 * (7.0 * x).sin() * (5.0 * y).cos()));
+        }
+    }
+    let mut t = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let k = (j * (n + 1) + i) as u32;
+            let m = (n + 1) as u32;
+            t.push([k, k + 1, k + m + 1]);
+            t.push([k, k + m + 1, k + m]);
+        }
+    }
+    lumest::geometry::mesh::Mesh::from_triangles(v, t)
+        .unwrap()
+        .write_obj(&dir.join("sheet.obj"))
+        .unwrap();
+    let path = dir.join("room.toml");
+    std::fs::write(
+        &path,
+        r#"
+[[surface]]
+type = "box"
+min = [0, 0, 0]
+max = [5, 4, 3]
+normals = "inward"
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+type = "mesh"
+file = "blob.obj"
+translate = [2.5, 2.0, 1.2]
+scale = 0.5
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[surface]]
+type = "mesh"
+file = "sheet.obj"
+translate = [3.6, 0.6, 1.0]
+rotate = [70, 0, 25]
+scale = 1.1
+material = { type = "lambertian", reflectance = 0.5 }
+
+[[light]]
+type = "point"
+position = [2.5, 2, 2.9]
+intensity = 100
+"#,
+    )
+    .unwrap();
+    let scene = lumest::scene::load(&path);
+    std::fs::remove_dir_all(&dir).ok();
+    scene.unwrap()
+}
+
+/// The maps of large meshes from the receivers (`MeshView`, issue 15)
+/// change no shadow test: for every (receiver, segment end) pair the
+/// occluder list with the maps gives the answer of the list without them
+/// (the exact BVH test), and the maps answer most pairs themselves, both
+/// ways. The ends: ray hits on every surface (the meshes' own included,
+/// tested from their triangle), and points in the air just short of and
+/// just past the directions through the meshes' vertices (the silhouettes'
+/// ends, where a map must leave the answer to the exact test).
+#[test]
+fn mesh_views_agree_with_the_exact_test() {
+    use lumest::geometry::mesh_view::{MeshEdges, MeshView, Seen};
+    let scene = mesh_views_room();
+    let mut rng = Philox4x32::new(23, 0);
+    let (lo, hi) = (DVec3::new(0.05, 0.05, 0.05), DVec3::new(4.95, 3.95, 2.95));
+    let recs = receivers(
+        &mut rng,
+        lo,
+        hi,
+        &[(DVec3::new(2.5, 2.0, 0.0), Some(DVec3::Z))],
+    );
+    let collisions = hits(&scene, lo, hi, 1500, &mut rng);
+    let meshes: Vec<u32> = scene
+        .occluders(DVec3::splat(1e3), None, None)
+        .iter()
+        .filter_map(|o| o.mesh())
+        .collect();
+    assert_eq!(meshes.len(), 2);
+    let edges: Vec<MeshEdges> = meshes
+        .iter()
+        .map(|&i| MeshEdges::new(scene.mesh(i)))
+        .collect();
+    let (mut pairs, mut open, mut blocked, mut viewed) = (0usize, 0usize, 0usize, 0usize);
+    for &(p, front) in &recs {
+        let ip = scene.inside_mask(p);
+        // Each mesh's map from p (none from inside its ball).
+        let views: Vec<Option<std::sync::Arc<MeshView>>> = meshes
+            .iter()
+            .zip(&edges)
+            .map(|(&i, e)| MeshView::build(scene.mesh(i), e, p).map(std::sync::Arc::new))
+            .collect();
+        let view = |i: u32| views[meshes.iter().position(|&m| m == i).unwrap()].clone();
+        // (End, the surface and triangle it lies on, its surface.)
+        type End = (DVec3, Option<(u32, u32)>, Option<u32>);
+        let mut ends: Vec<End> = collisions
+            .iter()
+            .map(|h| (h.p, Some((h.surface, h.prim)), Some(h.surface)))
+            .collect();
+        for &i in &meshes {
+            let v = scene.mesh(i).vertices();
+            let (c, r) = scene.mesh(i).bounding_ball();
+            for k in 0..60 {
+                let q = v[(k * 7919 + i as usize * 131) % v.len()];
+                // Where the ray towards q enters and leaves the mesh's
+                // ball: the ends just before and just past the ball too.
+                let d = q - p;
+                let (b, cc) = (d.dot(p - c), (p - c).length_squared() - r * r);
+                let disc = (b * b - d.length_squared() * cc).max(0.0).sqrt();
+                let (f0, f1) = (
+                    (-b - disc) / d.length_squared(),
+                    (-b + disc) / d.length_squared(),
+                );
+                for f in [1.0 - 1e-7, 1.0 + 1e-7, 1.7, 0.999 * f0, 1.001 * f1] {
+                    ends.push((p + f * d, None, None));
+                }
+            }
+        }
+        for (x, from, surface) in ends {
+            if front.is_some_and(|n| n.dot(x - p) <= 0.0) {
+                continue;
+            }
+            let region = surface.and_then(|s| scene.surface_bounds(s));
+            let occ = scene.occluders(p, front, region);
+            let mut occ_v = occ.clone();
+            for o in &mut occ_v {
+                if let Some(v) = o.mesh().and_then(view) {
+                    o.set_view(v);
+                }
+            }
+            let inside = scene.inside_mask(x) & ip;
+            let l2 = (x - p).length_squared();
+            let want = scene.blocked_by_occluders(x, from, p, inside, &occ, l2);
+            let got = scene.blocked_by_occluders(x, from, p, inside, &occ_v, l2);
+            assert_eq!(
+                got, want,
+                "receiver {p} (front {front:?}), end {x} from {from:?}"
+            );
+            assert_eq!(want, scene.blocked_by_shapes(x, from, p, inside), "{p} {x}");
+            pairs += 1;
+            for i in occ_v.iter().filter_map(|o| o.mesh()) {
+                if let Some(v) = view(i) {
+                    viewed += 1;
+                    match v.classify(x) {
+                        Seen::Open => open += 1,
+                        Seen::Blocked => blocked += 1,
+                        Seen::Test => {}
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("{pairs} pairs, {viewed} mesh tests with a map: {open} open, {blocked} blocked");
+    assert!(pairs > 30_000, "{pairs}");
+    // The maps answer most of their tests, both ways.
+    assert!(
+        2 * (open + blocked) > viewed,
+        "{open} + {blocked} of {viewed}"
+    );
+    assert!(
+        open * 10 > viewed && blocked * 10 > viewed,
+        "{open}, {blocked} of {viewed}"
+    );
+}

@@ -35,6 +35,7 @@
 pub mod backward;
 pub mod direct;
 pub mod local;
+mod mesh_views;
 pub mod near_paths;
 mod occluded_kernel;
 mod open_kernel;
@@ -453,7 +454,7 @@ struct ReceiverList {
     flat: bool,
 }
 
-/// Most occluders kept over all receiver lists (136 bytes each, 96 more
+/// Most occluders kept over all receiver lists (144 bytes each, 96 more
 /// for a rectangle's); past it a list tests every shape.
 const MAX_OCCLUDERS: usize = 2_000_000;
 
@@ -897,6 +898,7 @@ impl Receivers {
                     list.occ = occ;
                 }
             }
+            mesh_views::attach(scene, receivers, &mut lists);
             // Visibility cells over each bounded region whose list tests
             // occluders, as fine as the budget allows (in list order).
             let mut masks = 0;

@@ -9,6 +9,7 @@ pub mod bvh;
 pub mod mesh;
 pub mod mesh_core;
 pub mod mesh_parity;
+pub mod mesh_view;
 pub mod polygon;
 pub mod sh;
 pub mod shapes;

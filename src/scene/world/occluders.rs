@@ -33,9 +33,11 @@
 
 use super::shape_tree::{padded, prim_bounds};
 use super::{Prim, Scene, ShapeRef, segment};
+use crate::geometry::mesh_view::{MeshView, Seen};
 use crate::geometry::segment_meets_box;
 use crate::geometry::shapes::EDGE_REL;
 use glam::DVec3;
+use std::sync::Arc;
 
 /// Relative margin of every skip (of the largest coordinate magnitude of
 /// the receiver, the shape and the region).
@@ -67,6 +69,26 @@ pub struct Occluder {
     /// for the separating-axis test of the segment against the box.
     rel: DVec3,
     half: DVec3,
+    /// A large mesh's map from the receiver ([`MeshView`]): most segments
+    /// it answers without the BVH, with the exact test's answer.
+    view: Option<Arc<MeshView>>,
+}
+
+impl Occluder {
+    /// The mesh this occluder is (its index among the scene's meshes).
+    pub fn mesh(&self) -> Option<u32> {
+        match self.prim {
+            Prim::Mesh(i) => Some(i),
+            _ => None,
+        }
+    }
+
+    /// Answer this mesh occluder's segments from `view`, its map from the
+    /// receiver whose list holds it.
+    pub fn set_view(&mut self, view: Arc<MeshView>) {
+        debug_assert!(self.mesh().is_some());
+        self.view = Some(view);
+    }
 }
 
 impl Scene {
@@ -217,6 +239,7 @@ impl Scene {
                 pyramid,
                 rel: p - c,
                 half: 0.5 * (hi - lo),
+                view: None,
             });
         }
         out
@@ -331,11 +354,23 @@ impl Scene {
                     }
                 }
             }
+            if let Some(v) = &o.view {
+                match v.classify(a) {
+                    Seen::Open => continue,
+                    Seen::Blocked => return true,
+                    Seen::Test => {}
+                }
+            }
             if self.exact_blocks(o.prim, a, from, b, inside_both) {
                 return true;
             }
         }
         false
+    }
+
+    /// Mesh `i` of the scene.
+    pub fn mesh(&self, i: u32) -> &crate::geometry::mesh::Mesh {
+        &self.meshes[i as usize].0
     }
 
     /// The supporting plane of a rectangle or disc; `None` for other shapes.
