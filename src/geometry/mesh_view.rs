@@ -32,7 +32,11 @@
 //! The exact test is the mesh's watertight ray-triangle test
 //! ([`super::bvh`]), whose rounding moves a direction by a few ulp of the
 //! coordinates' magnitude over the distance (some `1e-16` of them); `pad`
-//! is `1e-9` of them, far above that. A direction in an open cell is more
+//! is `1e-9` of them, far above that. The test's ray starts at the
+//! segment's other end, so an end far from the mesh or from the origin
+//! (beyond `5e4` times the distance to the ball plus the scale of the
+//! coordinates, see `LIMIT_REL`) is left to the exact test: a reviewer's
+//! 1e-6 m mesh in a room of 1e8 m differed in the third digit without this. A direction in an open cell is more
 //! than `pad` from every triangle's projection: no triangle is met. A
 //! direction in an inside cell is more than `pad` inside `U`: the
 //! watertight test meets some triangle, inside the mesh's ball. When the
@@ -57,6 +61,15 @@ pub const MAP_BYTES: usize = CELLS * CELLS;
 /// Relative margins (see the module docs).
 const PAD_REL: f64 = 1e-9;
 const END_REL: f64 = 1e-6;
+
+/// The exact test's ray starts at the segment's other end `x`: its
+/// rounding moves the ray, near the mesh, by some `8 eps (|x|_inf + |x -
+/// p| + S)` (`S` the coordinates' scale of `p` and the mesh), which seen
+/// from `p` across the distance `D` to the ball stays below the margin
+/// `1e-9 (1 + S / D)` while `|x|_inf + |x - p|` stays below
+/// `1e-9 / (8 eps) (D + S)`, 5.6e5 times `D + S`: the map answers ends
+/// within a tenth of that.
+const LIMIT_REL: f64 = 5e4;
 
 /// A cell's class.
 const OPEN: u8 = 0;
@@ -171,6 +184,9 @@ pub struct MeshView {
     /// Squared distance \[m^2\] within which a segment from `p` ends
     /// before the ball.
     near2: f64,
+    /// Half the largest `|x|_inf + |x - p|` \[m\] of a segment end `x` the
+    /// map answers for (see [`Self::classify`]).
+    half_limit: f64,
     /// The ball holding the mesh (grown by the margin): centre \[m\] and
     /// radius \[m\].
     c: DVec3,
@@ -287,6 +303,7 @@ impl MeshView {
             w,
             inv_cell: 1.0 / cell,
             near2: near * near,
+            half_limit: 0.5 * LIMIT_REL * (near + scale),
             c,
             r,
             cells,
@@ -300,6 +317,13 @@ impl MeshView {
         let l2 = d.length_squared();
         if l2 < self.near2 {
             return Seen::Open;
+        }
+        // An end so far away (or so far from the origin) that the exact
+        // test's rounding, a few ulp of its coordinates and of the length,
+        // could pass the map's margin as seen from p: left to that test.
+        let h = self.half_limit;
+        if x.abs().max_element() > h || l2 > h * h {
+            return Seen::Test;
         }
         let t = d.dot(self.axis);
         if t.is_nan() || t <= 0.0 {
