@@ -294,6 +294,14 @@ impl MeshView {
                 }
             }
         }
+        // A map mostly left to the exact test would only add its lookup
+        // to every test: kept where its inside cells outnumber its edge
+        // cells (a double-sided sheet, every edge a silhouette, or a mesh
+        // of T-junctions, every edge a border, is not).
+        let count = |class: u8| cells.iter().filter(|&&c| c == class).count();
+        if count(EDGE) >= count(INSIDE) {
+            return None;
+        }
         let near = dist - r;
         Some(Self {
             p,
@@ -450,5 +458,34 @@ mod tests {
             }
         }
         assert!(seen[0] > 0 && seen[1] > 0, "{seen:?}");
+    }
+
+    /// A wavy sheet gets a map; the same sheet written twice, front and
+    /// back (every edge then a silhouette), gets none: it would leave
+    /// every test to the BVH.
+    #[test]
+    fn a_map_that_would_answer_little_is_not_kept() {
+        let n = 30u32;
+        let mut v = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (f64::from(i) / f64::from(n), f64::from(j) / f64::from(n));
+                v.push(DVec3::new(x, y, 0.1 * (6.0 * x).sin()));
+            }
+        }
+        let mut t = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let k = j * (n + 1) + i;
+                t.push([k, k + 1, k + n + 2]);
+                t.push([k, k + n + 2, k + n + 1]);
+            }
+        }
+        let p = DVec3::new(0.4, 0.6, 3.0);
+        let one = Mesh::from_triangles(v.clone(), t.clone()).unwrap();
+        assert!(MeshView::build(&one, &MeshEdges::new(&one), p).is_some());
+        let back: Vec<[u32; 3]> = t.iter().map(|&[a, b, c]| [a, c, b]).collect();
+        let both = Mesh::from_triangles(v, [t, back].concat()).unwrap();
+        assert!(MeshView::build(&both, &MeshEdges::new(&both), p).is_none());
     }
 }
