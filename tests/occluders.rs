@@ -170,11 +170,12 @@ fn office_lists_agree_with_the_full_test() {
     check(&scene, &recs, &collisions);
 }
 
-/// A room (inward box) holding every finite shape kind: a solid box, a
-/// sphere, a tilted two-sided rectangle, a tilted disc and a mesh.
-fn shapes_room() -> Scene {
+/// The scene `toml` loaded from a fresh temporary folder (named after
+/// `tag` and the thread) holding the office's `blob.obj` and the files
+/// `extra` (name, text).
+fn scene_in_temp(tag: &str, toml: &str, extra: &[(&str, String)]) -> Scene {
     let dir = std::env::temp_dir().join(format!(
-        "lumest-occluders-{}-{:?}",
+        "lumest-{tag}-{}-{:?}",
         std::process::id(),
         std::thread::current().id()
     ));
@@ -184,9 +185,21 @@ fn shapes_room() -> Scene {
         dir.join("blob.obj"),
     )
     .unwrap();
+    for (name, text) in extra {
+        std::fs::write(dir.join(name), text).unwrap();
+    }
     let path = dir.join("room.toml");
-    std::fs::write(
-        &path,
+    std::fs::write(&path, toml).unwrap();
+    let scene = lumest::scene::load(&path);
+    std::fs::remove_dir_all(&dir).ok();
+    scene.unwrap()
+}
+
+/// A room (inward box) holding every finite shape kind: a solid box, a
+/// sphere, a tilted two-sided rectangle, a tilted disc and a mesh.
+fn shapes_room() -> Scene {
+    scene_in_temp(
+        "occluders",
         r#"
 [[surface]]
 type = "box"
@@ -236,11 +249,8 @@ type = "point"
 position = [2.5, 2, 2.9]
 intensity = 100
 "#,
+        &[],
     )
-    .unwrap();
-    let scene = lumest::scene::load(&path);
-    std::fs::remove_dir_all(&dir).ok();
-    scene.unwrap()
 }
 
 #[test]
@@ -348,17 +358,6 @@ fn shapes_room_run_is_bit_identical_with_the_tree() {
 /// the mesh is no longer closed by its indices and has no core, while its
 /// triangles, bounds and BVH are the same.
 fn cube_room(split: bool) -> Scene {
-    let dir = std::env::temp_dir().join(format!(
-        "lumest-cube-room-{}-{:?}-{split}",
-        std::process::id(),
-        std::thread::current().id()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/blob.obj"),
-        dir.join("blob.obj"),
-    )
-    .unwrap();
     // Outward, counter-clockwise faces of [2, 2.5] x [2, 2.5] x [0, 0.5].
     let mut obj = String::new();
     for k in 0..8 {
@@ -390,10 +389,8 @@ fn cube_room(split: bool) -> Scene {
         let f = f.map(|v| if split && i < 2 && v == 0 { 8 } else { v });
         obj += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
     }
-    std::fs::write(dir.join("cube.obj"), obj).unwrap();
-    let path = dir.join("room.toml");
-    std::fs::write(
-        &path,
+    scene_in_temp(
+        &format!("cube-room-{split}"),
         r#"
 [[surface]]
 type = "box"
@@ -431,11 +428,8 @@ type = "point"
 position = [0.5, 0.5, 2.8]
 intensity = 100
 "#,
+        &[("cube.obj", obj)],
     )
-    .unwrap();
-    let scene = lumest::scene::load(&path);
-    std::fs::remove_dir_all(&dir).ok();
-    scene.unwrap()
 }
 
 /// The mesh core changes no answer: a run in the cube room through the
@@ -478,17 +472,6 @@ fn mesh_core_changes_no_bit() {
 /// triangles) and an open folded sheet (a height field seen from the side,
 /// tilted: silhouettes inside its outline, and a border).
 fn mesh_views_room() -> Scene {
-    let dir = std::env::temp_dir().join(format!(
-        "lumest-mesh-views-{}-{:?}",
-        std::process::id(),
-        std::thread::current().id()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/blob.obj"),
-        dir.join("blob.obj"),
-    )
-    .unwrap();
     let n = 40;
     let mut v = Vec::new();
     for j in 0..=n {
@@ -506,13 +489,11 @@ fn mesh_views_room() -> Scene {
             t.push([k, k + m + 1, k + m]);
         }
     }
-    lumest::geometry::mesh::Mesh::from_triangles(v, t)
+    let sheet = lumest::geometry::mesh::Mesh::from_triangles(v, t)
         .unwrap()
-        .write_obj(&dir.join("sheet.obj"))
-        .unwrap();
-    let path = dir.join("room.toml");
-    std::fs::write(
-        &path,
+        .to_obj_string();
+    scene_in_temp(
+        "mesh-views",
         r#"
 [[surface]]
 type = "box"
@@ -541,11 +522,8 @@ type = "point"
 position = [2.5, 2, 2.9]
 intensity = 100
 "#,
+        &[("sheet.obj", sheet)],
     )
-    .unwrap();
-    let scene = lumest::scene::load(&path);
-    std::fs::remove_dir_all(&dir).ok();
-    scene.unwrap()
 }
 
 /// The maps of large meshes from the receivers (`MeshView`, issue 15)
@@ -670,20 +648,8 @@ fn mesh_views_agree_with_the_exact_test() {
 #[test]
 fn mesh_views_leave_far_ends_to_the_exact_test() {
     use lumest::geometry::mesh_view::{MeshEdges, MeshView};
-    let dir = std::env::temp_dir().join(format!(
-        "lumest-mesh-views-far-{}-{:?}",
-        std::process::id(),
-        std::thread::current().id()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/blob.obj"),
-        dir.join("blob.obj"),
-    )
-    .unwrap();
-    let path = dir.join("room.toml");
-    std::fs::write(
-        &path,
+    let scene = scene_in_temp(
+        "mesh-views-far",
         r#"
 [[surface]]
 type = "box"
@@ -703,10 +669,8 @@ type = "point"
 position = [0, 0, 4e-6]
 intensity = 100
 "#,
-    )
-    .unwrap();
-    let scene = lumest::scene::load(&path).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
+        &[],
+    );
     let i = scene
         .occluders(DVec3::splat(1e3), None, None)
         .iter()
