@@ -207,7 +207,9 @@ pub struct MeshView {
 
 impl MeshView {
     /// The map of `mesh` (its `edges`) from `p`; `None` where `p` is not
-    /// outside the mesh's bounding ball by the margin.
+    /// outside the mesh's bounding ball by the margin, or where the map's
+    /// edge cells would be at least as many as its inside cells (it would
+    /// leave most tests to the BVH and only add its lookup).
     pub fn build(mesh: &Mesh, edges: &MeshEdges, p: DVec3) -> Option<Self> {
         let (c, reach) = mesh.bounding_ball();
         let (lo, hi) = mesh.bounds();
