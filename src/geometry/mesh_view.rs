@@ -71,9 +71,10 @@ const END_REL: f64 = 1e-6;
 /// within a tenth of that.
 const LIMIT_REL: f64 = 5e4;
 
-/// Distance of `p` from a triangle's plane, relative to its distance from
-/// the triangle plus the coordinates' scale, within which the triangle
-/// counts as seen edge-on (its edges drawn). It must exceed the rounding
+/// Distance of `p` from a triangle's plane, relative to the distance from
+/// `p` to the ball's far side (at least its distance from the triangle)
+/// plus the coordinates' scale, within which the triangle counts as seen
+/// edge-on (its edges drawn). It must exceed the rounding
 /// of the side's sign, and the exact test's end tolerance: a hit within
 /// its end margin of `p` is skipped when `p` lies within `Mesh::on_tolerance`
 /// of the triangle's plane, which for an end at the [`LIMIT_REL`] bound
@@ -104,10 +105,10 @@ pub enum Seen {
 /// that mesh.
 #[derive(Clone, Debug)]
 pub struct MeshEdges {
-    /// Per triangle: `n = (b - a) x (c - a)` in its stored order, its first
-    /// corner's index and `|n|`.
+    /// Per triangle: `n = (b - a) x (c - a)` in its stored order, `n . a`
+    /// and `|n|`.
     normals: Vec<DVec3>,
-    first: Vec<u32>,
+    offsets: Vec<f64>,
     norms: Vec<f64>,
     /// Per edge `(a, b)` (vertex indices): the two triangles joined there
     /// (`t1 = u32::MAX` where the edge does not join exactly two) and
@@ -131,7 +132,7 @@ impl MeshEdges {
         let tris = mesh.triangles();
         let mut normals = Vec::with_capacity(tris.len());
         let mut norms = Vec::with_capacity(tris.len());
-        let mut first = Vec::with_capacity(tris.len());
+        let mut offsets = Vec::with_capacity(tris.len());
         // (min, max, triangle, runs min -> max)
         let mut keys: Vec<(u32, u32, u32, bool)> = Vec::with_capacity(3 * tris.len());
         for (t, tri) in tris.iter().enumerate() {
@@ -139,7 +140,7 @@ impl MeshEdges {
             let n = (b - a).cross(c - a);
             normals.push(n);
             norms.push(n.length());
-            first.push(tri[0]);
+            offsets.push(n.dot(a));
             for k in 0..3 {
                 let (i, j) = (tri[k], tri[(k + 1) % 3]);
                 keys.push((i.min(j), i.max(j), t as u32, i < j));
@@ -175,7 +176,7 @@ impl MeshEdges {
         }
         Self {
             normals,
-            first,
+            offsets,
             norms,
             edges,
         }
@@ -233,12 +234,18 @@ impl MeshView {
         let mut cells = vec![UNKNOWN; CELLS * CELLS].into_boxed_slice();
         let vtx = mesh.vertices();
         // Each triangle's side as seen from p (the orientation of its
-        // projection): positive, negative or 0 within the rounding.
-        let side: Vec<i8> = (0..edges.normals.len())
-            .map(|t| {
-                let q = vtx[edges.first[t] as usize];
-                let s = edges.normals[t].dot(q - p);
-                let tol = EDGE_ON_REL * edges.norms[t] * ((q - p).length() + scale);
+        // projection): positive, negative or 0 within the tolerance
+        // (`EDGE_ON_REL` of the distance plus the scale: every corner lies
+        // within `dist + r` of p), far above the rounding of `n . a - n . p`.
+        let k = EDGE_ON_REL * (dist + r + scale);
+        let side: Vec<i8> = edges
+            .normals
+            .iter()
+            .zip(&edges.offsets)
+            .zip(&edges.norms)
+            .map(|((n, d), m)| {
+                let s = d - n.dot(p);
+                let tol = k * m;
                 if s > tol {
                     1
                 } else if s < -tol {
