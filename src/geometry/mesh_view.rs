@@ -318,8 +318,8 @@ impl MeshView {
         // to every test: kept where its inside cells outnumber its edge
         // cells (a double-sided sheet, every edge a silhouette, or a mesh
         // of T-junctions, every edge a border, is not).
-        let count = |class: u8| cells.iter().filter(|&&c| c == class).count();
-        if count(EDGE) >= count(INSIDE) {
+        let [_, inside, edge] = class_counts(&cells);
+        if edge >= inside {
             return None;
         }
         let near = dist - r;
@@ -385,14 +385,20 @@ impl MeshView {
     }
 
     /// Shares of the map's cells that are open, inside and left to the
-    /// exact test (for the tests and diagnostics).
-    pub fn shares(&self) -> [f64; 3] {
-        let mut n = [0usize; 3];
-        for &c in self.cells.iter() {
-            n[c.min(EDGE) as usize] += 1;
-        }
-        n.map(|k| k as f64 / self.cells.len() as f64)
+    /// exact test.
+    #[cfg(test)]
+    fn shares(&self) -> [f64; 3] {
+        class_counts(&self.cells).map(|k| k as f64 / self.cells.len() as f64)
     }
+}
+
+/// How many of `cells` are open, inside and edge cells.
+fn class_counts(cells: &[u8]) -> [usize; 3] {
+    let mut n = [0usize; 3];
+    for &c in cells {
+        n[usize::from(c.min(EDGE))] += 1;
+    }
+    n
 }
 
 /// Mark `EDGE` every cell whose box, grown by `pad`, meets the segment from
