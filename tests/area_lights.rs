@@ -780,3 +780,42 @@ fn a_ring_of_zero_luminance_keeps_light_sampling_s_spread() {
     );
     assert!(kurt < 20.0, "kurtosis {kurt}");
 }
+
+/// A point on a sphere light's surface is refused with a message that says
+/// so and how to fix it (it read "its illuminance is not finite", which is
+/// false there: the limit from outside is finite); 1e-9 m outside, the
+/// exact direct term is that limit, `I / R^2` facing the sphere (`pi L`),
+/// 0 facing away, `L (alpha - sin alpha cos alpha)` with `alpha = pi / 2`
+/// sideways (half of `pi L`).
+#[test]
+fn a_point_on_a_sphere_light_is_refused_clearly_and_finite_just_outside() {
+    let s = scene(
+        r#"
+[[light]]
+type = "sphere"
+name = "globe"
+center = [5, 0, 2]
+radius = 0.5
+intensity = 100.0
+"#,
+    );
+    let on = DVec3::new(5.0, 0.0, 1.5);
+    let err = Receivers::new(&s, &[(on, DVec3::Z)])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("globe, a sphere light of radius 0.5 m centred at (5, 0, 2) m: place it outside the sphere"),
+        "{err}"
+    );
+    let off = on - DVec3::Z * 1e-9;
+    let rec = Receivers::new(&s, &[(off, DVec3::Z), (off, -DVec3::Z), (off, DVec3::X)]).unwrap();
+    // At d = R + 1e-9 (sin alpha = R / d, L = I / (pi R^2)).
+    let (d, l): (f64, f64) = (0.5 + 1e-9, 100.0 / (std::f64::consts::PI * 0.25));
+    let a = (0.5 / d).asin();
+    let want = [100.0 / (d * d), 0.0, l * (a - a.sin() * a.cos())];
+    assert!((want[2] - 200.0).abs() < 0.02);
+    for (j, w) in want.iter().enumerate() {
+        let e = rec.direct()[j];
+        assert!((e - w).abs() < 1e-6 * 400.0, "normal {j}: {e} vs {w}");
+    }
+}

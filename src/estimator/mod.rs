@@ -639,13 +639,21 @@ impl Receivers {
                 if l.contains(p) {
                     let c = l.position();
                     let name = scene.light_names.get(k).map_or("a light", String::as_str);
-                    return Err(ReceiverError {
-                        index: j,
-                        message: format!(
+                    let message = if let crate::light::Light::Sphere { r, .. } = *l {
+                        // On its surface the limit from outside is finite,
+                        // but the sphere's own emission and shadow are not
+                        // resolved there: a clear refusal, not a guess.
+                        format!(
+                            "point lies on or inside {name}, a sphere light of radius {r} m centred at ({}, {}, {}) m: place it outside the sphere",
+                            c.x, c.y, c.z
+                        )
+                    } else {
+                        format!(
                             "point lies on or inside {name} at ({}, {}, {}) m: its illuminance is not finite",
                             c.x, c.y, c.z
-                        ),
-                    });
+                        )
+                    };
+                    return Err(ReceiverError { index: j, message });
                 }
                 // A receiver whose response varies with the direction (a
                 // glossy view, a solid receiver) has closed forms for points
