@@ -298,7 +298,9 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
              carries those points' light (local estimate: collisions near the point; backward \
              estimator: path vertices near a light), so their estimate misses most of it \
              whatever the error bar says (local estimate far from the sources: use \
-             --near-radius auto, the default)";
+             --near-radius auto, the default; scenes with the sun, a sky, an environment map \
+             or glass run without the near/far split: use --estimator backward for such \
+             points)";
         }
         if counts.contains_key("enclosed") {
             sparse += "; `enclosed`: those points see the back of a surface in most directions \
