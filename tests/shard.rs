@@ -388,7 +388,7 @@ fn shard_options_are_checked() {
         "{e}"
     );
     // What a single run refuses, a shard refuses too: glass panes with
-    // the backward estimator, a near part with a light at infinity.
+    // the backward estimator or a fixed near part.
     for (scene, points, extra, want) in [
         (
             "office_daylight.toml",
@@ -397,10 +397,10 @@ fn shard_options_are_checked() {
             "glass panes",
         ),
         (
-            "sun_floor.toml",
-            "sun_floor_points.csv",
+            "office_daylight.toml",
+            "office_grid.csv",
             ["--near-radius", "0.1"],
-            "--near-radius is not supported",
+            "--near-radius do not support",
         ),
     ] {
         let (scene, points) = (data(scene), data(points));

@@ -204,13 +204,6 @@ pub fn glare(a: &GlareArgs) -> anyhow::Result<()> {
     );
     let cfg = a.run.config()?;
     let scene = scene::load(&a.scene)?;
-    if scene.has_directional() {
-        anyhow::ensure!(
-            cfg.near.0 <= 0.0,
-            "{}: --near-radius is not supported with distant or environment lights",
-            a.scene.display()
-        );
-    }
     let areas = luminaires(&scene)?;
     anyhow::ensure!(
         areas.iter().any(Option::is_some),

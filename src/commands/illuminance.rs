@@ -298,9 +298,8 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
              carries those points' light (local estimate: collisions near the point; backward \
              estimator: path vertices near a light), so their estimate misses most of it \
              whatever the error bar says (local estimate far from the sources: use \
-             --near-radius auto, the default; scenes with the sun, a sky, an environment map \
-             or glass run without the near/far split: use --estimator backward for such \
-             points)";
+             --near-radius auto, the default; scenes with glass panes run without the near/far \
+             split, and the backward estimator does not take them yet)";
         }
         if counts.contains_key("enclosed") {
             sparse += "; `enclosed`: those points see the back of a surface in most directions \
@@ -310,11 +309,12 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
         }
         if counts.contains_key("near") {
             sparse += "; `near`: a surface lies closer to those points than a tenth of their \
-             distance to the nearest light (in a scene lit from infinity alone, of the median \
-             distance of the surfaces around them) while the near/far split is off there, so \
+             distance to the nearest light (in a scene lit from infinity alone, of the scale \
+             of the chains' start density there, or in a room of the median distance of the \
+             surfaces around them) while the near/far split is off there, so \
              the plain local estimate can miss a large part of E with a small error bar (use \
-             --near-radius auto, the default; scenes with the sun, a sky, an environment map \
-             or glass run without the split: use --estimator backward for such points)";
+             --near-radius auto, the default; scenes with glass panes run without the split, \
+             and the backward estimator does not take them yet)";
         }
         format!(
             "statistical checks FAILED or points flagged ({}); see the _flag column{sparse}",
@@ -1017,13 +1017,6 @@ pub(crate) fn prepare_job(
         "{}: --direct-lights ris is not supported with glass panes (the sampled sources would miss the panes' transmittance and mirror images); the exact sum runs there",
         scene_path.display()
     );
-    if scene.has_directional() {
-        anyhow::ensure!(
-            cfg.near.0 <= 0.0,
-            "{}: --near-radius is not supported with distant or environment lights (the near part's backward paths cannot reach a light at infinity); the local estimate runs plain there",
-            scene_path.display()
-        );
-    }
     if scene.has_panes() {
         // Backward paths do not cross or mirror glass yet (their MIS
         // weights assume straight segments): glazed scenes run the local

@@ -111,7 +111,9 @@ pub struct RunArgs {
     pub rr_weight: f64,
     /// Near/far split against the singular kernel and for far points: `auto`
     /// (the default: where a point has a surface closer than a tenth of its
-    /// distance to the nearest light, with a quarter of that distance), a radius (m) for
+    /// distance to the nearest light, with a quarter of that distance; lit
+    /// from infinity alone, the scale of the chains' start density there, or
+    /// in a room the median distance of its surroundings), a radius (m) for
     /// every point, or `0` (off: the plain local estimate). Collisions closer
     /// than the radius leave their share to backward paths from the point
     /// (unbiased; keeps the variance finite next to walls and in corners, and

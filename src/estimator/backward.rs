@@ -571,7 +571,11 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                     k: order,
                     picks: Pool::picks(beta, beta0),
                 };
-                rays += join_pool(scene, pool, &at, radius, cfg.chain.max_order, rng, &mut add);
+                // (Lit from infinity alone, the radius is infinite and the
+                // path carries all: no collision lies beyond it.)
+                if radius.is_finite() {
+                    rays += join_pool(scene, pool, &at, radius, cfg.chain.max_order, rng, &mut add);
+                }
                 // Exposed: the receiver's radius, not `d / 2`, sets the split
                 // here and a light's core lies within it.
                 if radius == vertex_r

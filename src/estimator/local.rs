@@ -42,15 +42,14 @@ pub fn run(
     drive(&LocalWork::new(scene, receivers), cfg, observe)
 }
 
-/// Whether `cfg` asks for the near/far split in `scene`. The near part's
-/// backward paths cannot reach a light at infinity: such scenes run the
-/// plain local estimate (the `near` check flags receivers that would need
-/// the split; the command line refuses `--near-radius`).
+/// Whether `cfg` asks for the near/far split in `scene`. Its backward
+/// paths reach lights at infinity (the sun, a sky, an environment map) by
+/// next-event estimation, as the backward estimator's do; they do not
+/// cross or mirror glass, so glazed scenes run the plain local estimate
+/// (the `near` check flags receivers that would need the split; the
+/// command line refuses `--near-radius` there).
 fn wants_split(scene: &Scene, cfg: &RunConfig) -> bool {
-    cfg.near.1 > 0
-        && (cfg.near.0 > 0.0 || cfg.near_auto)
-        && !scene.has_directional()
-        && !scene.has_panes()
+    cfg.near.1 > 0 && (cfg.near.0 > 0.0 || cfg.near_auto) && !scene.has_panes()
 }
 
 /// Set the near/far split `cfg` asks for on `receivers` in place, as
@@ -94,10 +93,16 @@ impl<'a> LocalWork<'a> {
                 .lights
                 .iter()
                 .map(|l| {
-                    (
-                        l.position(),
-                        (backward::light_reach(scene, l) / 10.0).powi(2),
-                    )
+                    if l.is_directional() {
+                        // Light from infinity piles up nowhere: no core, so
+                        // no vertex is ever in one or exposed to one.
+                        (DVec3::INFINITY, 0.0)
+                    } else {
+                        (
+                            l.position(),
+                            (backward::light_reach(scene, l) / 10.0).powi(2),
+                        )
+                    }
                 })
                 .collect()
         } else {

@@ -167,6 +167,25 @@ impl StartRegion {
         Some(s)
     }
 
+    /// Radius \[m\] of the disc whose area holds one chain start at the
+    /// start density next to `p`: `1 / sqrt(pi p_s)`, with `p_s` the
+    /// density at `p`'s distance from the centre `c` (bounded: the start
+    /// disc's radius `r0`; unbounded: `sqrt(2 (rho^2 + a^2)^(3/2) / a)`,
+    /// `sqrt(2) a` at the centre). The counterpart for a light at infinity
+    /// of a point light's distance, which sets how densely chains collide
+    /// around `p` ([`crate::estimator::near_need`]). `None` with portals
+    /// (chains start on them: the room sets the scale).
+    pub fn start_scale(&self, p: DVec3) -> Option<f64> {
+        if self.portals.is_some() {
+            return None;
+        }
+        if !self.unbounded {
+            return Some(if self.r0 > 0.0 { self.r0 } else { self.a });
+        }
+        let q = (p - self.c).length_squared() + self.a * self.a;
+        Some((2.0 * q * q.sqrt() / self.a).sqrt())
+    }
+
     /// Probability mass of the untruncated density within `rho_max`.
     #[inline]
     fn mass(&self) -> f64 {

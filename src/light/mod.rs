@@ -636,6 +636,17 @@ impl Light {
         }
     }
 
+    /// For a light at infinity, the scale \[m\] of its chains' start
+    /// density next to `p` ([`distant::StartRegion::start_scale`]); `None`
+    /// for other lights and where chains start on portals.
+    pub fn start_scale(&self, p: DVec3) -> Option<f64> {
+        match *self {
+            Light::Distant(ref dl) => dl.region.start_scale(p),
+            Light::Environment(ref env) => env.region.start_scale(p),
+            _ => None,
+        }
+    }
+
     /// Luminance of a sphere's emitting surface [cd/m^2] (0 for a point; 0
     /// for an area source, whose luminance is met on its surface:
     /// [`AreaLight::emitted`]).
