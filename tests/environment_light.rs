@@ -835,3 +835,78 @@ fn openexr_maps_read_like_radiance_ones() {
         "{e}"
     );
 }
+
+/// A Radiance picture in each of the eight orientations of its resolution
+/// line reads as the same map (the `image` crate decodes `-Y H +X W` only;
+/// a reviewer's `+Y 64 +X 128` and `-Y 64 -X 128` were refused). The files
+/// are written here byte by byte, flat RGBE scanlines of grey integer
+/// values (exact in RGBE), by Radiance's rule: the scanlines advance along
+/// the first axis named, in the direction of its sign (`Y` up, `X` right),
+/// and each runs along the second.
+#[test]
+fn radiance_pictures_read_alike_in_every_orientation() {
+    use lumest::io::envmap::read_luminance_map;
+    let (w, h) = (5usize, 3usize);
+    // The picture: value at column x (from the left), row r (from the top).
+    let value = |x: usize, r: usize| (1 + x + 10 * r) as u32;
+    let rgbe = |v: u32| {
+        // v = m 2^(e - 136) with m in [128, 256).
+        let mut m = v;
+        let mut e = 136i32;
+        while m < 128 {
+            m *= 2;
+            e -= 1;
+        }
+        [m as u8, m as u8, m as u8, e as u8]
+    };
+    let d = dir("orient");
+    for line in [
+        "-Y 3 +X 5",
+        "+Y 3 +X 5",
+        "-Y 3 -X 5",
+        "+Y 3 -X 5",
+        "+X 5 -Y 3",
+        "+X 5 +Y 3",
+        "-X 5 -Y 3",
+        "-X 5 +Y 3",
+    ] {
+        let t: Vec<&str> = line.split(' ').collect();
+        let (a1, a2) = (t[0], t[2]);
+        let (n1, n2): (usize, usize) = (t[1].parse().unwrap(), t[3].parse().unwrap());
+        let mut bytes = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n".to_vec();
+        bytes.extend_from_slice(format!("{line}\n").as_bytes());
+        for i in 0..n1 {
+            for j in 0..n2 {
+                // Coordinates along X (from the left) and Y (from the bottom).
+                let along = |axis: &str, k: usize, n: usize| {
+                    if axis.starts_with('+') { k } else { n - 1 - k }
+                };
+                let (x, y) = if a1.ends_with('Y') {
+                    (along(a2, j, n2), along(a1, i, n1))
+                } else {
+                    (along(a1, i, n1), along(a2, j, n2))
+                };
+                bytes.extend_from_slice(&rgbe(value(x, h - 1 - y)));
+            }
+        }
+        let path = d.join("o.hdr");
+        std::fs::write(&path, &bytes).unwrap();
+        let map = read_luminance_map(&path).unwrap_or_else(|e| panic!("{line}: {e}"));
+        assert_eq!((map.width, map.height), (w, h), "{line}");
+        for r in 0..h {
+            for x in 0..w {
+                let got = map.y[r * w + x];
+                let want = f64::from(value(x, r));
+                assert!(
+                    (got - want).abs() < 1e-9 * want,
+                    "{line}: ({x}, {r}) {got} vs {want}"
+                );
+            }
+        }
+    }
+    // Not an orientation: two X axes.
+    let path = d.join("bad.hdr");
+    std::fs::write(&path, b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-X 3 +X 5\n").unwrap();
+    let e = read_luminance_map(&path).unwrap_err();
+    assert!(e.contains("bad.hdr") && e.contains("-X 3 +X 5"), "{e}");
+}

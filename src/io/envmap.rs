@@ -13,6 +13,13 @@
 //! JPEG, ...) holds display values, gamma-encoded and clipped, not
 //! luminance, and is refused rather than read as if it were.
 //!
+//! Every one of the eight orientations of a Radiance resolution line is
+//! read (`-Y H +X W`, the standard one, and the flipped and transposed
+//! ones such as `+Y H -X W` or `+X W -Y H`: the first axis is the one the
+//! scanlines advance along, its sign the direction, see [`Orientation`]);
+//! the `image` crate decodes the standard one only, so the scanlines are
+//! decoded as if standard and put in place here.
+//!
 //! An RGBE pixel of mantissa byte `m` and exponent byte `e` decodes to
 //! `m 2^(e - 136)`, as the `image` crate and Walter's widely used
 //! `rgbe.c` read it; Radiance's own `colr_color` adds half a step,
@@ -136,20 +143,24 @@ pub fn read_luminance_map(path: &Path) -> Result<LuminanceMap, String> {
             ));
         }
     }
-    let (img, exposure, corr) = if reader.format() == Some(ImageFormat::Hdr) {
-        // Decode through the Radiance decoder itself to read its header.
-        let file = std::fs::File::open(path)
-            .map_err(|e| format!("cannot open `{}`: {e}", path.display()))?;
-        let decoder = HdrDecoder::new(std::io::BufReader::new(file)).map_err(decode_error)?;
+    let (img, exposure, corr, orientation) = if reader.format() == Some(ImageFormat::Hdr) {
+        // Decode through the Radiance decoder itself to read its header,
+        // with the resolution line made standard (module docs).
+        let mut bytes =
+            std::fs::read(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+        let orientation = Orientation::standardise(&mut bytes)
+            .map_err(|m| format!("cannot decode `{}`: {m}", path.display()))?;
+        let decoder = HdrDecoder::new(std::io::Cursor::new(bytes)).map_err(decode_error)?;
         let (exposure, corr) = radiance_header_factors(&decoder.metadata().custom_attributes)
             .map_err(|m| format!("`{}`: {m}", path.display()))?;
         let img = DynamicImage::from_decoder(decoder).map_err(decode_error)?;
-        (img.to_rgb32f(), exposure, corr)
+        (img.to_rgb32f(), exposure, corr, orientation)
     } else {
         (
             reader.decode().map_err(decode_error)?.to_rgb32f(),
             1.0,
             [1.0; 3],
+            Orientation::STANDARD,
         )
     };
     let div = corr.map(|c| exposure * c);
@@ -174,6 +185,7 @@ pub fn read_luminance_map(path: &Path) -> Result<LuminanceMap, String> {
         }
         y.push(v);
     }
+    let (y, w, h) = orientation.place(y, w, h);
     Ok(LuminanceMap {
         width: w,
         height: h,
@@ -181,4 +193,98 @@ pub fn read_luminance_map(path: &Path) -> Result<LuminanceMap, String> {
         exposure,
         colour_correction: corr,
     })
+}
+
+/// The pixel order of a Radiance picture, from its resolution line: the
+/// scanlines advance along the first axis named (`Y` or `X`), in the
+/// direction of its sign (`-Y`: from the top down, `Y` pointing up; `+X`:
+/// from the left), and the pixels of a scanline along the second. The
+/// standard `-Y H +X W` is row-major from the top left.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orientation {
+    /// The scanlines advance along `X` (columns), not `Y` (rows).
+    pub transposed: bool,
+    /// Signs of the first and second axes (`true`: `+`).
+    pub ascending: [bool; 2],
+}
+
+impl Orientation {
+    /// `-Y H +X W`.
+    pub const STANDARD: Self = Self {
+        transposed: false,
+        ascending: [false, true],
+    };
+
+    /// Read the resolution line of the Radiance picture `bytes` (the line
+    /// after the header's blank line) and, where it is not the standard
+    /// one, rewrite it in place as `-Y n1 +X n2` (its two counts in their
+    /// order, padded to the same length), so that a standard decoder reads
+    /// the scanlines as they lie; returns the orientation found. An
+    /// unreadable line is left to the decoder's own error.
+    pub fn standardise(bytes: &mut [u8]) -> Result<Self, String> {
+        let Some(blank) = bytes.windows(2).position(|w| w == b"\n\n") else {
+            return Ok(Self::STANDARD);
+        };
+        let start = blank + 2;
+        let Some(len) = bytes[start..].iter().take(256).position(|&b| b == b'\n') else {
+            return Ok(Self::STANDARD);
+        };
+        let line = String::from_utf8_lossy(&bytes[start..start + len]).into_owned();
+        let t: Vec<&str> = line.split_whitespace().collect();
+        let axis = |a: &str| match a {
+            "-Y" => Some(('Y', false)),
+            "+Y" => Some(('Y', true)),
+            "-X" => Some(('X', false)),
+            "+X" => Some(('X', true)),
+            _ => None,
+        };
+        let (Some((a1, s1)), Some((a2, s2))) = (
+            t.first().and_then(|a| axis(a)),
+            t.get(2).and_then(|a| axis(a)),
+        ) else {
+            return Ok(Self::STANDARD);
+        };
+        if t.len() != 4 || a1 == a2 {
+            return Err(format!(
+                "resolution line `{line}`: two different axes, X and Y, each with a count"
+            ));
+        }
+        let found = Self {
+            transposed: a1 == 'X',
+            ascending: [s1, s2],
+        };
+        if found != Self::STANDARD {
+            let new = format!("-Y {} +X {}", t[1], t[3]);
+            // The same length: pad with spaces before the newline (the
+            // decoder splits on whitespace).
+            if new.len() > len {
+                return Err(format!("resolution line `{line}` cannot be read"));
+            }
+            let padded = format!("{new:<len$}");
+            bytes[start..start + len].copy_from_slice(padded.as_bytes());
+        }
+        Ok(found)
+    }
+
+    /// Put `y`, decoded as `n2` pixels by `n1` scanlines in file order
+    /// (`w = n2`, `h = n1`), in place: row-major from the top left of the
+    /// picture. Returns the values, the width and the height.
+    pub fn place(self, y: Vec<f64>, w: usize, h: usize) -> (Vec<f64>, usize, usize) {
+        if self == Self::STANDARD {
+            return (y, w, h);
+        }
+        let (n1, n2) = (h, w);
+        let (width, height) = if self.transposed { (n1, n2) } else { (n2, n1) };
+        let mut out = vec![0.0; y.len()];
+        for i in 0..n1 {
+            let a1 = if self.ascending[0] { i } else { n1 - 1 - i };
+            for j in 0..n2 {
+                let a2 = if self.ascending[1] { j } else { n2 - 1 - j };
+                // Picture coordinates, X from the left and Y from the bottom.
+                let (x, yy) = if self.transposed { (a1, a2) } else { (a2, a1) };
+                out[(height - 1 - yy) * width + x] = y[i * n2 + j];
+            }
+        }
+        (out, width, height)
+    }
 }
