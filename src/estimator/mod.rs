@@ -1792,8 +1792,8 @@ pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame, sphere: bool) -> f64 {
         // the backward 18835 +- 6, points 1-2 cm above an infinite ground
         // facing down 5-50 % of `rho E_h`, flagged `sparse`.)
         hits.sort_by(f64::total_cmp);
-        let enclosed = |t: &[f64]| t.iter().filter(|t| t.is_finite()).count() >= 3 * PROBES / 4;
-        let room = enclosed(&hits)
+        let mostly_met = |t: &[f64]| t.iter().filter(|t| t.is_finite()).count() >= 3 * PROBES / 4;
+        let room = mostly_met(&hits)
             && (sphere || {
                 let back = Frame::from_normal(-frame.n);
                 let behind: Vec<f64> = (0..PROBES)
@@ -1802,7 +1802,7 @@ pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame, sphere: bool) -> f64 {
                         scene.first_hit_from(p, w).map_or(f64::INFINITY, |h| h.t)
                     })
                     .collect();
-                enclosed(&behind)
+                mostly_met(&behind)
             });
         let unbounded = !scene.planes().is_empty();
         d = scene
