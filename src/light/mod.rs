@@ -223,6 +223,13 @@ impl LuminousShape {
     }
 }
 
+/// How far off the `x` axis \[rad\] an aim still counts as along it
+/// ([`LuminaireFrame::aimed`]): the rounding noise of a computed aim, such
+/// as `[cos 180 deg, 0, -sin 180 deg] = [-1, 0, -1.2e-16]`, which would
+/// otherwise turn C0 from `+y` to `-z` (a reviewer's find), and far below
+/// any aim meant to differ from the axis.
+pub const ALONG_X: f64 = 1e-12;
+
 /// A luminaire's orientation: the world directions of its local axes
 /// (`-z` is the photometric nadir, `x` the C0 plane, `y` the C90 plane).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -246,21 +253,22 @@ impl LuminaireFrame {
     /// The frame whose nadir points along unit `aim`, turned by `rotate`
     /// \[rad\] about it (right-handed about the nadir... about `-aim`): C0 is
     /// the world `+x` axis projected onto the plane normal to `aim` (the
-    /// world `+y` axis only when `aim` is exactly along `x`), then rotated.
+    /// world `+y` axis when `aim` lies along `x`, within [`ALONG_X`]), then
+    /// rotated.
     ///
-    /// The projection is taken for every aim off the `x` axis, however
-    /// close: with `s = hypot(z_y, z_z)` it is `(s, -z_x z_y / s, -z_x z_z / s)`,
+    /// The projection is taken for every aim farther off the `x` axis:
+    /// with `s = hypot(z_y, z_z)` it is `(s, -z_x z_y / s, -z_x z_z / s)`,
     /// a unit vector without the cancellation of `x - z (x . z)`. (An
     /// earlier threshold of `|z_x| > 0.999999` took `+y` up to 0.08 deg off
     /// the axis, and turned the distribution there by 90 or 180 deg.)
     pub fn aimed(aim: DVec3, rotate: f64) -> Self {
         let z = -aim.normalize();
         let s = z.y.hypot(z.z);
-        let x0 = if s > 0.0 {
+        let x0 = if s > ALONG_X {
             DVec3::new(s, -z.x * z.y / s, -z.x * z.z / s)
         } else {
-            // Exactly along x: C0 along +y (in the plane normal to aim).
-            DVec3::Y
+            // Along x: C0 along +y projected on the plane normal to aim.
+            (DVec3::Y - z * z.y).normalize()
         };
         let y0 = z.cross(x0);
         let (s, c) = rotate.sin_cos();
@@ -917,10 +925,11 @@ mod tests {
     /// off the `x` axis, however close (a reviewer's case: `[1, 0, 0.0014]`
     /// took `+y`, turning the distribution by 90 deg and E at a point by up
     /// to 6.5 times); the reference projection is `a x (x x a)`, by cross
-    /// products (no cancellation). Exactly along `x`, C0 is `+y`.
+    /// products (no cancellation). Along `x` within rounding ([`ALONG_X`]:
+    /// `1.2e-16` off, as `[cos 180 deg, 0, -sin 180 deg]`), C0 is `+y`.
     #[test]
     fn c0_is_the_projection_of_x_however_close_the_aim_is_to_it() {
-        for t in [0.5, 1e-2, 1.5e-3, 1.4e-3, 1e-6, 1e-9, 1e-12, 1e-150] {
+        for t in [0.5, 1e-2, 1.5e-3, 1.4e-3, 1e-6, 1e-9, 1e-11] {
             for aim in [
                 DVec3::new(1.0, 0.0, t),
                 DVec3::new(1.0, t, 0.0),
@@ -946,9 +955,19 @@ mod tests {
                 }
             }
         }
-        for aim in [DVec3::X, -DVec3::X * 3.0] {
+        for aim in [
+            DVec3::X,
+            -DVec3::X * 3.0,
+            DVec3::new(-1.0, 0.0, -1.2246e-16),
+            DVec3::new(-1.0, 0.0, 1.2246e-16),
+            DVec3::new(1.0, 2.449e-16, 0.0),
+            DVec3::new(1.0, 1e-13, -1e-13),
+            DVec3::new(1.0, 1e-300, 0.0),
+        ] {
             let f = LuminaireFrame::aimed(aim, 0.0);
-            assert_eq!((f.x, f.z), (DVec3::Y, -aim.normalize()));
+            assert!((f.x - DVec3::Y).length() < 1e-12, "{aim}: C0 {}", f.x);
+            assert!((f.z + aim.normalize()).length() < 1e-15 && f.x.dot(f.z).abs() < 1e-15);
+            assert!((f.y - f.z.cross(f.x)).length() < 1e-15);
         }
     }
 
