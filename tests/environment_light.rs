@@ -904,9 +904,23 @@ fn radiance_pictures_read_alike_in_every_orientation() {
             }
         }
     }
-    // Not an orientation: two X axes.
-    let path = d.join("bad.hdr");
-    std::fs::write(&path, b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-X 3 +X 5\n").unwrap();
-    let e = read_luminance_map(&path).unwrap_err();
-    assert!(e.contains("bad.hdr") && e.contains("-X 3 +X 5"), "{e}");
+    // Not an orientation, each named with its fault: two X axes, a field
+    // too many or too few, a count that is no number (in a transposed
+    // line, the count of the axis at fault).
+    for (line, fault) in [
+        ("-X 3 +X 5", "names X twice"),
+        ("-Y 16 +X 32 foo", "expected 4 fields"),
+        ("-Y 16 +X", "found 3"),
+        ("+X 32 -Y 1x", "the Y count `1x`"),
+        ("+X 3x -Y 16", "the X count `3x`"),
+    ] {
+        let path = d.join("bad.hdr");
+        let text = format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n{line}\n");
+        std::fs::write(&path, text).unwrap();
+        let e = read_luminance_map(&path).unwrap_err();
+        assert!(
+            e.contains("bad.hdr") && e.contains(line) && e.contains(fault),
+            "{e}"
+        );
+    }
 }

@@ -244,10 +244,23 @@ impl Orientation {
         ) else {
             return Ok(Self::STANDARD);
         };
-        if t.len() != 4 || a1 == a2 {
+        if t.len() != 4 {
             return Err(format!(
-                "resolution line `{line}`: two different axes, X and Y, each with a count"
+                "resolution line `{line}`: expected 4 fields (two axes, each with its count), found {}",
+                t.len()
             ));
+        }
+        if a1 == a2 {
+            return Err(format!(
+                "resolution line `{line}`: names {a1} twice (it needs one X and one Y axis)"
+            ));
+        }
+        for (axis, count) in [(a1, t[1]), (a2, t[3])] {
+            if count.parse::<u32>().is_err() {
+                return Err(format!(
+                    "resolution line `{line}`: the {axis} count `{count}` is not a whole number of pixels"
+                ));
+            }
         }
         let found = Self {
             transposed: a1 == 'X',
