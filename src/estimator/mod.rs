@@ -639,7 +639,27 @@ impl Receivers {
                 if l.contains(p) {
                     let c = l.position();
                     let name = scene.light_names.get(k).map_or("a light", String::as_str);
-                    let message = if let crate::light::Light::Sphere { r, .. } = *l {
+                    let message = if let crate::light::Light::Gonio {
+                        p: lp,
+                        frame,
+                        opening: Some(shape),
+                        ..
+                    } = *l
+                        && shape.holds(frame.to_local(p - lp))
+                    {
+                        let h = shape.half * 2.0;
+                        format!(
+                            "point lies inside or on the luminous {} ({} x {} x {} m) of {name} at ({}, {}, {}) m, or within {:e} of its size of it: place it outside, where its light can be resolved",
+                            shape.shape.name(h.y, h.x, h.z),
+                            h.x,
+                            h.y,
+                            h.z,
+                            c.x,
+                            c.y,
+                            c.z,
+                            crate::light::LuminousShape::NEAR
+                        )
+                    } else if let crate::light::Light::Sphere { r, .. } = *l {
                         // On its surface the limit from outside is finite,
                         // but the sphere's own emission and shadow are not
                         // resolved there: a clear refusal, not a guess.

@@ -169,6 +169,40 @@ impl LuminousShape {
         }
     }
 
+    /// How close to a luminous solid, relative to its size (the largest
+    /// half extent), a point counts as on it ([`Self::holds`]): there the
+    /// sampled direct light, drawn uniform in the projected area the shape
+    /// shows from afar, almost never meets the small cap the point sees,
+    /// and read 0 with a zero error bar, `ok` (a reviewer's find: 1e-6 m
+    /// below a 0.5 m sphere, against about 4.6e3 lx; 1e-5 m off, 0.7 +- 0.7
+    /// and flagged).
+    pub const NEAR: f64 = 1e-4;
+
+    /// Whether the local point `q` \[m\] (from the luminaire's position,
+    /// in its frame) lies inside the closed luminous solid, on it, or
+    /// within [`Self::NEAR`] of its size outside it (a box or an elliptic
+    /// cylinder for an opening with luminous sides, an ellipsoid, a
+    /// horizontal cylinder); never for a flat shape, which has no inside.
+    pub fn holds(&self, q: DVec3) -> bool {
+        use crate::io::photometry::OpeningShape as S;
+        if self.is_flat() {
+            return false;
+        }
+        // Every semi-axis grown by the margin (for a round section, the
+        // ellipse of semi-axes `a + d`, `b + d`).
+        let h = self.half + DVec3::splat(Self::NEAR * self.half.max_element());
+        let ell = |u: f64, a: f64, v: f64, b: f64| (u / a).powi(2) + (v / b).powi(2) <= 1.0;
+        let within = |u: f64, a: f64| u.abs() <= a;
+        match self.shape {
+            S::Rectangle => within(q.x, h.x) && within(q.y, h.y) && within(q.z, h.z),
+            S::Ellipse => ell(q.x, h.x, q.y, h.y) && within(q.z, h.z),
+            S::Ellipsoid => (q / h).length_squared() <= 1.0,
+            S::CylinderC0 => within(q.x, h.x) && ell(q.y, h.y, q.z, h.z),
+            S::CylinderC90 => within(q.y, h.y) && ell(q.x, h.x, q.z, h.z),
+            S::Point | S::VerticalEllipseC0 | S::VerticalEllipseC90 => false,
+        }
+    }
+
     /// Radius \[m\] of the smallest sphere about the centre holding the shape.
     pub fn bounding_radius(&self) -> f64 {
         self.half.length()
@@ -670,12 +704,19 @@ impl Light {
         }
     }
 
-    /// Whether `x` \[m\] is inside (or on) a sphere source, or on a point
-    /// source (never for an area source: a point on it has a finite
-    /// illuminance).
+    /// Whether `x` \[m\] is inside (or on) a sphere source, on a point
+    /// source, or inside, on or within [`LuminousShape::NEAR`] of a
+    /// luminaire's luminous solid ([`LuminousShape::holds`]) (never for an
+    /// area source: a point on it has a finite illuminance).
     pub fn contains(&self, x: DVec3) -> bool {
         match *self {
             Light::Area(_) | Light::Distant(_) | Light::Environment(_) => false,
+            Light::Gonio {
+                p,
+                frame,
+                opening: Some(shape),
+                ..
+            } if shape.holds(frame.to_local(x - p)) => true,
             Light::Point { p, .. } | Light::Gonio { p, .. } | Light::Spot(Spot { p, .. }) => {
                 (p - x).length() <= 1e-12 * p.abs().max_element().max(x.abs().max_element())
             }
