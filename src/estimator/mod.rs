@@ -1777,9 +1777,11 @@ pub const NEAR_SHARE: f64 = 0.25;
 /// spiral, cosine-distributed; over the whole sphere for a solid receiver,
 /// `sphere`) meets a surface closer than [`NEAR_TRIGGER`] `d = 0.1 d`; 0
 /// elsewhere (and in a scene without lights). In a scene lit from infinity
-/// alone (sun, sky, environment) `d` is the median distance of the probes'
-/// hits instead, where three in four of them meet a surface (0 under the
-/// open sky). Closer than that, the local estimate's `1/d^2`
+/// alone (sun, sky, environment) `d` is the scale of the chains' start
+/// density next to the point ([`Light::start_scale`]), or in a room (three
+/// in four probes meet a surface, in front of the point and behind it) of
+/// finite shapes or lit through portals the median distance of the
+/// probes' hits. Closer than that, the local estimate's `1/d^2`
 /// kernel dominates its variance (infinite in a corner), and far from the
 /// lights the light reaching the point from around it comes from rare
 /// collisions.
