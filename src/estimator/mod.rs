@@ -1814,17 +1814,18 @@ pub fn near_need(scene: &Scene, p: DVec3, frame: &Frame, sphere: bool) -> f64 {
         // the backward 18835 +- 6, points 1-2 cm above an infinite ground
         // facing down 5-50 % of `rho E_h`, flagged `sparse`.)
         hits.sort_by(f64::total_cmp);
-        let mostly_met = |t: &[f64]| t.iter().filter(|t| t.is_finite()).count() >= 3 * PROBES / 4;
-        let room = mostly_met(&hits)
+        let mostly_met = |met: usize| met >= 3 * PROBES / 4;
+        let room = mostly_met(hits.iter().filter(|t| t.is_finite()).count())
             && (sphere || {
                 let back = Frame::from_normal(-frame.n);
-                let behind: Vec<f64> = (0..PROBES)
-                    .map(|k| {
-                        let w = probe_direction(k, PROBES, &back, false);
-                        scene.first_hit_from(p, w).map_or(f64::INFINITY, |h| h.t)
-                    })
-                    .collect();
-                mostly_met(&behind)
+                mostly_met(
+                    (0..PROBES)
+                        .filter(|&k| {
+                            let w = probe_direction(k, PROBES, &back, false);
+                            scene.first_hit_from(p, w).is_some()
+                        })
+                        .count(),
+                )
             });
         let unbounded = !scene.planes().is_empty();
         d = scene
