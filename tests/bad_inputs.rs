@@ -351,6 +351,8 @@ fn scene_cases() -> Vec<Case> {
         light("spot: direction zero", "spot", "position = [0, 0, 2]\ndirection = [0, 0, 0]\ninner = 10\nouter = 20\nintensity = 10", Error("field `direction`")),
         light("spot: direction missing", "spot", "position = [0, 0, 2]\ninner = 10\nouter = 20\nintensity = 10", Error("field `direction`: missing field")),
         light("spot: outer 0 with a flux", "spot", "position = [0, 0, 2]\ndirection = [0, 0, -1]\ninner = 0\nouter = 0\nflux = 100", Error("field `outer`")),
+        light("spot: outer 1e-6 degrees with a flux", "spot", "position = [0, 0, 2]\ndirection = [0, 0, -1]\ninner = 0\nouter = 1e-6\nflux = 100", Error("field `outer`: must be at least 0.01 degrees")),
+        light("spot: outer 0.01 degrees with a flux", "spot", "position = [0, 0, 2]\ndirection = [0, 0, -1]\ninner = 0\nouter = 0.01\nflux = 100", Accept("E_avg")),
         light("spot: outer 0 with an intensity", "spot", "position = [0, 0, 2]\ndirection = [0, 0, -1]\ninner = 0\nouter = 0\nintensity = 100", Error("field `outer`: must be > 0")),
         light("spot: 180/180 is a point light", "spot", "position = [0, 0, 2.5]\ndirection = [0, 0, -1]\ninner = 180\nouter = 180\nintensity = 100", Accept("E_avg 88.3417")),
         light("spot: pointing at the ceiling it sits on", "spot", "position = [0, 0, 3]\ndirection = [0, 0, 1]\ninner = 10\nouter = 20\nintensity = 100", Accept("E_avg 44.8288")),

@@ -36,6 +36,11 @@ pub struct Spot {
 }
 
 impl Spot {
+    /// Narrowest outer half-angle a scene may give \[deg\]: `1 - cos` of
+    /// 0.01 degrees is 1.5e-8, resolved to 1e-8 of itself; at 1e-6 degrees
+    /// it is rounding alone.
+    pub const MIN_OUTER_DEG: f64 = 0.01;
+
     /// A spot at `p` along `axis` (normalised) with half-angles `inner <=
     /// outer` \[rad\] and axial intensity `i0` \[cd\].
     pub fn new(p: DVec3, axis: DVec3, inner: f64, outer: f64, i0: f64) -> Self {

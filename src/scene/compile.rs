@@ -919,6 +919,22 @@ fn light(
                     format!("must be > 0 and >= `inner` ({inner} degrees), got {}", crate::io::format_number(outer)),
                 ));
             }
+            // The cones are held by their cosines, whose distance from 1
+            // (`theta^2 / 2`) is resolved to 1.1e-16: at 1e-6 degrees a flux
+            // gave 37 % too much on the axis. From 0.01 degrees on it is
+            // resolved to 1e-8 of itself.
+            if outer < crate::light::Spot::MIN_OUTER_DEG {
+                let sp = d.outer.as_ref().map_or(l.span(), Spanned::span);
+                return Err(ctx.invalid(
+                    sp,
+                    "outer",
+                    format!(
+                        "must be at least {} degrees (a narrower cone is below what its cosine resolves in double precision), got {}",
+                        crate::light::Spot::MIN_OUTER_DEG,
+                        crate::io::format_number(outer)
+                    ),
+                ));
+            }
             // `i` above took a flux as isotropic: a spot's flux fills its cones.
             let unit = crate::light::Spot::new(p, axis, inner.to_radians(), outer.to_radians(), 1.0);
             let i0 = if d.flux.is_some() { i * 4.0 * PI / unit.power() } else { i };
