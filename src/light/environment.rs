@@ -472,6 +472,15 @@ mod tests {
             assert_eq!(e.luminance(e.cell_direction(0, j)), 2.0 * v);
             assert_eq!(r.luminance(r.cell_direction(0, j)), 2.0 * v);
         }
+        // A map lit below the horizon only gives an unobstructed horizontal
+        // plane nothing, exactly: the row edge at the horizon is 0, not
+        // `cos(pi / 2) = 6e-17` (which gave 1e-16 of the lower half, and
+        // `horizontal_illuminance = 100` then scaled the map by 1e34).
+        let mut lower = vec![0.0; 16 * 8];
+        lower[64..].fill(1.0);
+        let l = Environment::new(&lower, 16, 8, Mapping::Equirect, 1.0, 0.0).unwrap();
+        assert_eq!(l.horizontal_illuminance(), 0.0);
+        assert!((l.integral() - 2.0 * PI).abs() < 1e-12);
         // Uniform upper hemisphere L: E_h = pi L.
         let u = Environment::new(&[5.0, 5.0, 0.0, 0.0], 2, 2, Mapping::Equirect, 1.0, 0.0).unwrap();
         assert!((u.horizontal_illuminance() - 5.0 * PI).abs() < 1e-12);

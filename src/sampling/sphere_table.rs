@@ -98,6 +98,10 @@ impl SphereTable {
             .map(|i| {
                 if i == rows {
                     -1.0
+                } else if 2 * i == rows {
+                    // The horizon, exactly (`cos(pi / 2)` rounds to 6e-17:
+                    // a row below it would reach above the horizon).
+                    0.0
                 } else {
                     (PI * i as f64 / rows as f64).cos()
                 }
