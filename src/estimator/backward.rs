@@ -19,6 +19,7 @@
 
 use crate::chain::Collision;
 use crate::chain::roulette;
+use crate::estimator::first_band::FirstBand;
 use crate::estimator::local_kernel;
 use crate::estimator::{Receiver, Receivers, Response};
 use crate::geometry::{Hit, Ray};
@@ -155,6 +156,7 @@ impl BatchWork for BackwardWork<'_> {
                     pool: None,
                     reach: &[],
                     peaked: false,
+                    first_band: None,
                 };
                 let frame = &self.receivers.frames()[j];
                 vertices +=
@@ -185,6 +187,7 @@ impl BatchWork for BackwardWork<'_> {
             pool: None,
             reach: &self.reach,
             peaked: false,
+            first_band: None,
         };
         for (j, rec) in self.receivers.receivers().iter().enumerate() {
             let frame = &self.receivers.frames()[j];
@@ -307,6 +310,9 @@ pub(crate) struct PathSetup<'a> {
     /// so every vertex makes light-guided connections, not only where
     /// [`guides`] says.
     pub(crate) peaked: bool,
+    /// A near part's illuminance point draws its first direction in one of
+    /// two strata of its cosine lobe ([`FirstBand`]); `None`: the cosine.
+    pub(crate) first_band: Option<FirstBand>,
 }
 
 /// What one backward path did.
@@ -395,6 +401,7 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
         pool,
         reach,
         peaked,
+        first_band,
     } = *path;
     // Under `--max-order K` no light of a higher order counts: the light a
     // seated source sends into its surface arrives orders above the vertex
@@ -466,9 +473,12 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
             rng,
             |w: DVec3| {
                 let (value, pdf) = rec.transfer(frame, w);
-                match grazing {
-                    Some(t) if matches!(rec.response, Response::Illuminance) => {
+                match (grazing, first_band) {
+                    (Some(t), _) if matches!(rec.response, Response::Illuminance) => {
                         (value, t.pdf(frame.to_local(w)))
+                    }
+                    (None, Some(b)) if matches!(rec.response, Response::Illuminance) => {
+                        (value, b.pdf(frame.to_local(w)))
                     }
                     _ => (value, pdf),
                 }
@@ -494,10 +504,14 @@ pub(crate) fn trace<F: FnMut(u32, f64)>(
                 }
                 (s.w, s.w.z / s.pdf, s.pdf)
             }
-            None => {
-                let s = sample_cosine_hemisphere(rng.next_2d());
-                (s.w, PI, s.pdf)
-            }
+            None => match first_band {
+                // A stratum of the cosine lobe: weight cos / pdf.
+                Some(b) => b.sample(rng.next_2d()),
+                None => {
+                    let s = sample_cosine_hemisphere(rng.next_2d());
+                    (s.w, PI, s.pdf)
+                }
+            },
         },
         Response::Luminance { material, wo } => {
             let s = material.sample(wo, rng.next_2d());

@@ -3,6 +3,7 @@
 //! split, backward paths add the near part ([`crate::backward`]).
 
 use super::Receivers;
+use super::first_band::FirstBand;
 use crate::backward::{self, PathSetup, Pool};
 use crate::chain;
 use crate::run::{
@@ -84,6 +85,9 @@ struct LocalWork<'a> {
     /// Some light's emission is peaked: the near part's vertices all make
     /// light-guided connections ([`backward::peaked_lights`]).
     peaked: bool,
+    /// Per receiver: the width of the grazing band its near paths' first
+    /// directions are stratified by (0: none; [`super::first_band`]).
+    bands: Vec<f64>,
 }
 
 impl<'a> LocalWork<'a> {
@@ -108,11 +112,13 @@ impl<'a> LocalWork<'a> {
         } else {
             Vec::new()
         };
+        let bands = receivers.near_bands(scene);
         Self {
             scene,
             receivers,
             reach,
             peaked: backward::peaked_lights(scene),
+            bands,
         }
     }
 
@@ -217,7 +223,23 @@ impl<'a> LocalWork<'a> {
                 let w = bs as f64 / paths as f64;
                 let frame = &receivers.frames()[j];
                 let (grazing, vertex_r) = receivers.near_path_setup(j);
+                // Strata of the first direction (`super::first_band`).
+                let strata = match self.bands[j] {
+                    w if w > 0.0 && paths >= 2 => FirstBand::strata(w, paths),
+                    _ => 0,
+                };
                 for s in 0..paths {
+                    let first_band = (strata > 0)
+                        .then(|| FirstBand {
+                            width: self.bands[j],
+                            strata,
+                            paths,
+                            index: 0,
+                        })
+                        .map(|b| FirstBand {
+                            index: b.stratum_of_path(s),
+                            ..b
+                        });
                     let stream = (b * paths + s) * n as u64 + j as u64;
                     let mut rng = Philox4x32::new(keys.part_seed ^ NEAR_KEY, stream);
                     let path = PathSetup {
@@ -227,6 +249,7 @@ impl<'a> LocalWork<'a> {
                         pool: pool.as_ref(),
                         reach: &self.reach,
                         peaked: self.peaked,
+                        first_band,
                     };
                     let walk =
                         backward::trace(scene, rec, frame, cfg, &mut rng, &path, |order, v| {

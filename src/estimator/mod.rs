@@ -34,6 +34,7 @@
 
 pub mod backward;
 pub mod direct;
+pub mod first_band;
 pub mod local;
 mod mesh_views;
 pub mod near_paths;
@@ -1282,6 +1283,26 @@ impl Receivers {
             Ok(k) => (Some(&self.slots[k].1), self.need_r[j]),
             Err(_) => (None, self.near_r[j]),
         }
+    }
+
+    /// Per receiver: the width of the grazing band that stratifies its near
+    /// paths' first directions ([`first_band::band_width`]): illuminance
+    /// points with a near part and no slot table; 0 elsewhere.
+    pub fn near_bands(&self, scene: &Scene) -> Vec<f64> {
+        use rayon::prelude::*;
+        (0..self.all.len())
+            .into_par_iter()
+            .map(|j| {
+                let r = self.near_r[j];
+                let plain = matches!(self.all[j].response, Response::Illuminance)
+                    && self.near_path_setup(j).0.is_none();
+                if r > 0.0 && plain {
+                    first_band::band_width(scene, self.all[j].p, &self.frames[j], r)
+                } else {
+                    0.0
+                }
+            })
+            .collect()
     }
 
     /// Whether receiver `j` needs the near/far split ([`near_need`]) but is

@@ -189,6 +189,7 @@ pub fn allocate(scene: &crate::scene::Scene, receivers: &Receivers, cfg: &RunCon
             pool: Some(&pool),
             reach: &[],
             peaked,
+            first_band: None,
         };
         let (rec, frame) = (&receivers.receivers()[j], &receivers.frames()[j]);
         let mut sums = [0.0; 3];
