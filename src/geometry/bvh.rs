@@ -610,6 +610,23 @@ impl TriangleBvh {
         });
     }
 
+    /// Call `f(input index, corners)` for every triangle of the leaves
+    /// whose boxes the ray meets with `t` in `(t_min, t_max)`, each once,
+    /// in no particular order, with no triangle test (the caller's own).
+    pub fn for_each_candidate(
+        &self,
+        q: &RayQuery,
+        t_min: f64,
+        t_max: f64,
+        mut f: impl FnMut(u32, &[DVec3; 3]),
+    ) {
+        let ids = self.tree.ids();
+        self.tree.any(q, t_min, t_max, |pos| {
+            f(ids[pos], &self.tris[pos]);
+            false
+        });
+    }
+
     /// Whether any triangle is hit with `t` in `(t_min, t_max)` that
     /// `ends` lets count, both ends of the segment `(0, t_max)` checked.
     pub fn any_hit(&self, q: &RayQuery, t_min: f64, t_max: f64, ends: Ends) -> bool {

@@ -624,32 +624,25 @@ impl Mesh {
         if (self.lo - pad).cmpgt(p).any() || p.cmpgt(self.hi + pad).any() {
             return None;
         }
-        (0..self.triangles.len() as u32).find(|&k| {
-            let [a, b, c] = self.corners(k);
-            let n = (b - a).cross(c - a);
-            let len = n.length();
-            if len <= 0.0 || (p - a).dot(n).abs() > tol * len {
-                return false;
-            }
-            // Inside every edge, each widened by `tol`.
-            [(a, b), (b, c), (c, a)]
-                .iter()
-                .all(|&(u, v)| n.cross(v - u).dot(p - u) >= -tol * len * (v - u).length())
-        })
+        (0..self.triangles.len() as u32).find(|&k| on_triangle(p, &self.corners(k), tol))
     }
 
     /// The triangles that point `p` lies on, within `tol` \[m\] of their
-    /// planes, in index order, each once, with their corners: found by
+    /// planes and inside their edges widened by `tol`, in index order,
+    /// each once, with their corners: the triangles of the leaves met by
     /// segments through `p` along the three axes (one crosses any plane),
-    /// so a point on an edge or a corner finds every triangle there.
+    /// so a point on an edge or a corner finds every triangle there. (The
+    /// segments' own hits were taken before: a point on the diagonal two
+    /// triangles of a wall share, off it by rounding, met one of them only,
+    /// and a light there lost the light it sent into the other's half; a
+    /// reviewer's find.)
     pub fn triangles_through(&self, p: DVec3, tol: f64) -> Vec<(u32, [DVec3; 3])> {
         let reach = 4.0 * tol.max(f64::MIN_POSITIVE);
         let mut out: Vec<(u32, [DVec3; 3])> = Vec::new();
         for d in [DVec3::X, DVec3::Y, DVec3::Z] {
             let q = RayQuery::new(p - reach * d, d);
-            self.bvh.for_each_hit(&q, 0.0, 2.0 * reach, |_, id, v| {
-                let n = (v[1] - v[0]).cross(v[2] - v[0]);
-                if (p - v[0]).dot(n).abs() <= tol * n.length() && out.iter().all(|x| x.0 != id) {
+            self.bvh.for_each_candidate(&q, 0.0, 2.0 * reach, |id, v| {
+                if out.iter().all(|x| x.0 != id) && on_triangle(p, v, tol) {
                     out.push((id, *v));
                 }
             });
@@ -857,6 +850,20 @@ fn bad_face_ref(
         }
     }
     None
+}
+
+/// Whether `p` lies on triangle `[a, b, c]`: within `tol` \[m\] of its plane
+/// and inside each of its edges widened by `tol` (never on a degenerate
+/// triangle).
+fn on_triangle(p: DVec3, [a, b, c]: &[DVec3; 3], tol: f64) -> bool {
+    let n = (*b - *a).cross(*c - *a);
+    let len = n.length();
+    if len <= 0.0 || (p - *a).dot(n).abs() > tol * len {
+        return false;
+    }
+    [(*a, *b), (*b, *c), (*c, *a)]
+        .iter()
+        .all(|&(u, v)| n.cross(v - u).dot(p - u) >= -tol * len * (v - u).length())
 }
 
 #[cfg(test)]
