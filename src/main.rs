@@ -83,7 +83,13 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("lumest: error: {e:#}");
-            ExitCode::FAILURE
+            // Interrupted before anything could be written: still the
+            // shell's code for a signal.
+            if lumest::io::interrupt::interrupted() {
+                ExitCode::from(130)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }

@@ -602,6 +602,15 @@ fn points_cases() -> Vec<Case> {
             "id,grid,x,y,z,nx,ny,nz,area\na,g,0,0,0.75,0,0,1,1e308\n",
             Error("p.csv:2: field `area`: an area weight must be positive and at most"),
         ),
+        // A grid's figures average one quantity (a mixed grid's E_avg
+        // mixed E_h and E_z, with verdicts).
+        points(
+            "grid mixing receiver types",
+            "id,grid,x,y,z,nx,ny,nz,receiver\na,g,0,0,0.75,0,0,1,planar\nb,g,1,0,0.75,0,0,1,cylindrical\n",
+            Error(
+                "p.csv:3: field `receiver`: grid `g` mixes receiver types (`cylindrical` here, `planar` on line 2)",
+            ),
+        ),
         points(
             "normal 1e200",
             "id,x,y,z,nx,ny,nz\na,0,0,0.75,0,0,1e200\n",

@@ -100,6 +100,16 @@ fn an_interrupted_run_resumes_to_the_identical_result() {
         !o.status.success() && err.contains("its --chains differ(s)"),
         "{err}"
     );
+    // Another batch size: refused (the default one resumed silently, and
+    // the result was not the run asked for; a reviewer's find).
+    let mut a = args(done.to_str().unwrap(), "7");
+    a.extend(["--batch-size", "1000", "--resume", ck_s]);
+    let o = lumest(&a);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("its --batch-size differ(s)"),
+        "{err}"
+    );
     // Another setting: named by its option.
     let mut a = args(done.to_str().unwrap(), "7");
     a.extend(["--orders", "2", "--resume", ck_s]);

@@ -217,6 +217,48 @@ fn unbounded_requests_are_refused_with_the_limit() {
         !ok && err.contains("64000000 views; at most 4000000"),
         "{err}"
     );
+    // Products past 2^64 are refused, not wrapped to 0 and let through (a
+    // panic on allocation, and a loop of 2^64 views; a reviewer's finds).
+    let (ok, err) = run(&[
+        "render",
+        "--scene",
+        &s,
+        "--eye",
+        "0,0,0.5",
+        "--look",
+        "1,0,0.5",
+        "--width",
+        "2",
+        "--height",
+        "2",
+        "--aperture",
+        "0.01",
+        "--lens-samples",
+        "4611686018427387904",
+        "--out",
+        &out,
+        "--quiet",
+    ]);
+    assert!(
+        !ok && err.contains("more than 2^64 views; at most 4000000"),
+        "{err}"
+    );
+    let (ok, err) = run(&[
+        "luminance",
+        "--scene",
+        &s,
+        "--fan-at",
+        "0,0,0,0,0,1",
+        "--fan",
+        "2.0954757928848267e-08,8.381903171539307e-08",
+        "--out",
+        &out,
+        "--quiet",
+    ]);
+    assert!(
+        !ok && err.contains("= more than 2^64 views; at most 4000000"),
+        "{err}"
+    );
     let mesh = write(
         dir.path(),
         "t.obj",

@@ -113,6 +113,7 @@ fn median_cut_is_reported_as_a_bias_not_z_tested() {
         } else {
             assert!(r["reference"].starts_with("e_probe_median_cut_"), "{r:?}");
             assert_eq!(r["verdict"], "biased (approximation)", "{r:?}");
+            assert_eq!(r["flag"], "approx", "{r:?}");
             assert!(num(r, "z_score").is_nan(), "not z-tested: {r:?}");
             assert_eq!(num(r, "stderr"), 0.0, "{r:?}");
         }

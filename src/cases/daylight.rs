@@ -173,8 +173,14 @@ pub fn judge(r: &Row, approximation: bool) -> Verdict {
     if !finite {
         return Verdict::Fail;
     }
+    // An approximation's rows carry the `approx` flag (the scene's lights
+    // approximate it), and that flag alone.
     if approximation {
-        return Verdict::Biased;
+        return if r.flag == "approx" {
+            Verdict::Biased
+        } else {
+            Verdict::Flagged
+        };
     }
     if !zcheck::within(r.z, r.bound) || !r.z.is_finite() {
         return Verdict::Fail;
@@ -965,9 +971,13 @@ mod tests {
         // A zero error counts only when exact.
         assert_eq!(judge(&row(100.0, 0.0, "ok"), false), Verdict::Pass);
         assert_eq!(judge(&row(100.001, 0.0, "ok"), false), Verdict::Fail);
-        // An approximation reports its bias, whatever its z, but a NaN fails.
-        assert_eq!(judge(&row(110.0, 0.0, "ok"), true), Verdict::Biased);
-        assert_eq!(judge(&row(f64::NAN, 0.0, "ok"), true), Verdict::Fail);
+        // An approximation reports its bias, whatever its z, with its own
+        // flag `approx` alone (no flag, or another, is not excused), but a
+        // NaN fails.
+        assert_eq!(judge(&row(110.0, 0.0, "approx"), true), Verdict::Biased);
+        assert_eq!(judge(&row(110.0, 0.0, "ok"), true), Verdict::Flagged);
+        assert_eq!(judge(&row(110.0, 0.0, "approx;R"), true), Verdict::Flagged);
+        assert_eq!(judge(&row(f64::NAN, 0.0, "approx"), true), Verdict::Fail);
         assert_eq!(Verdict::Biased.as_str(), "biased (approximation)");
     }
 

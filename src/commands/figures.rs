@@ -3,6 +3,7 @@
 //! uncertainty ([`crate::tally::surface_figures`]) and the verdicts on the
 //! requirements of the scene's `[[grid]]` of the same name.
 
+use crate::estimator::solid::Solid;
 use crate::grid::Grid;
 use crate::io::csvio::{InputError, number};
 use crate::io::{PointTable, format_number};
@@ -28,11 +29,48 @@ pub fn grid_groups(t: &PointTable, input: &str) -> Result<Option<(Vec<Group>, bo
         return Ok(None);
     };
     let ac = t.headers.iter().position(|h| h == "area");
+    let rc = t.headers.iter().position(|h| h == "receiver");
+    let file = || {
+        if input == "-" {
+            "<stdin>".to_string()
+        } else {
+            input.to_string()
+        }
+    };
     let mut groups: Vec<Group> = Vec::new();
+    // Per grid: its receiver type (an unknown one is refused with the
+    // receivers) and the line that set it.
+    let mut kinds: Vec<(Option<Solid>, u64, &str)> = Vec::new();
     for (j, (row, &line)) in t.rows.iter().zip(&t.lines).enumerate() {
         let name = row.get(gc).map_or("", |s| s.as_str());
         if name.is_empty() {
             continue;
+        }
+        // One receiver type per grid: its E_avg, E_min and U0 average one
+        // quantity (a grid of planar and cylindrical points gave a mean of
+        // E_h and E_z, with verdicts, where the plain figures refused).
+        let cell = rc.and_then(|c| row.get(c)).map_or("", String::as_str);
+        let kind = Solid::parse(cell).ok().flatten();
+        let at = groups.iter().position(|g| g.name == name);
+        if let Some(k) = at
+            && kinds[k].0 != kind
+        {
+            let (_, first_line, first) = kinds[k];
+            let shown = |c: &str| if c.is_empty() { "planar" } else { c }.to_string();
+            return Err(InputError::Field {
+                file: file(),
+                line,
+                field: "receiver".into(),
+                message: format!(
+                    "grid `{name}` mixes receiver types (`{}` here, `{}` on line {first_line}): its \
+                     figures would average different quantities; give each type a grid of its own",
+                    shown(cell),
+                    shown(first)
+                ),
+            });
+        }
+        if at.is_none() {
+            kinds.push((kind, line, cell));
         }
         let w = match ac {
             Some(c) => {
@@ -43,11 +81,7 @@ pub fn grid_groups(t: &PointTable, input: &str) -> Result<Option<(Vec<Group>, bo
                 let max = (2.0 * crate::scene::MAX_COORD).powi(2);
                 if !(w > 0.0 && w <= max) {
                     return Err(InputError::Field {
-                        file: if input == "-" {
-                            "<stdin>".into()
-                        } else {
-                            input.into()
-                        },
+                        file: file(),
                         line,
                         field: "area".into(),
                         message: format!(

@@ -307,6 +307,13 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
              that holds no light or face the black side of the surface they lie on: check their \
              position and normal; they are left out of the grid figures";
         }
+        if counts.contains_key("approx") {
+            sparse += "; `approx`: the scene's lights approximate what it describes (median \
+             cut: an environment map replaced by distant lights), with a bias no error bar \
+             holds (README: median cut; unobstructed, 0.02-12 % at 16-256 lights, and much \
+             more where an obstacle cuts a bright feature): use `sampling = \"importance\"` \
+             for an estimate with an honest error bar";
+        }
         if counts.contains_key("near") {
             sparse += "; `near`: a surface lies closer to those points than a tenth of their \
              distance to the nearest light (in a scene lit from infinity alone, of the scale \
@@ -358,6 +365,14 @@ pub fn summary_seen(r: &RunResult, sees_lights: bool) -> String {
         {
             "undefined\nWARNING: no light reaches any point (a light sealed inside a solid, \
              points behind walls, or lights facing away): every result is 0"
+                .to_string()
+        } else if counts.contains_key("batches") {
+            "undefined (every error bar is 0 after fewer than 32 batches: see the `batches` \
+             flag)"
+                .to_string()
+        } else if r.tallies.approximate {
+            "undefined (zero sampling error, but the median-cut lights only approximate the map: \
+             see the `approx` flag)"
                 .to_string()
         } else {
             "undefined (zero error: every estimate is exact)".to_string()
@@ -1245,9 +1260,23 @@ pub(crate) fn measure_full(
     crate::io::interrupt::install();
     let result = run_job(&scene, &job, &cfg, estimator, run_args.quiet, checkpointer);
     if crate::io::interrupt::interrupted() {
+        // What the interrupt kept to resume from, said either way.
+        let kept = match &ckpt_path {
+            Some(p) if super::run_state::last_checkpoint_written() => format!(
+                "checkpoint written to {p}: run the same command with `--resume {p}` to finish \
+                 the run (the result is the uninterrupted run's, bit for bit)"
+            ),
+            Some(p) => {
+                format!("no checkpoint was written to {p} (see above): the run cannot be resumed")
+            }
+            None => "no checkpoint was kept (the run has no --checkpoint, and an interrupted run \
+                     keeps one next to --out only when --out is a file and the run stops by \
+                     --chains): the run cannot be resumed"
+                .to_string(),
+        };
         anyhow::ensure!(
             result.tallies.batches() >= 2,
-            "interrupted before 2 batches were complete: nothing written"
+            "interrupted before 2 batches were complete: no results written; {kept}"
         );
         eprintln!(
             "lumest: interrupted by a signal after {} batches ({} chains): writing the results so far, \
@@ -1255,16 +1284,7 @@ pub(crate) fn measure_full(
             result.tallies.batches(),
             result.chains
         );
-        match &ckpt_path {
-            Some(p) if super::run_state::last_checkpoint_written() => eprintln!(
-                "lumest: checkpoint written to {p}: run the same command with `--resume {p}` to finish \
-                 the run (the result is the uninterrupted run's, bit for bit)"
-            ),
-            Some(p) => eprintln!(
-                "lumest: no checkpoint was written to {p} (see above): the run cannot be resumed"
-            ),
-            None => {}
-        }
+        eprintln!("lumest: {kept}");
     }
     // Every output is staged before any is renamed into place: all or none.
     let mut rows = Vec::new();
@@ -1457,6 +1477,10 @@ pub fn illuminance(a: &IlluminanceArgs) -> anyhow::Result<()> {
         return super::mpi_run::run(a);
     }
     let views = a.views.as_deref().zip(a.views_out.as_deref());
+    anyhow::ensure!(
+        !(a.points == "-" && views.is_some_and(|v| v.0 == "-")),
+        "--points - and --views -: standard input can be read once; give one of them a file"
+    );
     let referenced = scene::referenced_files(&a.scene);
     let mut inputs = vec![a.scene.as_path(), Path::new(&a.points)];
     inputs.extend(referenced.iter().map(|p| p.as_path()));
@@ -1542,10 +1566,12 @@ pub fn luminance(a: &LuminanceArgs) -> anyhow::Result<()> {
             "--fan: steps must lie in (0, 90] degrees"
         );
         let (nt, np) = fan_steps(st[0], st[1]);
+        // (Checked: a product that wraps past 2^64 passed the bound.)
+        let n = nt.checked_mul(np);
         anyhow::ensure!(
-            nt * np <= MAX_VIEWS,
+            n.is_some_and(|n| n <= MAX_VIEWS),
             "--fan {steps}: {nt} x {np} = {} views; at most {MAX_VIEWS} (take larger steps)",
-            nt * np
+            n.map_or_else(|| "more than 2^64".to_string(), |n| n.to_string())
         );
         let at = glam::DVec3::new(v[0], v[1], v[2]);
         anyhow::ensure!(

@@ -259,9 +259,10 @@ pub fn merge_states(mut states: Vec<(String, ShardState)>, out: &str) -> anyhow:
             r.points == f.points && s.headers == first.headers && s.rows == first.rows,
         )?;
         same("seeds", r.seed == f.seed)?;
+        same("chain counts", r.chains == f.chains)?;
         same(
-            "chain counts",
-            r.chains == f.chains && r.batches == f.batches && r.batch_size == f.batch_size,
+            "batch sizes (--batch-size)",
+            r.batches == f.batches && r.batch_size == f.batch_size,
         )?;
         same(
             &super::run_state::settings_differ(&r.config, &f.config),
@@ -320,6 +321,7 @@ pub fn merge_states(mut states: Vec<(String, ShardState)>, out: &str) -> anyhow:
         table.rows.len(),
     );
     let mut tallies = Tallies::new(n, run.orders);
+    tallies.approximate = run.approximate;
     [
         tallies.watched,
         tallies.near_plain,

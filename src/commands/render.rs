@@ -117,12 +117,15 @@ pub fn camera_views(
     );
     if let Some(l) = lens {
         let m = (l.k as f64).sqrt().round().max(1.0) as u64;
-        let views = (w * h) as u64 * m * m;
+        // (Checked: a product that wraps past 2^64 read 0 and passed.)
+        let views = ((w * h) as u64)
+            .checked_mul(m)
+            .and_then(|v| v.checked_mul(m));
         anyhow::ensure!(
-            views <= super::MAX_VIEWS,
-            "{w} x {h} pixels with {} lens samples each make {views} views; at most {} \
+            views.is_some_and(|v| v <= super::MAX_VIEWS),
+            "{w} x {h} pixels with {m} x {m} lens samples each make {} views; at most {} \
              (fewer pixels or lens samples)",
-            m * m,
+            views.map_or_else(|| "more than 2^64".to_string(), |v| v.to_string()),
             super::MAX_VIEWS
         );
     }

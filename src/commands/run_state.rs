@@ -70,6 +70,7 @@ pub fn identity(
             env!("CARGO_PKG_VERSION"),
             env!("LUMEST_BUILD")
         ),
+        approximate: scene.approximate.is_some(),
     }
 }
 
@@ -216,6 +217,11 @@ pub fn resume(
         ),
         ("seed", want.seed != c.run.seed),
         ("--chains", want.chains != c.run.chains),
+        // (A run without --batch-size takes the checkpoint's.)
+        (
+            "--batch-size",
+            cfg.batch_size.is_some_and(|b| b != c.run.batch_size),
+        ),
         (
             "settings",
             want.config != c.run.config || want.orders != c.run.orders,

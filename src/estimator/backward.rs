@@ -131,6 +131,7 @@ impl BatchWork for BackwardWork<'_> {
             enclosed: (0..self.len())
                 .map(|j| self.receivers.enclosed(j))
                 .collect(),
+            approximate: self.scene.approximate.is_some(),
         }
     }
 

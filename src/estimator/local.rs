@@ -318,6 +318,7 @@ impl BatchWork for LocalWork<'_> {
             near_plain: (0..n).map(|j| self.receivers.near_plain(j)).collect(),
             near_reach: (0..n).map(|j| self.near_reach(j)).collect(),
             enclosed: (0..n).map(|j| self.receivers.enclosed(j)).collect(),
+            approximate: self.scene.approximate.is_some(),
         }
     }
     /// Chains per batch when not given: about 2^22 units of work per batch

@@ -380,6 +380,9 @@ pub struct Checks {
     pub near_reach: Vec<bool>,
     /// Whether the receiver is enclosed (flag `enclosed`; empty: none is).
     pub enclosed: Vec<bool>,
+    /// Whether every result is an approximation (flag `approx`:
+    /// [`crate::scene::Scene::approximate`]).
+    pub approximate: bool,
 }
 
 /// A source of independent batches: a work item that turns a batch index
@@ -408,6 +411,7 @@ pub trait BatchWork: Sync {
             near_plain: vec![false; self.len()],
             near_reach: vec![false; self.len()],
             enclosed: Vec::new(),
+            approximate: false,
         }
     }
     /// Default batch size for an optional chain count; must not depend on
@@ -1043,6 +1047,7 @@ fn empty_tallies(work: &dyn BatchWork, cfg: &RunConfig) -> Tallies {
     tallies.near_plain = checks.near_plain;
     tallies.near_reach = checks.near_reach;
     tallies.enclosed = checks.enclosed;
+    tallies.approximate = checks.approximate;
     tallies.batch_means = crate::tally::BatchMeans::new(cfg.keep_batch_means.min(n));
     tallies
 }

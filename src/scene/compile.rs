@@ -158,6 +158,7 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
         .collect();
     let mut lights = Vec::with_capacity(desc.light.len());
     let mut notes = Vec::with_capacity(desc.light.len());
+    let mut approximate = None;
     let mut names = Vec::with_capacity(desc.light.len());
     let mut tables = GonioTables::new();
     for (k, l) in desc.light.iter().enumerate() {
@@ -176,6 +177,9 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
             notes.push(note.map(|n0| {
                 format!("{n0}; median cut into {n} distant lights (an approximation: see the README for its bias)")
             }));
+            approximate = Some(format!(
+                "`{name}` is replaced by {n} distant lights (median cut), an approximation of its map"
+            ));
             names.push(format!("{name} [median cut 1/{n}]"));
             for m in 1..n {
                 notes.push(None);
@@ -197,6 +201,7 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
     // cannot fail here.
     let mut scene =
         Scene::build(surfaces, lights).map_err(|e| ctx.invalid(0..0, "light", e.to_string()))?;
+    scene.approximate = approximate;
     scene.notes = names
         .iter()
         .zip(notes)
@@ -394,7 +399,7 @@ fn positive(v: &Spanned<f64>, field: &str, ctx: &SourceCtx) -> Result<f64, Scene
             v.span(),
             field,
             format!(
-                "must be at least {MIN_RADIUS:e} m, got {} (a smaller source is a point: `type = \"point\"`)",
+                "must be at least {MIN_RADIUS:e} m, got {} (a smaller sphere light is a point light, `type = \"point\"`)",
                 crate::io::format_number(x)
             ),
         ))

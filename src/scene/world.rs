@@ -345,6 +345,10 @@ pub struct Scene {
     /// What compiling the scene found worth telling the user (for example
     /// a luminaire table's flux against its file's lamp lumens).
     pub notes: Vec<String>,
+    /// Why the scene's lights only approximate what it describes (median
+    /// cut: an environment map replaced by distant lights), if they do:
+    /// every result carries the `approx` flag, whose bias no error bar holds.
+    pub approximate: Option<String>,
     /// Alias table of the lights' powers, for picking the emitting light
     /// in O(1); `None` when nothing emits.
     light_pick: Option<crate::sampling::alias::AliasTable>,
@@ -540,6 +544,7 @@ impl Scene {
             lights: Vec::new(),
             light_names: Vec::new(),
             notes: Vec::new(),
+            approximate: None,
             light_pick: None,
             total_power: 0.0,
             light_surface: Vec::new(),
@@ -860,7 +865,22 @@ impl Scene {
             DirectLights::Ris => "forced by --direct-lights ris".into(),
         };
         let m = self.light_array.as_ref().map_or(0, |a| a.candidates());
+        // (Under the light array a collimated sun stays exact, as in
+        // `Receivers::new`.)
+        let collimated = self
+            .lights
+            .iter()
+            .filter(|l| matches!(l, Light::Distant(dl) if dl.collimated()))
+            .count();
         let at_receivers = match self.light_array() {
+            Some(_) if collimated == n => format!(
+                "exact sum: all {n} are collimated lights at infinity, which stay exact under RIS \
+                 (one shadow test per source and receiver)"
+            ),
+            Some(_) if collimated > 0 => format!(
+                "sampled by RIS ({m} candidates drawn by power, one shadow test per sample), but for \
+                 {collimated} collimated light(s) at infinity, exact"
+            ),
             Some(_) => format!(
                 "sampled by RIS ({m} candidates drawn by power, one shadow test per sample)"
             ),

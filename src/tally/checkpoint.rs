@@ -161,6 +161,7 @@ impl Checkpoint {
             enclosed,
             near_vertices: flat.chunks(2).map(|c| [c[0], c[1]]).collect(),
             batch_means,
+            approximate: run.approximate,
         };
         Ok(Self {
             run,
@@ -201,6 +202,7 @@ mod tests {
                 scene: 1,
                 points: 2,
                 config: "x".into(),
+                approximate: false,
             },
             folded: 40,
             chains: 4000,

@@ -375,6 +375,9 @@ pub struct Diagnostics {
     /// The point sees the back of a surface in most directions (inside a
     /// solid, behind a wall, outside a closed room).
     pub enclosed: bool,
+    /// The scene's lights approximate it (median cut): a bias no error bar
+    /// holds ([`crate::scene::Scene::approximate`]).
+    pub approximate: bool,
     /// The batch count `B_h` of the FOM ratio's snapshot, if any.
     pub half_batches: Option<u64>,
     /// The receivers the bounds hold the false-alarm rate over (the run's,
@@ -410,6 +413,7 @@ impl Diagnostics {
             indirect_zero: w.mean() == 0.0,
             near: false,
             enclosed: false,
+            approximate: false,
             half_batches: half.map(|h| h.0),
             family: 1,
         }
@@ -436,8 +440,8 @@ impl Diagnostics {
     }
 
     /// The failed checks, as `R`, `VOV`, `FOM`, `tail`, `batches` (fewer than
-    /// 32, too few for the checks themselves), `sparse`, `near`, joined by
-    /// `;`, or `ok`. A non-finite relative error is flagged `R`.
+    /// 32, too few for the checks themselves), `sparse`, `near`,
+    /// `enclosed`, `approx`, joined by `;`, or `ok`. A non-finite relative error is flagged `R`.
     pub fn flag(&self) -> String {
         let mut f = Vec::new();
         if self.batches < 32 {
@@ -466,6 +470,9 @@ impl Diagnostics {
         }
         if self.enclosed {
             f.push("enclosed");
+        }
+        if self.approximate {
+            f.push("approx");
         }
         if f.is_empty() {
             "ok".to_string()

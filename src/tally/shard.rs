@@ -226,6 +226,7 @@ mod tests {
                 scene: 0xdead_beef,
                 points: 42,
                 config: "near (0.0, 16)".into(),
+                approximate: false,
             },
             shard: (1, 2),
             wall: 0.25,

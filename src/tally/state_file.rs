@@ -46,6 +46,10 @@ pub struct RunIdentity {
     pub points: u64,
     /// Every other setting that changes the numbers, as text.
     pub config: String,
+    /// Whether the scene's lights approximate it (median cut; flag
+    /// `approx`): the header line `approximate = 1`, written only then
+    /// (older states, without it, read as not).
+    pub approximate: bool,
 }
 
 /// What is wrong with a state file.
@@ -166,6 +170,9 @@ pub(super) fn write_header<W: Write>(
     writeln!(w, "scene = {:016x}", r.scene)?;
     writeln!(w, "points = {:016x}", r.points)?;
     writeln!(w, "config = {}", r.config.replace('\n', " "))?;
+    if r.approximate {
+        writeln!(w, "approximate = 1")?;
+    }
     writeln!(w)
 }
 
@@ -224,6 +231,15 @@ pub(super) fn open<'a>(
         scene: key_hex(&kv, "scene")?,
         points: key_hex(&kv, "points")?,
         config: key(&kv, "config")?,
+        approximate: match kv.get("approximate").map(String::as_str) {
+            None | Some("0") => false,
+            Some("1") => true,
+            Some(v) => {
+                return Err(StateError::Header(format!(
+                    "`approximate` is `{v}`, not 0 or 1"
+                )));
+            }
+        },
     };
     Ok((kv, run, &content[end + 2..]))
 }

@@ -29,6 +29,9 @@ pub struct Tallies {
     pub near_reach: Vec<bool>,
     /// Per receiver: whether it is enclosed (flag `enclosed`; empty: none).
     pub enclosed: Vec<bool>,
+    /// Whether the scene's lights approximate it (flag `approx` on every
+    /// receiver: [`crate::scene::Scene::approximate`]).
+    pub approximate: bool,
     /// Per receiver: the near part's exposed and reached path vertices over
     /// the run (see [`crate::tally::Diagnostics::near_reach`]).
     pub near_vertices: Vec<[u64; 2]>,
@@ -68,6 +71,7 @@ impl Tallies {
             near_plain: vec![false; n],
             near_reach: vec![false; n],
             enclosed: Vec::new(),
+            approximate: false,
             near_vertices: vec![[0; 2]; n],
             batch_means: BatchMeans::default(),
         }
@@ -159,6 +163,7 @@ impl Tallies {
             .then(|| self.near_hits[j]);
         d.near = self.near_plain.get(j).copied().unwrap_or(false);
         d.enclosed = self.enclosed.get(j).copied().unwrap_or(false);
+        d.approximate = self.approximate;
         d.near_reach = (self.near_reach.get(j).copied().unwrap_or(false)
             && self.near_vertices[j][0] > 0)
             .then(|| self.near_vertices[j][1]);
