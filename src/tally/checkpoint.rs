@@ -7,7 +7,8 @@
 //! The encoding of [`super::state_file`]: the header names the run (as a
 //! shard state's does: batches, batch size, chains, seed, orders,
 //! receivers, the hashes of the compiled scene and of the points, the
-//! settings) and adds `folded = F` (batches folded), `chains_done`,
+//! settings, and `approximate = 1` where the scene's lights approximate it)
+//! and adds `folded = F` (batches folded), `chains_done`,
 //! `collisions`, `scores` and `wall` (seconds so far); the body holds the
 //! tallies: every accumulator's exact state (count, then mean, M2, M3, M4,
 //! min, max as f64 bits) for the estimated part, the sampled direct light

@@ -20,6 +20,8 @@
 //! scene = <16 hex digits>  FNV-1a 64 of the scene file and the files it refers to
 //! points = <16 hex digits> FNV-1a 64 of the points file
 //! config = <text>          every run setting that changes the numbers, which must match
+//! approximate = 1          optional: the scene's lights approximate it (median cut: the
+//!                          `approx` flag on every row); absent, or 0, when they do not
 //! wall = <seconds>         the shard's wall time (for the merged summary only)
 //! inputs = <paths>         optional: the run's input files (scene, points, the files the
 //!                          scene names), canonical, tab-separated, with `%`, tab, CR and
