@@ -14,6 +14,7 @@
 //!   negligible). Seen from outside it has luminance `L`.
 
 pub mod angle_grid;
+pub mod angular_map;
 pub mod area;
 pub mod array;
 pub mod distant;
