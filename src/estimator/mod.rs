@@ -477,6 +477,11 @@ pub struct Receivers {
     /// Per receiver: its own paths for every 256 chains
     /// ([`Self::with_allocated_near_paths`]); empty: `near_paths` each.
     near_per: Vec<u32>,
+    /// Per receiver: the variance of one near path's value relative to
+    /// `E^2`, from the pilot of [`Self::set_allocated_near_paths`] (empty
+    /// without it): where it is not small the near paths' first directions
+    /// are not stratified ([`Self::near_bands`]).
+    near_var: Vec<f64>,
     /// Set by [`local::prepare`].
     near_prepared: bool,
     /// Radius \[m\] of each receiver's neighbourhood that holds almost all of
@@ -1036,6 +1041,7 @@ impl Receivers {
         let mut r = Self {
             near_paths: 0,
             near_per: Vec::new(),
+            near_var: Vec::new(),
             near_prepared: false,
             near_r: vec![0.0; receivers.len()],
             slots: Vec::new(),
@@ -1211,6 +1217,7 @@ impl Receivers {
         let on = paths > 0 && radii.iter().any(|&r| r > 0.0);
         self.near_paths = if on { paths } else { 0 };
         self.near_per.clear();
+        self.near_var.clear();
         self.near_r = if on { radii } else { vec![0.0; self.all.len()] };
         for list in &mut self.lists {
             for (e, &j) in list.eps2.iter_mut().zip(&list.idx) {
@@ -1287,7 +1294,9 @@ impl Receivers {
 
     /// Per receiver: the width of the grazing band that stratifies its near
     /// paths' first directions ([`first_band::band_width`]): illuminance
-    /// points with a near part and no slot table; 0 elsewhere.
+    /// points with a near part and no slot table whose near paths' values
+    /// vary little, by the pilot ([`first_band::STEADY`]; all such points
+    /// without a pilot); 0 elsewhere.
     pub fn near_bands(&self, scene: &Scene) -> Vec<f64> {
         use rayon::prelude::*;
         (0..self.all.len())
@@ -1296,7 +1305,11 @@ impl Receivers {
                 let r = self.near_r[j];
                 let plain = matches!(self.all[j].response, Response::Illuminance)
                     && self.near_path_setup(j).0.is_none();
-                if r > 0.0 && plain {
+                let steady = self
+                    .near_var
+                    .get(j)
+                    .is_none_or(|&v| v <= first_band::STEADY);
+                if r > 0.0 && plain && steady {
                     first_band::band_width(scene, self.all[j].p, &self.frames[j], r)
                 } else {
                     0.0
@@ -1359,6 +1372,7 @@ impl Receivers {
         }
         let alloc = near_paths::allocate(scene, self, cfg);
         self.near_per = alloc.paths.clone();
+        self.near_var = alloc.near_var.clone();
         alloc
     }
 
