@@ -194,6 +194,16 @@ fn scene_cases() -> Vec<Case> {
             text("[[light]]\ntype = \"point\"\nposition = [0, 0, 2.5]\nintensity = 100.0\n"),
             Accept("E_avg 22.5192 lx"),
         ),
+        // Far from the origin for its size: warned (steps off surfaces are
+        // 1e-8 of the coordinates, 6.4 cm at 6.4e6 m).
+        case(
+            Ch::Scene,
+            "a small scene 6.4e6 m from the origin",
+            text("[[surface]]\ntype = \"sphere\"\ncenter = [6.4e6, 0, 0]\nradius = 1\n\
+                  material = { type = \"lambertian\", reflectance = 0.5 }\n\n\
+                  [[light]]\ntype = \"point\"\nposition = [6.4e6, 0, 2]\nintensity = 100.0\n"),
+            Accept("WARNING: the scene lies up to 6.400e6 m from the origin"),
+        ),
         scene_rep("intensity as a string", "intensity = 100.0", "intensity = \"100\"", Error("field `intensity`")),
         scene_rep("intensity as an integer", "intensity = 100.0", "intensity = 100", Same),
         scene_rep("intensity as a boolean", "intensity = 100.0", "intensity = true", Error("field `intensity`")),
