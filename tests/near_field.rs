@@ -397,78 +397,70 @@ fn guided_cfg(guide: bool, seed: u64) -> RunConfig {
     }
 }
 
+/// A plane of reflectance 0.5 through the origin facing up, and `light`.
+fn plane_under(light: &str) -> lumest::scene::Scene {
+    let src = format!(
+        "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
+         material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\n[[light]]\n{light}"
+    );
+    lumest::scene::parse(&src, std::path::Path::new("plane.toml")).unwrap()
+}
+
+/// Points `pts` of `scene` against `exact` over `seeds` runs of `chains`
+/// chains (seeds from `seed0`): every |z| within the Sidak bound over all
+/// of them, and the mean of z^2 (about 1.07 for 32 batches) below 2.5.
+fn calibrated(
+    scene: &lumest::scene::Scene,
+    pts: &[(DVec3, DVec3)],
+    exact: &[f64],
+    (seeds, seed0, chains): (u64, u64, u64),
+) {
+    let rec = Receivers::new(scene, pts).unwrap();
+    let bound = sidak_bound(1e-3, seeds as usize * pts.len(), Some(32));
+    let mut z2 = 0.0;
+    for seed in seed0..seed0 + seeds {
+        let r = run(scene, &rec, &chains_cfg(chains, seed, 2), &mut |_| true);
+        for (j, &e) in exact.iter().enumerate() {
+            let z = common::z(&r, j, e);
+            assert!(
+                z.abs() < bound,
+                "point {:?}, seed {seed}: z = {z}",
+                pts[j].0
+            );
+            z2 += z * z;
+        }
+    }
+    let mean = z2 / (seeds as usize * pts.len()) as f64;
+    assert!(mean < 2.5, "mean z^2 {mean}");
+}
+
 /// Points a fraction of a millimetre to a few millimetres above an evenly
 /// lit ground (the sun over an infinite plane), facing it, read `rho E_h`
 /// exactly; their near paths leave the split radius only in grazing
 /// directions, one in 10^5-10^7 (`(h / R)^2`). Drawn from the plain cosine
 /// no run saw one: the near part read `1 / (1 - p)` high with an error bar
-/// of nearly nothing (z 30-300 over seeds, flagged `ok`). With the first
-/// direction stratified (`lumest::estimator::first_band`) the grazing
-/// strata see them in every run: calibrated over seeds.
+/// of nearly nothing (z 30-300 over seeds, flagged `ok`; the mean of z^2
+/// in the thousands). With the first direction stratified
+/// (`lumest::estimator::first_band`) the grazing strata see them in every
+/// run: calibrated over seeds. Under a lamp (1000 cd, 1 m up) the ground's
+/// illuminance falls off across the distances the paths reach, `h tan
+/// theta`, a heavy tail in every decade of `cos^2 theta`: 0.1 mm up the
+/// plain cosine read 1e-7 high on most runs (mean z^2 about 9, coverage
+/// 27 of 40).
 #[test]
 fn points_just_above_a_sunlit_ground_have_calibrated_error_bars() {
     let rho = 0.5;
-    let scene = lumest::scene::parse(
-        r#"
-[[surface]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 0, 1]
-material = { type = "lambertian", reflectance = 0.5 }
-
-[[light]]
-type = "distant"
-direction = [-0.5, -0.4, -0.6]
-illuminance = 50000
-"#,
-        std::path::Path::new("ground.toml"),
-    )
-    .unwrap();
+    let mut sun =
+        plane_under("type = \"distant\"\ndirection = [-0.5, -0.4, -0.6]\nilluminance = 50000\n");
     let e_h = 50000.0 * 0.6 / (0.25f64 + 0.16 + 0.36).sqrt();
-    let heights = [2e-4, 2e-3];
-    let pts: Vec<_> = heights
+    let pts: Vec<_> = [2e-4, 2e-3]
         .iter()
         .map(|&h| (DVec3::new(0.3, 0.2, h), -DVec3::Z))
         .collect();
-    let mut sc = scene.clone();
-    sc.fit_directional(&pts.iter().map(|p| p.0).collect::<Vec<_>>());
-    let rec = Receivers::new(&sc, &pts).unwrap();
-    let seeds = 12;
-    let bound = sidak_bound(1e-3, seeds * pts.len(), Some(32));
-    let mut z2 = 0.0;
-    for seed in 0..seeds as u64 {
-        let r = run(&sc, &rec, &chains_cfg(16_384, 100 + seed, 2), &mut |_| true);
-        for (j, &h) in heights.iter().enumerate() {
-            let z = common::z(&r, j, rho * e_h);
-            assert!(z.abs() < bound, "h = {h}, seed {seed}: z = {z}");
-            z2 += z * z;
-        }
-    }
-    // The mean of z^2 over the runs (about 1.07 for 32 batches): the old
-    // sampling gave thousands.
-    let mean = z2 / (seeds * heights.len()) as f64;
-    assert!(mean < 2.5, "mean z^2 {mean}");
+    sun.fit_directional(&pts.iter().map(|p| p.0).collect::<Vec<_>>());
+    calibrated(&sun, &pts, &[rho * e_h; 2], (12, 100, 16_384));
 
-    // Under a lamp (1000 cd, 1 m up) the ground's illuminance falls off
-    // across the distances the paths reach, `h tan theta`, a heavy tail
-    // in every decade of `cos^2 theta`: 0.1 mm up the plain cosine read
-    // 1e-7 high on most runs (mean z^2 about 9, coverage 27 of 40).
-    let lamp = lumest::scene::parse(
-        r#"
-[[surface]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 0, 1]
-material = { type = "lambertian", reflectance = 0.5 }
-
-[[light]]
-type = "point"
-position = [0, 0, 1]
-intensity = 1000
-"#,
-        std::path::Path::new("lamp.toml"),
-    )
-    .unwrap();
+    let lamp = plane_under("type = \"point\"\nposition = [0, 0, 1]\nintensity = 1000\n");
     let heights = [1e-4, 1e-3];
     let pts: Vec<_> = heights
         .iter()
@@ -478,22 +470,7 @@ intensity = 1000
         .iter()
         .map(|&h| from_floor(rho, h, |s| 1000.0 / (1.0 + s * s).powf(1.5)))
         .collect();
-    let rec = Receivers::new(&lamp, &pts).unwrap();
-    let seeds = 16;
-    let bound = sidak_bound(1e-3, seeds * pts.len(), Some(32));
-    let mut z2 = 0.0;
-    for seed in 0..seeds as u64 {
-        let r = run(&lamp, &rec, &chains_cfg(20_000, 200 + seed, 2), &mut |_| {
-            true
-        });
-        for (j, &e) in exact.iter().enumerate() {
-            let z = common::z(&r, j, e);
-            assert!(z.abs() < bound, "h = {}, seed {seed}: z = {z}", heights[j]);
-            z2 += z * z;
-        }
-    }
-    let mean = z2 / (seeds * heights.len()) as f64;
-    assert!(mean < 2.5, "lamp: mean z^2 {mean}");
+    calibrated(&lamp, &pts, &exact, (16, 200, 20_000));
 }
 
 /// The strata go where the near paths' values are steady (the pilot's
@@ -511,13 +488,7 @@ fn near_strata_only_where_the_near_paths_are_steady() {
         assert!(rec.near_field().1[0] > 0.0, "no near part at {p}");
         rec.near_bands(scene)[0]
     };
-    let lamp = lumest::scene::parse(
-        "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n\
-         material = { type = \"lambertian\", reflectance = 0.5 }\n\n\
-         [[light]]\ntype = \"point\"\nposition = [0, 0, 1]\nintensity = 1000\n",
-        std::path::Path::new("lamp.toml"),
-    )
-    .unwrap();
+    let lamp = plane_under("type = \"point\"\nposition = [0, 0, 1]\nintensity = 1000\n");
     let b = bands(&lamp, DVec3::new(0.3, 0.0, 1e-3), -DVec3::Z);
     assert!(b > 0.0, "the floor point under the lamp takes no strata");
     let office = lumest::scene::load(std::path::Path::new("data/office.toml")).unwrap();
