@@ -312,7 +312,7 @@ pub(crate) struct PathSetup<'a> {
     /// [`guides`] says.
     pub(crate) peaked: bool,
     /// A near part's illuminance point draws its first direction in one of
-    /// two strata of its cosine lobe ([`FirstBand`]); `None`: the cosine.
+    /// the strata of its cosine lobe ([`FirstBand`]); `None`: the cosine.
     pub(crate) first_band: Option<FirstBand>,
 }
 

@@ -224,22 +224,25 @@ impl<'a> LocalWork<'a> {
                 let frame = &receivers.frames()[j];
                 let (grazing, vertex_r) = receivers.near_path_setup(j);
                 // Strata of the first direction (`super::first_band`).
-                let strata = match self.bands[j] {
-                    w if w > 0.0 && paths >= 2 => FirstBand::strata(w, paths),
-                    _ => 0,
+                let width = self.bands[j];
+                let strata = if width > 0.0 && paths >= 2 {
+                    FirstBand::strata(width, paths)
+                } else {
+                    0
                 };
                 for s in 0..paths {
-                    let first_band = (strata > 0)
-                        .then(|| FirstBand {
-                            width: self.bands[j],
+                    let first_band = (strata > 0).then(|| {
+                        let b = FirstBand {
+                            width,
                             strata,
                             paths,
                             index: 0,
-                        })
-                        .map(|b| FirstBand {
+                        };
+                        FirstBand {
                             index: b.stratum_of_path(s),
                             ..b
-                        });
+                        }
+                    });
                     let stream = (b * paths + s) * n as u64 + j as u64;
                     let mut rng = Philox4x32::new(keys.part_seed ^ NEAR_KEY, stream);
                     let path = PathSetup {
