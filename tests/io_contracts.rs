@@ -537,3 +537,44 @@ fn outputs_over_files_the_scene_refers_to_are_refused() {
         ies
     );
 }
+
+/// An output named by a symbolic link is written to the file the link
+/// leads to, the link kept: renamed onto the link, the results replaced
+/// the link and left its file stale, with no word (a reviewer's find).
+#[cfg(unix)]
+#[test]
+fn an_output_through_a_link_lands_in_its_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = write(dir.path(), "scene.toml", SCENE);
+    let p = write(dir.path(), "p.csv", POINTS);
+    std::fs::create_dir(dir.path().join("results")).unwrap();
+    let file = write(&dir.path().join("results"), "E.csv", "old\n");
+    let link = dir.path().join("E_link.csv");
+    std::os::unix::fs::symlink("results/E.csv", &link).unwrap();
+    let (ok, err) = run(&[
+        "illuminance",
+        "--scene",
+        &s,
+        "--points",
+        &p,
+        "--out",
+        link.to_str().unwrap(),
+        "--chains",
+        "500",
+        "--quiet",
+    ]);
+    assert!(ok, "{err}");
+    let meta = std::fs::symlink_metadata(&link).unwrap();
+    assert!(meta.file_type().is_symlink(), "the link was replaced");
+    let text = std::fs::read_to_string(&file).unwrap();
+    assert!(text.starts_with("id,x,y,z,nx,ny,nz,E,"), "{text}");
+    // Nothing left beside the file or the link.
+    for d in [dir.path(), &dir.path().join("results")] {
+        let stray: Vec<_> = std::fs::read_dir(d)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+            .collect();
+        assert!(stray.is_empty(), "{stray:?}");
+    }
+}

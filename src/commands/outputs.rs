@@ -57,7 +57,9 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[(&str, &Path)]) -> anyhow::Res
             !path.is_dir(),
             "{opt} {shown}: is a folder; give a file name"
         );
-        let dir = path
+        // Where the write lands: through symbolic links to their file.
+        let landing = crate::io::csvio::through_links(path);
+        let dir = landing
             .parent()
             .filter(|p| !p.as_os_str().is_empty())
             .unwrap_or(Path::new("."));
@@ -66,7 +68,7 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[(&str, &Path)]) -> anyhow::Res
             "{opt} {shown}: the folder {} does not exist",
             dir.display()
         );
-        let probe = crate::io::csvio::temp_path(path);
+        let probe = crate::io::csvio::temp_path(&landing);
         std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)

@@ -438,19 +438,42 @@ pub fn write_atomic_with<T>(
         out.flush()?;
         return Ok(v);
     }
-    let target = Path::new(path);
-    let tmp = temp_path(target);
+    let target = through_links(Path::new(path));
+    let tmp = temp_path(&target);
     let written = (|| {
         let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
         let v = fill(&mut f)?;
         f.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-        std::fs::rename(&tmp, target)?;
+        std::fs::rename(&tmp, &target)?;
         Ok(v)
     })();
     if written.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
     written
+}
+
+/// The file an output named `path` is written to: `path`, or where the
+/// symbolic links it names lead (a link is kept and its file replaced:
+/// renamed onto the link, the results replaced the link and left the file
+/// it pointed to stale; a reviewer's find). At most 40 links are followed.
+pub(crate) fn through_links(path: &Path) -> PathBuf {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        let is_link = std::fs::symlink_metadata(&p).is_ok_and(|m| m.file_type().is_symlink());
+        if !is_link {
+            break;
+        }
+        match std::fs::read_link(&p) {
+            Ok(next) if next.is_absolute() => p = next,
+            Ok(next) => {
+                let dir = p.parent().map(Path::to_path_buf).unwrap_or_default();
+                p = dir.join(next);
+            }
+            Err(_) => break,
+        }
+    }
+    p
 }
 
 /// The temporary file next to `target` that an atomic write goes through.
@@ -519,7 +542,7 @@ pub fn stage_csv(
         let target = PathBuf::from(path);
         return Ok((Staged { tmp: None, target }, n));
     }
-    let target = PathBuf::from(path);
+    let target = through_links(Path::new(path));
     let staged = Staged {
         tmp: Some(temp_path(&target)),
         target,
@@ -539,6 +562,7 @@ pub fn stage_bytes(path: &str, bytes: &[u8]) -> std::io::Result<Staged> {
         write_atomic(path, bytes)?;
         return Ok(Staged { tmp: None, target });
     }
+    let target = through_links(&target);
     let staged = Staged {
         tmp: Some(temp_path(&target)),
         target,
