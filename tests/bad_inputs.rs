@@ -483,7 +483,15 @@ fn points_cases() -> Vec<Case> {
         points(
             "tabs",
             "id\tx\ty\tz\tnx\tny\tnz\na\t0\t0\t0.75\t0\t0\t1\n",
-            Error("p.csv"),
+            Error("seems to use tabs"),
+        ),
+        // An unclosed quote runs to the end of the file: said.
+        points(
+            "unclosed quote",
+            "id,x,y,z,nx,ny,nz\n\"a,0,0,0.75,0,0,1\nb,1,0,0.75,0,0,1\n",
+            Error(
+                "p.csv:2: 1 cells where the header has 7 columns (a cell runs over several lines: an unclosed `\"` quote?)",
+            ),
         ),
         points("byte-order mark", &format!("\u{feff}{POINTS}"), Same),
         // The mark hid the comment's `#`: the comment became the header.
@@ -502,6 +510,12 @@ fn points_cases() -> Vec<Case> {
         points(
             "blank lines between rows",
             &POINTS.replace('\n', "\n\n"),
+            Same,
+        ),
+        // Blank lines of spaces and tabs too (they were 1 cell of 7).
+        points(
+            "lines of spaces between rows",
+            &POINTS.replace('\n', "\n  \t \n"),
             Same,
         ),
         points(

@@ -117,8 +117,11 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
         }
     }
     let body = &text[start..];
+    // (Flexible: the cell counts are checked below, where a line of
+    // spaces alone is skipped as blank.)
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
+        .flexible(true)
         .from_reader(body.as_bytes());
     let headers: Vec<String> = rdr
         .headers()
@@ -175,7 +178,30 @@ pub(crate) fn read_table(path: &str) -> Result<RawTable, InputError> {
                 message,
             }
         })?;
-        lines.push(rec.position().map_or(0, |p| line_of(p.byte())));
+        let line = rec.position().map_or(0, |p| line_of(p.byte()));
+        if rec.len() != headers.len() {
+            // A line of spaces (or tabs) alone is blank, as an empty one is.
+            if rec.len() == 1 && rec[0].is_empty() {
+                continue;
+            }
+            // An unclosed quote takes the rest of the file into one cell.
+            let quote = rec.iter().any(|c| c.contains('\n'));
+            return Err(InputError::Row {
+                file: file.clone(),
+                line,
+                message: format!(
+                    "{} cells where the header has {} columns{}",
+                    rec.len(),
+                    headers.len(),
+                    if quote {
+                        " (a cell runs over several lines: an unclosed `\"` quote?)"
+                    } else {
+                        ""
+                    }
+                ),
+            });
+        }
+        lines.push(line);
         rows.push(rec.iter().map(str::to_string).collect());
     }
     Ok(RawTable {
@@ -207,6 +233,9 @@ pub(crate) fn columns(
                         if headers.len() == 1 && headers[0].contains(';') {
                             "; the file seems to use `;` between columns: lumest reads comma-separated \
                              files with a decimal point (12.5, not 12,5)"
+                        } else if headers.len() == 1 && headers[0].contains('\t') {
+                            "; the file seems to use tabs between columns: lumest reads \
+                             comma-separated files"
                         } else {
                             ""
                         }
