@@ -179,7 +179,7 @@ fn scene_cases() -> Vec<Case> {
             Error("s.toml:1:1: invalid type: map, expected a sequence (each surface is an array-of-tables entry: write `[[surface]]` with double brackets)"),
         ),
         scene_add("`[light]` after `[[light]]` (single brackets)", "[light]\ntype = \"point\"\n", Error("write `[[light]]` with double brackets")),
-        scene_rep("duplicate key in a table", "intensity = 100.0", "intensity = 100.0\nintensity = 50.0", Error("duplicate key")),
+        scene_rep("duplicate key in a table", "intensity = 100.0", "intensity = 100.0\nintensity = 50.0", Error("duplicate key `intensity`")),
         scene_rep("unknown key in a surface", "name = \"room\"", "name = \"room\"\ncolour = \"red\"", Error("unknown field `colour`")),
         scene_rep("unknown key in a light", "name = \"lamp\"", "name = \"lamp\"\nwatts = 60", Error("unknown field `watts`")),
         scene_rep("unknown key in a material", "reflectance = 0.5 }", "reflectance = 0.5, gloss = 1 }", Error("unknown field `gloss`")),

@@ -181,6 +181,17 @@ pub(crate) fn parse_desc(src: &str, file: &Path) -> Result<desc::SceneDesc, Scen
         // same name: say what was meant.
         let before = src[..at.min(src.len())].rsplit('\n').next().unwrap_or("");
         let rest = &src[at.min(src.len()) - before.len()..];
+        // A key given twice: name it (the parser's message does not).
+        if message == "duplicate key"
+            && let Some(key) = rest
+                .lines()
+                .next()
+                .and_then(|l| l.split_once('='))
+                .map(|(k, _)| k.trim())
+                .filter(|k| !k.is_empty())
+        {
+            message = format!("duplicate key `{key}` (a key may be given once per table)");
+        }
         if let Some(table) = ["surface", "light"]
             .into_iter()
             .find(|t| rest.trim_start().starts_with(&format!("[{t}]")))
