@@ -164,7 +164,7 @@ fn scene_cases() -> Vec<Case> {
             Ch::Scene,
             "not UTF-8 (Latin-1 byte in a name)",
             Body::Bytes([SCENE.as_bytes(), b"# \xe4\n"].concat()),
-            Error("s.toml"),
+            Error("not UTF-8 text"),
         ),
         case(Ch::Scene, "not TOML at all", text("this is not a scene\n"), Error("s.toml:1:")),
         case(Ch::Scene, "byte-order mark before the first table", text(format!("\u{feff}{SCENE}")), Same),
@@ -690,7 +690,11 @@ fn points_cases() -> Vec<Case> {
             "id,x,y,z,nx,ny,nz\na,2,2,3,-1,-1,-1\n",
             Accept("E_avg"),
         ),
-        points("invalid UTF-8", "", Error("p.csv")),
+        points(
+            "invalid UTF-8",
+            "",
+            Error("p.csv:2: the byte at column 1 is not UTF-8 text"),
+        ),
         points("a folder", "", Error("p.csv")),
         points("file missing", "", Error("p.csv")),
         points(

@@ -56,19 +56,31 @@ fn display_name(path: &str) -> String {
 
 /// Read a CSV table from a file or `-` (standard input).
 fn read_all(path: &str) -> Result<String, InputError> {
-    let mut s = String::new();
+    let mut bytes = Vec::new();
     let res = if path == "-" {
-        std::io::stdin().read_to_string(&mut s).map(|_| ())
+        std::io::stdin().read_to_end(&mut bytes).map(|_| ())
     } else {
         std::fs::File::open(path)
-            .and_then(|mut f| f.read_to_string(&mut s))
+            .and_then(|mut f| f.read_to_end(&mut bytes))
             .map(|_| ())
     };
     res.map_err(|e| InputError::File {
         file: display_name(path),
         message: format!("cannot read: {e}"),
     })?;
-    Ok(s)
+    // Not UTF-8: the line and column of the first bad byte.
+    String::from_utf8(bytes).map_err(|e| {
+        let ok = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = 1 + ok.iter().filter(|&&b| b == b'\n').count() as u64;
+        let column = 1 + ok.iter().rev().take_while(|&&b| b != b'\n').count();
+        InputError::Row {
+            file: display_name(path),
+            line,
+            message: format!(
+                "the byte at column {column} is not UTF-8 text: save the file as UTF-8"
+            ),
+        }
+    })
 }
 
 /// A CSV table with named columns: headers, rows and row line numbers.

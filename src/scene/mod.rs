@@ -48,11 +48,28 @@ pub enum SceneError {
 
 /// Read, validate and compile a scene file.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let src = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
+    let src = read_scene(path)?;
+    parse(&src, path)
+}
+
+/// A scene file's text; not UTF-8, the line and column of its first bad
+/// byte (it said only that the stream was not valid UTF-8).
+fn read_scene(path: &Path) -> Result<String, SceneError> {
+    let bytes = std::fs::read(path).map_err(|reason| SceneError::Io {
         file: path.to_path_buf(),
         reason,
     })?;
-    parse(&src, path)
+    String::from_utf8(bytes).map_err(|e| {
+        let ok = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = 1 + ok.iter().filter(|&&b| b == b'\n').count();
+        let column = 1 + ok.iter().rev().take_while(|&&b| b != b'\n').count();
+        SceneError::Syntax {
+            file: path.to_path_buf(),
+            line,
+            column,
+            message: "not UTF-8 text: save the file as UTF-8".into(),
+        }
+    })
 }
 
 /// Light kinds whose light is the sky's for a daylight factor: `sky` and
@@ -73,10 +90,7 @@ const BODY_KINDS: [&str; 2] = ["rectangle", "disc"];
 /// words, and the number of sky lights kept (0: the scene returned is the
 /// whole one, for the caller to refuse).
 pub fn load_sky_only(path: &Path) -> Result<(Scene, Vec<String>, usize), SceneError> {
-    let src = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
-        file: path.to_path_buf(),
-        reason,
-    })?;
+    let src = read_scene(path)?;
     let mut desc = parse_desc(&src, path)?;
     let ctx = compile::SourceCtx {
         src: &src,
