@@ -2131,25 +2131,38 @@ impl Scene {
     /// point inside such a mesh, whichever sides reflect (it is opaque).
     pub fn lightless_closed_meshes(&self) -> Vec<u32> {
         use crate::geometry::mesh_parity::{Side, side};
-        let outside = |m: &crate::geometry::mesh::Mesh, l: &Light| match l {
-            _ if l.is_directional() => true,
+        let outside = |m: &crate::geometry::mesh::Mesh, k: usize| match &self.lights[k] {
+            l if l.is_directional() => true,
             Light::Sphere { c, r, .. } => {
                 let (lo, hi) = m.bounds();
                 (lo - *c).max(*c - hi).max_element() > *r && side(m, *c) == Side::Outside
             }
-            // A light on the surface (`seat_at`'s tolerance) is held: a
-            // box-shaped room mesh's corner reads outside by the parity's
-            // rays, all of which leave along its edges and faces.
-            _ if l.is_point_like() => {
-                m.triangles_through(l.position(), on_mesh_tol(m)).is_empty()
-                    && side(m, l.position()) == Side::Outside
-            }
+            l if l.is_point_like() => match self.light_surface(k) {
+                // A light standing on surfaces belongs to the side it
+                // stands on: its shadow origin, stepped off them to that
+                // side, is where it is (a lamp on a closed cabinet mesh's
+                // side is outside the cabinet, whose inside then holds no
+                // light; a lamp on a room mesh's ceiling is inside the
+                // room).
+                Some(_) => {
+                    let q = self.light_shadow_origin(k);
+                    m.triangles_through(q, on_mesh_tol(m)).is_empty() && side(m, q) == Side::Outside
+                }
+                // A light on the surface (`seat_at`'s tolerance) that no
+                // seat holds is held: a box-shaped room mesh's corner reads
+                // outside by the parity's rays, all of which leave along
+                // its edges and faces.
+                None => {
+                    m.triangles_through(l.position(), on_mesh_tol(m)).is_empty()
+                        && side(m, l.position()) == Side::Outside
+                }
+            },
             _ => false,
         };
         (0..self.meshes.len() as u32)
-            .filter(|&k| {
-                let m = &self.meshes[k as usize].0;
-                m.is_closed() && self.lights.iter().all(|l| outside(m, l))
+            .filter(|&i| {
+                let m = &self.meshes[i as usize].0;
+                m.is_closed() && (0..self.lights.len()).all(|k| outside(m, k))
             })
             .collect()
     }
