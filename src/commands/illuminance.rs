@@ -1027,6 +1027,16 @@ pub(crate) fn prepare_job(
         scene::load(scene_path)?
     };
     scene.set_direct_lights(run_args.direct_lights, run_args.ris_candidates);
+    // A candidate count that nothing uses is said, not silently dropped.
+    if run_args.ris_candidates != crate::light::array::RIS_CANDIDATES
+        && scene.light_array().is_none()
+    {
+        eprintln!(
+            "lumest: --ris-candidates {} has no effect: RIS is not used here (--direct-lights exact, \
+             or auto below its source counts)",
+            run_args.ris_candidates
+        );
+    }
     anyhow::ensure!(
         !(scene.has_panes() && run_args.direct_lights == crate::light::array::DirectLights::Ris),
         "{}: --direct-lights ris is not supported with glass panes (the sampled sources would miss the panes' transmittance and mirror images); the exact sum runs there",
