@@ -5,7 +5,7 @@
 
 use crate::estimator::solid::Solid;
 use crate::grid::Grid;
-use crate::io::csvio::{InputError, number};
+use crate::io::csvio::{InputError, display_name, number};
 use crate::io::{PointTable, format_number};
 use crate::run::RunResult;
 use crate::tally::surface_figures::{Figure, SurfaceFigures, Verdict, surface_figures, verdict};
@@ -30,13 +30,7 @@ pub fn grid_groups(t: &PointTable, input: &str) -> Result<Option<(Vec<Group>, bo
     };
     let ac = t.headers.iter().position(|h| h == "area");
     let rc = t.headers.iter().position(|h| h == "receiver");
-    let file = || {
-        if input == "-" {
-            "<stdin>".to_string()
-        } else {
-            input.to_string()
-        }
-    };
+    let file = || display_name(input);
     let mut groups: Vec<Group> = Vec::new();
     // Per grid: its receiver type (an unknown one is refused with the
     // receivers) and the line that set it.

@@ -46,7 +46,8 @@ pub struct PointTable {
     pub points: Vec<(DVec3, DVec3)>,
 }
 
-fn display_name(path: &str) -> String {
+/// `path` as messages name it: `<stdin>` for `-`.
+pub(crate) fn display_name(path: &str) -> String {
     if path == "-" {
         "<stdin>".to_string()
     } else {
@@ -68,18 +69,21 @@ fn read_all(path: &str) -> Result<String, InputError> {
         file: display_name(path),
         message: format!("cannot read: {e}"),
     })?;
-    // Not UTF-8: the line and column of the first bad byte.
+    utf8_text(bytes).map_err(|(line, column)| InputError::Row {
+        file: display_name(path),
+        line: line as u64,
+        message: format!("the byte at column {column} is not UTF-8 text: save the file as UTF-8"),
+    })
+}
+
+/// A file's bytes as text, or the line and column (1-based) of its first
+/// byte that is not UTF-8.
+pub(crate) fn utf8_text(bytes: Vec<u8>) -> Result<String, (usize, usize)> {
     String::from_utf8(bytes).map_err(|e| {
         let ok = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        let line = 1 + ok.iter().filter(|&&b| b == b'\n').count() as u64;
+        let line = 1 + ok.iter().filter(|&&b| b == b'\n').count();
         let column = 1 + ok.iter().rev().take_while(|&&b| b != b'\n').count();
-        InputError::Row {
-            file: display_name(path),
-            line,
-            message: format!(
-                "the byte at column {column} is not UTF-8 text: save the file as UTF-8"
-            ),
-        }
+        (line, column)
     })
 }
 

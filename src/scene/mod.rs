@@ -59,16 +59,11 @@ fn read_scene(path: &Path) -> Result<String, SceneError> {
         file: path.to_path_buf(),
         reason,
     })?;
-    String::from_utf8(bytes).map_err(|e| {
-        let ok = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        let line = 1 + ok.iter().filter(|&&b| b == b'\n').count();
-        let column = 1 + ok.iter().rev().take_while(|&&b| b != b'\n').count();
-        SceneError::Syntax {
-            file: path.to_path_buf(),
-            line,
-            column,
-            message: "not UTF-8 text: save the file as UTF-8".into(),
-        }
+    crate::io::csvio::utf8_text(bytes).map_err(|(line, column)| SceneError::Syntax {
+        file: path.to_path_buf(),
+        line,
+        column,
+        message: "not UTF-8 text: save the file as UTF-8".into(),
     })
 }
 
