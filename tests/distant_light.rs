@@ -32,32 +32,43 @@ fn v(d: DVec3) -> String {
     format!("[{:.17e}, {:.17e}, {:.17e}]", d.x, d.y, d.z)
 }
 
+/// A Lambertian plane of reflectance `rho` through the origin, its unit
+/// normal `n` written as a TOML array.
+fn plane(n: &str, rho: f64) -> String {
+    format!(
+        "[[surface]]\ntype = \"plane\"\npoint = [0, 0, 0]\nnormal = {n}\n\
+         material = {{ type = \"lambertian\", reflectance = {rho} }}\n\n"
+    )
+}
+
+/// A Lambertian box from `min` to `max` (TOML arrays), normals outward.
+fn outward_box(min: &str, max: &str, rho: f64) -> String {
+    format!(
+        "[[surface]]\ntype = \"box\"\nmin = {min}\nmax = {max}\nnormals = \"outward\"\n\
+         material = {{ type = \"lambertian\", reflectance = {rho} }}\n\n"
+    )
+}
+
+/// The distant light of 1e5 lx travelling along `d`, with `extra` keys.
+fn distant(d: DVec3, extra: &str) -> String {
+    format!(
+        "[[light]]\ntype = \"distant\"\ndirection = {}\nilluminance = 1e5\n{extra}",
+        v(d)
+    )
+}
+
 #[test]
 fn direct_light_is_e_n_cos_exactly_and_shadowed_by_a_box() {
     for (el, az) in [(90.0, 0.0), (60.0, 30.0), (30.0, 200.0), (5.0, 90.0)] {
         let d = sun(el, az);
-        let s = scene(&format!(
-            r#"
-[[surface]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 0, 1]
-material = {{ type = "lambertian", reflectance = 0.3 }}
-
-[[surface]]
-type = "box"
-min = [-0.5, -0.5, 0.0]
-max = [0.5, 0.5, 1.0]
-normals = "outward"
-material = {{ type = "lambertian", reflectance = 0.5 }}
-
-[[light]]
-type = "distant"
-direction = {}
-illuminance = 1e5
-"#,
-            v(d)
-        ));
+        let s = scene(
+            &[
+                plane("[0, 0, 1]", 0.3),
+                outward_box("[-0.5, -0.5, 0.0]", "[0.5, 0.5, 1.0]", 0.5),
+                distant(d, ""),
+            ]
+            .concat(),
+        );
         // In the box's shadow: the ground point the shadow of the box's top
         // centre falls on (the ray towards the sun passes through the box).
         let top = DVec3::new(0.0, 0.0, 0.5);
@@ -95,22 +106,13 @@ illuminance = 1e5
 #[test]
 fn open_floor_reflects_rho_e_h_into_a_point_facing_down() {
     let d = sun(40.0, 30.0);
-    let s = scene(&format!(
-        r#"
-[[surface]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 0, 1]
-material = {{ type = "lambertian", reflectance = 0.6 }}
-
-[[light]]
-type = "distant"
-direction = {}
-illuminance = 1e5
-angular_diameter = 0.53
-"#,
-        v(d)
-    ));
+    let s = scene(
+        &[
+            plane("[0, 0, 1]", 0.6),
+            distant(d, "angular_diameter = 0.53\n"),
+        ]
+        .concat(),
+    );
     let e_h = 1e5 * -d.z;
     let pts = [
         (DVec3::new(0.0, 0.0, 1.0), -DVec3::Z),
@@ -178,27 +180,14 @@ angular_diameter = 0.53
 fn floor_and_wall_interreflect_to_the_closed_form() {
     let d = sun(35.0, 20.0); // travels towards -x, -z
     let (rf, rw) = (0.5, 0.8);
-    let s = scene(&format!(
-        r#"
-[[surface]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 0, 1]
-material = {{ type = "lambertian", reflectance = {rf} }}
-
-[[surface]]
-type = "plane"
-point = [0, 0, 0]
-normal = [1, 0, 0]
-material = {{ type = "lambertian", reflectance = {rw} }}
-
-[[light]]
-type = "distant"
-direction = {}
-illuminance = 1e5
-"#,
-        v(d)
-    ));
+    let s = scene(
+        &[
+            plane("[0, 0, 1]", rf),
+            plane("[1, 0, 0]", rw),
+            distant(d, ""),
+        ]
+        .concat(),
+    );
     let (ef, ew) = (1e5 * -d.z, 1e5 * -d.x);
     let e_floor = (ef + rw * ew / 2.0) / (1.0 - rf * rw / 4.0);
     let e_wall = ew + rf * e_floor / 2.0;
@@ -246,23 +235,13 @@ illuminance = 1e5
 #[test]
 fn sun_disc_is_sampled_among_finite_shapes_and_seen_by_views() {
     let d = sun(50.0, 0.0);
-    let s = scene(&format!(
-        r#"
-[[surface]]
-type = "box"
-min = [-0.5, -0.5, 0.0]
-max = [0.5, 0.5, 1.0]
-normals = "outward"
-material = {{ type = "lambertian", reflectance = 0.0 }}
-
-[[light]]
-type = "distant"
-direction = {}
-illuminance = 1e5
-angular_diameter = 2.0
-"#,
-        v(d)
-    ));
+    let s = scene(
+        &[
+            outward_box("[-0.5, -0.5, 0.0]", "[0.5, 0.5, 1.0]", 0.0),
+            distant(d, "angular_diameter = 2.0\n"),
+        ]
+        .concat(),
+    );
     // Behind the box (towards -x from it, the sun is at +x): a point on the
     // ground 0.3 m behind it, deep in its shadow; and points in full sun.
     let pts = [
@@ -414,26 +393,15 @@ fn command_line_states_the_start_region_and_runs_every_estimator() {
 #[test]
 fn near_split_under_sky_and_sun_meets_the_ground_closed_form() {
     let (rho, el) = (0.5, 40.0f64);
-    let s = scene(&format!(
-        r#"
-[[surface]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 0, 1]
-material = {{ type = "lambertian", reflectance = {rho} }}
-
-[[light]]
-type = "sky"
-sky = "overcast"
-horizontal_illuminance = 10000
-
-[[light]]
-type = "distant"
-direction = {}
-illuminance = 1e5
-"#,
-        v(sun(el, 30.0))
-    ));
+    let sky = "[[light]]\ntype = \"sky\"\nsky = \"overcast\"\nhorizontal_illuminance = 10000\n\n";
+    let s = scene(
+        &[
+            plane("[0, 0, 1]", rho),
+            sky.into(),
+            distant(sun(el, 30.0), ""),
+        ]
+        .concat(),
+    );
     let e_h = 10000.0 + 1e5 * el.to_radians().sin();
     let tilt = 50f64.to_radians();
     let tilted = DVec3::new(tilt.sin(), 0.0, -tilt.cos());
@@ -499,28 +467,9 @@ illuminance = 1e5
 fn backward_estimator_meets_the_closed_forms() {
     let d = sun(35.0, 20.0);
     let (rf, rw) = (0.5, 0.8);
-    let floor = format!(
-        r#"
-[[surface]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 0, 1]
-material = {{ type = "lambertian", reflectance = {rf} }}
-"#
-    );
-    let wall = format!(
-        r#"
-[[surface]]
-type = "plane"
-point = [0, 0, 0]
-normal = [1, 0, 0]
-material = {{ type = "lambertian", reflectance = {rw} }}
-"#
-    );
-    let light = format!(
-        "[[light]]\ntype = \"distant\"\ndirection = {}\nilluminance = 1e5\nangular_diameter = 0.53\n",
-        v(d)
-    );
+    let floor = plane("[0, 0, 1]", rf);
+    let wall = plane("[1, 0, 0]", rw);
+    let light = distant(d, "angular_diameter = 0.53\n");
     let (ef, ew) = (1e5 * -d.z, 1e5 * -d.x);
     // Open floor: rho E_f into points facing down (and E_f on the floor).
     let s = scene(&format!("{floor}{light}"));
@@ -585,22 +534,7 @@ material = {{ type = "lambertian", reflectance = {rw} }}
 fn near_split_off_a_sunlit_box_face_meets_the_view_factor() {
     let d = DVec3::new(-0.5, -0.4, -0.6).normalize();
     let rho = 0.5;
-    let s = scene(&format!(
-        r#"
-[[surface]]
-type = "box"
-min = [0, 0, 0]
-max = [1, 1, 0.8]
-normals = "outward"
-material = {{ type = "lambertian", reflectance = {rho} }}
-
-[[light]]
-type = "distant"
-direction = {}
-illuminance = 1e5
-"#,
-        v(d)
-    ));
+    let s = scene(&[outward_box("[0, 0, 0]", "[1, 1, 0.8]", rho), distant(d, "")].concat());
     // View factor from a point facing a rectangle at distance h, the foot
     // of its normal a corner: (1 / 2 pi) (A / sqrt(1 + A^2) atan(B /
     // sqrt(1 + A^2)) + B / sqrt(1 + B^2) atan(A / sqrt(1 + B^2))), A = a / h,
