@@ -740,6 +740,30 @@ fn a_luminous_solid_cut_by_the_ceiling_is_reported() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+#[test]
+fn a_sphere_light_centred_on_a_box_top_is_reported_half_sunk() {
+    // A sphere light (radius 0.2 m) whose centre lies exactly on a box's
+    // top has its lower half inside the box (the centre on the face used to
+    // see every point of the sphere and report none); 0.1 m up, the cap
+    // below the top is a quarter of its surface (height 0.1 of 0.4); 0.2 m
+    // up it stands on the box.
+    let with = |z: f64| {
+        let src = format!(
+            "[[surface]]\ntype = \"box\"\nmin = [-5, -5, -1]\nmax = [5, 5, 0]\nnormals = \"outward\"\n\
+             material = {{ type = \"lambertian\", reflectance = 0.5 }}\n\n\
+             [[light]]\nname = \"ball\"\ntype = \"sphere\"\ncenter = [0.3, -0.2, {z}]\nradius = 0.2\nflux = 1000\n"
+        );
+        let s = parse(&src, Path::new("sunk.toml")).unwrap();
+        let warned = s.notes.iter().any(|n| n.contains("WARNING: ball: about"));
+        (s.luminous_shape_cut(0), warned)
+    };
+    let (cut, warned) = with(0.0);
+    assert!((cut - 0.5).abs() < 0.01 && warned, "{cut}");
+    let (cut, warned) = with(0.1);
+    assert!((cut - 0.25).abs() < 0.01 && warned, "{cut}");
+    assert_eq!(with(0.2), (0.0, false));
+}
+
 /// A view that meets a luminaire's luminous shape sees its luminance
 /// `I(w) / A_p(w)` towards `w = -d` (it was black before: only sphere and
 /// area lights were seen). References by hand: a closed box `2a x 2b x 2c`

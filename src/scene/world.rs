@@ -1549,7 +1549,7 @@ impl Scene {
     /// photometric centre (`position`) in a ceiling sends half its sides'
     /// light into the ceiling. For a sphere light, the share of its surface
     /// (1024 points of a Fibonacci sphere) that a finite shape hides from
-    /// its centre: a sphere cutting a box's wall sends that part of its
+    /// its centre (stepped off a surface it lies on): a sphere cutting a box's wall sends that part of its
     /// flux out of the room (one cutting an infinite plane is refused when
     /// the scene is read). 0 for every other light.
     pub fn luminous_shape_cut(&self, k: usize) -> f64 {
@@ -1557,6 +1557,14 @@ impl Scene {
         const GRID: usize = 8;
         let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
         if let Light::Sphere { c, r, .. } = &self.lights[k] {
+            // Centred on a surface, its centre is taken off it to the side
+            // its seat faces (as a point light's shadow origin): from the
+            // centre itself every segment starts on that surface and none
+            // is hidden, so a sphere half sunk in a box's top read 0.
+            let scale = self.coordinate_scale();
+            let from = self.seat_at(*c).map_or(*c, |seat| {
+                *c + step_off_surface(*c, scale) * seat.bisector()
+            });
             let n = 16 * DIRS;
             let hidden = (0..n)
                 .filter(|&i| {
@@ -1564,7 +1572,7 @@ impl Scene {
                     let s = (1.0 - z * z).max(0.0).sqrt();
                     let (sp, cp) = (golden * i as f64).sin_cos();
                     let y = *c + *r * (1.0 - 1e-9) * DVec3::new(s * cp, s * sp, z);
-                    !self.visible(*c, None, y)
+                    !self.visible(from, None, y)
                 })
                 .count();
             return hidden as f64 / n as f64;
