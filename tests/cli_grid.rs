@@ -470,7 +470,8 @@ fn solid_receivers_on_a_surface_are_left_out() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success()
-            && e.contains("grid `hemi`: every point lies on a surface")
+            && e.contains("field `receiver`: grid `hemi`: every point lies on a surface")
+            && e.contains(&format!("{}:", s.display()))
             && e.contains("offset"),
         "{e}"
     );

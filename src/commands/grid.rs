@@ -90,8 +90,9 @@ fn leave_out_points_on_surfaces(
     let left_out = before - g.points.len();
     anyhow::ensure!(
         before == 0 || !g.points.is_empty(),
-        "grid `{}`: every point lies on a surface, where a {} receiver would be partly inside it: \
-         give the [[grid]] an `offset` (such as 0.001 m) or another height",
+        "{}: field `receiver`: grid `{}`: every point lies on a surface, where a {} receiver would \
+         be partly inside it: give the [[grid]] an `offset` (such as 0.001 m) or another height",
+        g.receiver_at,
         g.name,
         kind.name()
     );

@@ -54,6 +54,9 @@ pub struct Grid {
     pub name: String,
     /// Receiver type name of its points (one of [`RECEIVERS`]).
     pub receiver: String,
+    /// Where its `receiver` key (or, without one, its `name`) stands in
+    /// the scene file, as `file:line:column`, for messages about it.
+    pub receiver_at: String,
     /// The points, row by row (along the first edge first).
     pub points: Vec<GridPoint>,
     /// Cells along the first and second edge (before a disc drops corners).
@@ -274,6 +277,9 @@ fn compile(scene: &SceneDesc, g: &GridDesc, ctx: &SourceCtx) -> Result<Grid, Sce
         }
         (None, _) => {}
     }
+    let at = g.receiver.as_ref().map_or(g.name.span(), Spanned::span);
+    let (line, column) = ctx.line_col(at.start);
+    grid.receiver_at = format!("{}:{line}:{column}", ctx.file.display());
     grid.name = name;
     grid.receiver = receiver;
     grid.em = em;
@@ -411,6 +417,7 @@ fn area_grid(
     Ok(Grid {
         name: String::new(),
         receiver: String::new(),
+        receiver_at: String::new(),
         points,
         cells: (na, nb),
         cell_size: (sa, sb),
@@ -469,6 +476,7 @@ fn road_grid(g: &GridDesc, ctx: &SourceCtx, offset: f64) -> Result<Grid, SceneEr
     Ok(Grid {
         name: String::new(),
         receiver: String::new(),
+        receiver_at: String::new(),
         points,
         cells: (rows, across),
         cell_size: (sa, sb),
