@@ -97,7 +97,10 @@ pub struct RunArgs {
     /// Worker threads (0: all cores). Results do not depend on it.
     #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub threads: usize,
-    /// Resolve reflection orders 1..K and the rest in the output.
+    /// Resolve K reflection orders and the rest in the output: illuminance
+    /// `E_order1..E_orderK` (light reflected k times before it arrives);
+    /// luminance `L_order2..L_order{K+1}` (the reflection at the sub-point
+    /// counted: order 1 is `L_direct`).
     #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub orders: u32,
     /// Truncate chains after this many reflections (biased; for order studies only).
