@@ -6,8 +6,9 @@ the parsed intensities and flux against it. Run from the repository root:
     python3 data/photometry/generate.py
 Type C files: I = I0 cos(gamma) (1 + f(C)) for gamma <= 90 deg, zero above,
 with f depending on the symmetry the file stores; every f integrates to
-zero over C, so the flux is pi I0. Types B and A: I = I0 cos(H) cos(V), flux
-pi I0. I0 = 1000 cd.
+zero over C, so the flux is pi I0. Types B and A: I = I0 cos(H) cos(V)
+(1 + 0.4 sin H), V the plane angle and H the lateral one, flux pi I0.
+I0 = 1000 cd.
 """
 import math
 
@@ -78,7 +79,10 @@ def ies(name, header, sym, ptype=1, lumens=-1, tilt="TILT=NONE", h=None, v=None,
 
 
 def type_ba(h_deg, v_deg):
-    return [[I0 * math.cos(math.radians(hh)) * math.cos(math.radians(vv)) for vv in v_deg] for hh in h_deg]
+    # Asymmetric in the lateral angle H (not in the plane angle V), so that
+    # a reader swapping the two gives other values; the flux stays pi I0.
+    return [[I0 * math.cos(math.radians(hh)) * math.cos(math.radians(vv))
+             * (1.0 + 0.4 * math.sin(math.radians(hh))) for vv in v_deg] for hh in h_deg]
 
 
 # One file per LM-63 version (rotational), then every symmetry, types A and B,

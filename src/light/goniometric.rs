@@ -14,25 +14,35 @@
 //! interpolant averaged over C (each plane weighted by the span of C it
 //! interpolates; the plain mean of equally spaced planes), zero where the
 //! pole lies outside the measured range; [`Goniometric::intensity_at`],
-//! given an azimuth, keeps that plane's value. Type B (floodlights): the beam axis
-//! is `-z` and the B-planes turn about the transverse axis `y`; `H` is the
-//! plane's angle from the axis towards `+x` and `V` the angle out of the
-//! `xz` plane towards `+y`: `d = (cos V sin H, sin V, -cos V cos H)`. Type A
-//! swaps the roles of `x` and `y`: `d = (sin V, cos V sin H, -cos V cos H)`.
+//! given an azimuth, keeps that plane's value. Type B (floodlights, the
+//! B-beta system): the beam axis is `-z` and the B-planes turn about the
+//! transverse axis `y`. The file's vertical angle `V` is the B-plane's
+//! angle (a floodlight aimed level tilts its B-planes up and down about its
+//! horizontal trunnion axis), from the beam axis towards `+x`; the
+//! horizontal angle `H` is the lateral angle beta within the plane, out of
+//! the `xz` plane towards `+y`: `d = (cos H sin V, sin H, -cos H cos V)`, as
+//! Radiance's `source.cal` (`srcB_horiz = asin(D_y)`, `srcB_vert =
+//! atan(D_x / D_z)`) and LM-63 read it (a laterally symmetric floodlight
+//! lists `H` from 0 to 90). Type A swaps the roles of `x` and `y`:
+//! `d = (sin H, cos H sin V, -cos H cos V)`. Internally the table of types
+//! A and B is transposed: its rows (the "horizontal" angles of the code
+//! below) are the planes `V`, its columns (the "vertical" ones, with the
+//! measure `cos beta d beta`) the laterals `H`.
 //!
 //! # Interpolation
 //!
 //! Bilinear in (horizontal angle, vertical angle), the de-facto rule of
 //! photometric software, after expanding the stored planes by the file's
-//! symmetry to a full turn (type C) or to `H` in `[-90, 90]` (types A, B),
-//! periodic in `C`. **Zero outside the measured vertical range**: a
-//! downlight measured over 0-90 degrees emits nothing upward (extrapolating
-//! the last value would add flux the file does not have).
+//! symmetry to a full turn (type C) or the laterals `H` to `[-90, 90]`
+//! (types A, B), periodic in `C`. **Zero outside the measured range** of
+//! `gamma` (type C) or `V` (types A, B): a downlight measured over 0-90
+//! degrees emits nothing upward (extrapolating the last value would add
+//! flux the file does not have).
 //!
 //! # Power and sampling
 //!
 //! `power = int I dOmega` \[lm\] is integrated exactly for the bilinear
-//! interpolant, cell by cell (`dOmega = cos V dV dH` for types A and B,
+//! interpolant, cell by cell (`dOmega = cos H dH dV` for types A and B,
 //! `sin gamma dgamma dC` for type C). Emission directions are drawn from a
 //! piecewise-constant density: a cell is picked in proportion to its
 //! largest corner intensity times its solid angle (an alias-free binary
@@ -55,9 +65,11 @@ const POLE_SIN: f64 = 1e-12;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Goniometric {
     kind: PhotometricType,
-    /// Horizontal angles \[rad\], ascending, covering the full range.
+    /// Row angles \[rad\], ascending: the C-planes over a full turn (type
+    /// C), the planes `V` as measured (types A, B; module docs).
     h: Vec<f64>,
-    /// Vertical angles \[rad\], ascending (the measured range only).
+    /// Column angles \[rad\], ascending: `gamma` as measured (type C), the
+    /// laterals `H` over `[-90, 90]` deg (types A, B).
     v: Vec<f64>,
     /// Intensity \[cd\] at `(h[i], v[k])`: `i[i * v.len() + k]`.
     i: Vec<f64>,
@@ -109,10 +121,10 @@ impl Goniometric {
     /// Expand a photometric table by its symmetry and build the sampler.
     /// `scale` multiplies every intensity (a multiplier or a flux override).
     pub fn new(p: &Photometry, scale: f64) -> Self {
-        let (h_deg, rows) = expand(p);
-        let nv = p.v_angles.len();
+        let (h_deg, v_deg, rows) = expand(p);
+        let nv = v_deg.len();
         let h: Vec<f64> = h_deg.iter().map(|a| a.to_radians()).collect();
-        let v: Vec<f64> = p.v_angles.iter().map(|a| a.to_radians()).collect();
+        let v: Vec<f64> = v_deg.iter().map(|a| a.to_radians()).collect();
         let i: Vec<f64> = rows.iter().flatten().map(|c| c * scale).collect();
         let mut g = Self {
             kind: p.kind,
@@ -140,8 +152,8 @@ impl Goniometric {
                     / span
             };
             let poles = [
-                if p.v_angles[0] == 0.0 { mean(0) } else { 0.0 },
-                if p.v_angles[nv - 1] == 180.0 {
+                if v_deg[0] == 0.0 { mean(0) } else { 0.0 },
+                if v_deg[nv - 1] == 180.0 {
                     mean(nv - 1)
                 } else {
                     0.0
@@ -214,8 +226,9 @@ impl Goniometric {
         self.i[a * self.v.len() + k]
     }
 
-    /// `int_{v0}^{v1}` of the vertical measure: `cos v0 - cos v1` for type C
-    /// (`sin gamma dgamma`), `sin v1 - sin v0` for types A and B (`cos V dV`).
+    /// `int_{v0}^{v1}` of the column measure: `cos v0 - cos v1` for type C
+    /// (`sin gamma dgamma`), `sin v1 - sin v0` for types A and B (`cos H dH`,
+    /// `H` the lateral angle).
     fn measure(&self, v0: f64, v1: f64) -> f64 {
         match self.kind {
             PhotometricType::C => v0.cos() - v1.cos(),
@@ -251,8 +264,9 @@ impl Goniometric {
         self.i.iter().copied().fold(0.0, f64::max)
     }
 
-    /// (horizontal, vertical) angles \[rad\] of a unit direction in the
-    /// luminaire's frame (module docs).
+    /// (row, column) angles \[rad\] of a unit direction in the luminaire's
+    /// frame: `(C, gamma)` for type C, `(V, H)` for types A and B (module
+    /// docs).
     pub fn angles(&self, d: DVec3) -> (f64, f64) {
         match self.kind {
             PhotometricType::C => {
@@ -268,7 +282,8 @@ impl Goniometric {
         }
     }
 
-    /// The unit direction of (horizontal, vertical) angles \[rad\].
+    /// The unit direction of (row, column) angles \[rad\]: `(C, gamma)` or
+    /// `(V, H)` ([`Self::angles`]).
     pub fn direction(&self, h: f64, v: f64) -> DVec3 {
         match self.kind {
             PhotometricType::C => {
@@ -417,8 +432,8 @@ impl Goniometric {
         (lo + th * slope).max(0.0)
     }
 
-    /// Intensity \[cd\] at angles `(h, v)` \[rad\]: bilinear, zero outside the
-    /// measured vertical range and outside the horizontal range of types A/B.
+    /// Intensity \[cd\] at (row, column) angles `(h, v)` \[rad\]
+    /// ([`Self::angles`]): bilinear, zero outside the measured range.
     /// At a pole this is plane `h`'s own value, not the planes' mean that
     /// [`Self::intensity`] gives a direction there.
     pub fn intensity_at(&self, h: f64, v: f64) -> f64 {
@@ -525,10 +540,28 @@ fn locate(xs: &[f64], x: f64) -> (usize, f64) {
     (k, t)
 }
 
-/// The table over the full horizontal range \[deg\] with one row per
-/// horizontal angle: type C to `[0, 360]` (periodic), types A and B to
-/// `[-90, 90]`.
-fn expand(p: &Photometry) -> (Vec<f64>, Vec<Vec<f64>>) {
+/// The table in the layout of [`Goniometric`]: its row angles, column
+/// angles \[deg\] and one row per row angle. Type C: the C-planes over a
+/// full turn `[0, 360]` (periodic) by the file's symmetry, by `gamma`.
+/// Types A and B: transposed, the planes `V` as stored by the laterals `H`
+/// expanded to `[-90, 90]` (a file from `H = 0` is laterally symmetric; one
+/// lateral angle, the same at every lateral).
+fn expand(p: &Photometry) -> (Vec<f64>, Vec<f64>, Vec<Vec<f64>>) {
+    if p.kind != PhotometricType::C {
+        let mut lat: Vec<(f64, usize)> = p.h_angles.iter().copied().zip(0..).collect();
+        if lat.len() == 1 {
+            lat = vec![(-90.0, 0), (90.0, 0)];
+        } else if lat.first().is_some_and(|&(a, _)| a >= 0.0) {
+            let mirrored: Vec<(f64, usize)> = lat.iter().map(|&(a, i)| (-a, i)).collect();
+            lat.extend(mirrored);
+        }
+        lat.sort_by(|a, b| a.0.total_cmp(&b.0));
+        lat.dedup_by(|a, b| a.0 == b.0);
+        let rows = (0..p.v_angles.len())
+            .map(|j| lat.iter().map(|&(_, i)| p.candela[i][j]).collect())
+            .collect();
+        return (p.v_angles.clone(), lat.iter().map(|l| l.0).collect(), rows);
+    }
     let mut planes: Vec<(f64, Vec<f64>)> = p
         .h_angles
         .iter()
@@ -560,18 +593,12 @@ fn expand(p: &Photometry) -> (Vec<f64>, Vec<Vec<f64>>) {
             }
             Symmetry::None => close_turn(&mut planes),
         },
-        PhotometricType::A | PhotometricType::B => {
-            if p.h_angles.first().is_some_and(|&a| a >= 0.0) && p.h_angles.len() > 1 {
-                mirror(&mut planes, &|a| -a);
-            } else if p.h_angles.len() == 1 {
-                let r = planes[0].1.clone();
-                planes = vec![(-90.0, r.clone()), (90.0, r)];
-            }
-        }
+        PhotometricType::A | PhotometricType::B => unreachable!("transposed above"),
     }
     planes.sort_by(|a, b| a.0.total_cmp(&b.0));
     planes.dedup_by(|a, b| a.0 == b.0);
-    planes.into_iter().unzip()
+    let (h, rows) = planes.into_iter().unzip();
+    (h, p.v_angles.clone(), rows)
 }
 
 /// Give the planes of a periodic type C table (angles in `[0, 360]`, at
@@ -859,6 +886,55 @@ mod tests {
         // Half the sphere: the flux of the lower hemisphere only.
         let q = quadrature(&g, 1000);
         assert!((g.power() / q - 1.0).abs() < 2e-4);
+    }
+
+    /// Types A and B follow the B-beta system as LM-63 and Radiance's
+    /// `source.cal` read it: the file's `V` is the plane's angle about the
+    /// transverse axis, `H` the lateral angle out of the beam's plane, `d =
+    /// (cos H sin V, sin H, -cos H cos V)` for type B, `x` and `y` swapped
+    /// for type A. A table of `I = f(H, V)`, bilinear in the two so that
+    /// the interpolant is `f` itself, reads `f` in those directions at random
+    /// angles (the transposed reading, `H` as the plane, gives other values
+    /// wherever `f(H, V) != f(V, H)`); a laterally symmetric file (`H` from
+    /// 0) gives `I(-H) = I(H)`; the power is the sphere's quadrature.
+    #[test]
+    fn types_a_and_b_read_v_as_the_plane_and_h_as_the_lateral_angle() {
+        let f = |h: f64, v: f64| 1000.0 + 5.0 * h + 2.0 * v + 0.02 * h * v;
+        let hs = [-90.0, -40.0, -10.0, 0.0, 25.0, 60.0, 90.0];
+        let vs = [-90.0, -50.0, 0.0, 30.0, 70.0, 90.0];
+        let mut rng = crate::sampling::Philox4x32::new(5, 0);
+        for kind in [PhotometricType::B, PhotometricType::A] {
+            let g = Goniometric::new(&table(kind, &hs, &vs, f), 1.0);
+            for _ in 0..2000 {
+                let u = rng.next_2d();
+                let (h, v) = (178.0 * u[0] - 89.0, 180.0 * u[1] - 90.0);
+                let (sh, ch) = h.to_radians().sin_cos();
+                let (sv, cv) = v.to_radians().sin_cos();
+                let d = match kind {
+                    PhotometricType::B => DVec3::new(ch * sv, sh, -ch * cv),
+                    _ => DVec3::new(sh, ch * sv, -ch * cv),
+                };
+                let (got, want) = (g.intensity(d), f(h, v));
+                assert!(
+                    (got - want).abs() < 1e-9 * want,
+                    "{kind:?} H{h} V{v}: {got} vs {want}"
+                );
+            }
+            assert!((g.power() / quadrature(&g, 1000) - 1.0).abs() < 2e-4);
+            // Nothing behind the beam's hemisphere (V and H within +-90).
+            assert_eq!(g.intensity(DVec3::new(0.3, 0.2, 0.9).normalize()), 0.0);
+        }
+        let half = [0.0, 30.0, 60.0, 90.0];
+        let g = Goniometric::new(&table(PhotometricType::B, &half, &vs, f), 1.0);
+        for (h, v) in [(30.0f64, 20.0f64), (45.0, -60.0), (80.0, 85.0)] {
+            let at = |h: f64| {
+                let (sh, ch) = h.to_radians().sin_cos();
+                let (sv, cv) = v.to_radians().sin_cos();
+                g.intensity(DVec3::new(ch * sv, sh, -ch * cv))
+            };
+            let want = f(h, v);
+            assert!((at(h) - want).abs() < 1e-9 * want && (at(-h) - want).abs() < 1e-9 * want);
+        }
     }
 
     #[test]
