@@ -126,6 +126,44 @@ fn weld(vertices: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> (Vec<DVec3>, Vec<[u32
     (kept, triangles)
 }
 
+/// An OBJ file's text with its continued lines joined: a backslash that
+/// ends a line (before `\n` or `\r\n`) continues it on the next (the OBJ
+/// format's rule, which `tobj` does not follow). The joined line keeps the
+/// number of its first line, and the line breaks it swallowed follow it as
+/// empty lines, so every later line keeps its number in messages.
+fn join_continued_lines(bytes: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut swallowed = 0usize;
+    let mut i = 0;
+    while i < bytes.len() {
+        let b = bytes[i];
+        if b == b'\\' {
+            let after = &bytes[i + 1..];
+            let skip = if after.starts_with(b"\r\n") {
+                2
+            } else if after.starts_with(b"\n") {
+                1
+            } else {
+                0
+            };
+            if skip > 0 {
+                out.push(b' ');
+                swallowed += 1;
+                i += 1 + skip;
+                continue;
+            }
+        }
+        out.push(b);
+        if b == b'\n' {
+            out.extend(std::iter::repeat_n(b'\n', swallowed));
+            swallowed = 0;
+        }
+        i += 1;
+    }
+    out.extend(std::iter::repeat_n(b'\n', swallowed));
+    out
+}
+
 fn file_error(file: &str, message: impl Into<String>) -> MeshError {
     MeshError::File {
         file: file.to_string(),
@@ -200,6 +238,7 @@ impl Mesh {
         let file = path.display().to_string();
         let bytes =
             std::fs::read(path).map_err(|e| file_error(&file, format!("cannot read: {e}")))?;
+        let bytes = join_continued_lines(&bytes);
         let mut rest: &[u8] = &bytes;
         let options = tobj::LoadOptions {
             triangulate: false,
@@ -1662,6 +1701,29 @@ f 9
         assert!(e.contains("x.obj: cannot write"), "{e}");
     }
 
+    /// A backslash ending a line continues it on the next (the OBJ rule; a
+    /// reviewer's cube with one face split over two lines was refused).
+    #[test]
+    fn obj_continued_lines_are_joined() {
+        let dir = tempfile::tempdir().unwrap();
+        let verts = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+        let one = dir.path().join("one.obj");
+        let split = dir.path().join("split.obj");
+        std::fs::write(&one, format!("{verts}f 1 2 3 4\n")).unwrap();
+        std::fs::write(
+            &split,
+            format!("v 0 0 \\\r\n0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 \\\n 3 4\n"),
+        )
+        .unwrap();
+        let (a, b) = (
+            Mesh::load_obj(&one).unwrap(),
+            Mesh::load_obj(&split).unwrap(),
+        );
+        assert_eq!(a.triangle_count(), 2);
+        assert_eq!((a.vertices(), a.triangles()), (b.vertices(), b.triangles()));
+        assert_eq!(join_continued_lines(b"a \\\nb\nc\\"), b"a  b\n\nc\\");
+    }
+
     #[test]
     fn obj_errors_name_file_and_line() {
         let dir = tempfile::tempdir().unwrap();
@@ -1716,6 +1778,13 @@ f 9
                 "vn.obj",
                 "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//4\n",
                 ":5: face normal index 4 out of range (1 normals in the file, 1 before this line)",
+            ),
+            (
+                // Continued lines (a backslash ending a line) keep the
+                // numbers of the lines after them.
+                "continued.obj",
+                "v 0 0 \\\n0\nv 1 0 0\nv 0 1 0\nf 1 \\\r\n2 3\nf 1 2 x\n",
+                ":7: face parse error",
             ),
             (
                 "short.obj",
