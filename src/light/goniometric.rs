@@ -20,10 +20,13 @@
 //! angle (a floodlight aimed level tilts its B-planes up and down about its
 //! horizontal trunnion axis), from the beam axis towards `+x`; the
 //! horizontal angle `H` is the lateral angle beta within the plane, out of
-//! the `xz` plane towards `+y`: `d = (cos H sin V, sin H, -cos H cos V)`, as
-//! Radiance's `source.cal` (`srcB_horiz = asin(D_y)`, `srcB_vert =
-//! atan(D_x / D_z)`) and LM-63 read it (a laterally symmetric floodlight
-//! lists `H` from 0 to 90). Type A swaps the roles of `x` and `y`:
+//! the `xz` plane towards `+y`: `d = (cos H sin V, sin H, -cos H cos V)`.
+//! Which angle is which follows LM-63 and Radiance's `ies2rad` (the file's
+//! horizontal angles go to `srcB_horiz`, an arcsine of the lateral
+//! component; a laterally symmetric floodlight lists `H` from 0 to 90); the
+//! signs follow the type C frame here, as the usual B-to-C conversion
+//! `tan V = cos C tan gamma`, `sin H = sin C sin gamma` gives them (Radiance's
+//! own frame is mirrored, its type B too). Type A swaps the roles of `x` and `y`:
 //! `d = (sin H, cos H sin V, -cos H cos V)`. Internally the table of types
 //! A and B is transposed: its rows (the "horizontal" angles of the code
 //! below) are the planes `V`, its columns (the "vertical" ones, with the
