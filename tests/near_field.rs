@@ -449,28 +449,57 @@ fn calibrated(
 /// 27 of 40).
 #[test]
 fn points_just_above_a_sunlit_ground_have_calibrated_error_bars() {
+    lit_floor_calibrated(
+        [2e-4, 2e-3],
+        (12, 100, 16_384),
+        [1e-4, 1e-3],
+        (16, 200, 20_000),
+    );
+}
+
+/// Points facing a floor of reflectance 0.5 at heights `sun_h` \[m\] under
+/// the sun (50,000 lx, read `rho E_h`) and at `lamp_h` under a 1000 cd lamp
+/// 1 m up (the floor's light by quadrature, [`from_floor`]), each
+/// [`calibrated`] over its `(seeds, first seed, chains)`.
+fn lit_floor_calibrated(
+    sun_h: [f64; 2],
+    sun_runs: (u64, u64, u64),
+    lamp_h: [f64; 2],
+    lamp_runs: (u64, u64, u64),
+) {
     let rho = 0.5;
     let mut sun =
         plane_under("type = \"distant\"\ndirection = [-0.5, -0.4, -0.6]\nilluminance = 50000\n");
     let e_h = 50000.0 * 0.6 / (0.25f64 + 0.16 + 0.36).sqrt();
-    let pts: Vec<_> = [2e-4, 2e-3]
+    let pts: Vec<_> = sun_h
         .iter()
         .map(|&h| (DVec3::new(0.3, 0.2, h), -DVec3::Z))
         .collect();
     sun.fit_directional(&pts.iter().map(|p| p.0).collect::<Vec<_>>());
-    calibrated(&sun, &pts, &[rho * e_h; 2], (12, 100, 16_384));
+    calibrated(&sun, &pts, &[rho * e_h; 2], sun_runs);
 
     let lamp = plane_under("type = \"point\"\nposition = [0, 0, 1]\nintensity = 1000\n");
-    let heights = [1e-4, 1e-3];
-    let pts: Vec<_> = heights
+    let pts: Vec<_> = lamp_h
         .iter()
         .map(|&h| (DVec3::new(0.0, 0.0, h), -DVec3::Z))
         .collect();
-    let exact: Vec<f64> = heights
+    let exact: Vec<f64> = lamp_h
         .iter()
         .map(|&h| from_floor(rho, h, |s| 1000.0 / (1.0 + s * s).powf(1.5)))
         .collect();
-    calibrated(&lamp, &pts, &exact, (16, 200, 20_000));
+    calibrated(&lamp, &pts, &exact, lamp_runs);
+}
+
+/// Short runs (2000 chains, 32 batches of about 62: one or two grazing
+/// paths per batch) stay calibrated next to a lit floor: the grazing
+/// stratum, twice the escape share wide (`first_band::GRAZE`), sees an
+/// escape in about every second path. When it was eight times as wide,
+/// one run in about seventy saw none among its 32 grazing paths and read
+/// the far part's share twice with an error bar that missed it: z 11-22,
+/// flagged `ok` (mean z^2 5-13 over 40-80 seeds).
+#[test]
+fn short_runs_next_to_a_lit_floor_have_calibrated_error_bars() {
+    lit_floor_calibrated([1e-5, 1e-4], (60, 300, 2000), [1e-4, 1e-3], (60, 400, 2000));
 }
 
 /// The strata go where the near paths' values are steady (the pilot's
