@@ -1712,7 +1712,7 @@ f 9
         std::fs::write(&one, format!("{verts}f 1 2 3 4\n")).unwrap();
         std::fs::write(
             &split,
-            format!("v 0 0 \\\r\n0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 \\\n 3 4\n"),
+            "v 0 0 \\\r\n0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 \\\n 3 4\n",
         )
         .unwrap();
         let (a, b) = (
