@@ -626,6 +626,37 @@ fn lights_alone_and_panels_in_a_plane_get_the_exact_direct_light() {
     }
 }
 
+/// A uniform disc alone is exact however its normal rounds: `[0, 1, 1]`
+/// normalises to a vector an ulp short of unit length, and the disc's
+/// reach out of its own plane, `R sqrt(1 - (n . n)^2)`, came to 1.5e-8 m,
+/// past the tolerance: its direct light was sampled (1559.28 +- 7.02 lx
+/// against 1561.3603 exactly, a reviewer's find). On the axis, facing it
+/// at distance h: `pi L R^2 / (h^2 + R^2)`.
+#[test]
+fn a_tilted_uniform_disc_alone_is_exact() {
+    for normal in [[0.0, 1.0, 1.0], [0.3, -0.5, 0.8], [0.6, 0.0, 0.8]] {
+        let s = scene(&format!(
+            "[[light]]\ntype = \"disc\"\ncenter = [0.1, 0.2, 0.3]\nnormal = [{}, {}, {}]\nradius = 0.7\nluminance = 500.0\n",
+            normal[0], normal[1], normal[2]
+        ));
+        let n = DVec3::from_array(normal).normalize();
+        let points: Vec<_> = [0.05, 0.5, 2.0]
+            .iter()
+            .map(|&h| (DVec3::new(0.1, 0.2, 0.3) + h * n, -n))
+            .collect();
+        let rec = Receivers::new(&s, &points).unwrap();
+        assert!(!rec.has_sampled_direct(), "normal {normal:?}");
+        for (j, h) in [0.05f64, 0.5, 2.0].into_iter().enumerate() {
+            let exact = std::f64::consts::PI * 500.0 * 0.49 / (h * h + 0.49);
+            let got = rec.direct()[j];
+            assert!(
+                (got - exact).abs() <= 1e-9 * exact,
+                "{normal:?} h {h}: {got} vs {exact}"
+            );
+        }
+    }
+}
+
 #[test]
 fn disc_sources_with_every_radial_profile_against_quadrature() {
     use lumest::cases::luminaires::{DISC_PROFILES, disc_case};

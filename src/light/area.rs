@@ -287,7 +287,13 @@ impl AreaLight {
                 ..
             } => {
                 let d = (*center - p).dot(m);
-                let reach = radius * (1.0 - normal.dot(m).powi(2)).max(0.0).sqrt();
+                // The sine of the angle between the normals as the cross
+                // product's length, exact to rounding for parallel ones:
+                // `sqrt(1 - (n . m)^2)` cancels to 2e-8 where `n . n` is an
+                // ulp under 1 (`[0, 1, 1]` normalised), which made a lone
+                // tilted disc look out of its own plane and lose its exact
+                // closed form (a reviewer's find).
+                let reach = radius * normal.cross(m).length().min(1.0);
                 (d - reach, d + reach)
             }
         }
