@@ -481,3 +481,30 @@ fn near_field_split_fixes_the_corner_point() {
     assert_eq!(flag, "ok", "VOV {}", a.vov());
     assert_eq!(bwd.tallies.diagnostics(0, bwd.direct[0]).flag(), "ok");
 }
+
+/// The validation gate (`lumest validate plate`, `integrating-sphere`,
+/// `luminaires`: `cases::case::run_case`) passes a flagged receiver only by
+/// the one flag its case expects of it: the plate's point in its shadow,
+/// facing the plate's black back, is `enclosed` by design and passes; the
+/// same case without that expectation fails (the gate judged z alone).
+#[test]
+fn the_case_gate_fails_a_receiver_flagged_unexpectedly() {
+    let case = plate_case(1.0, 0.8, 12);
+    assert_eq!(case.expected_flags.len(), 1);
+    let dir = tempfile::tempdir().unwrap();
+    let args = lumest::cases::case::CaseArgs {
+        time: 0.5,
+        seed: 3,
+        threads: 2,
+        report: dir.path().to_path_buf(),
+        alpha: 0.01,
+        quiet: true,
+    };
+    let gate = |c: &Case| lumest::cases::case::run_case("plate", "plate", c, &args).unwrap();
+    assert!(gate(&case));
+    let unexpected = Case {
+        expected_flags: Vec::new(),
+        ..case
+    };
+    assert!(!gate(&unexpected));
+}

@@ -78,6 +78,7 @@ pub fn sphere_case(rho: f64, radius: f64, source: DVec3, n_points: usize, as_sh:
         scene,
         receivers,
         exact,
+        expected_flags: Vec::new(),
     }
 }
 

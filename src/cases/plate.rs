@@ -119,11 +119,18 @@ pub fn plate_case(a: f64, rho: f64, n_points: usize) -> Case {
         .zip(exact)
         .partition(|(_, e)| *e != 0.0);
     lit.append(&mut dark);
-    let (receivers, exact) = lit.into_iter().unzip();
+    let (receivers, exact): (Vec<Receiver>, Vec<f64>) = lit.into_iter().unzip();
+    // The point in the plate's shadow faces its black back over most of
+    // its hemisphere: flagged `enclosed` by design (its E is exactly 0).
+    let expected_flags = (0..exact.len())
+        .filter(|&j| exact[j] == 0.0)
+        .map(|j| (j, "enclosed"))
+        .collect();
     Case {
         scene,
         receivers,
         exact,
+        expected_flags,
     }
 }
 
