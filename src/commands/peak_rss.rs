@@ -15,12 +15,23 @@ pub fn reset() -> bool {
     unsafe {
         libc::malloc_trim(0);
     }
-    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+    let ok = std::fs::write("/proc/self/clear_refs", "5").is_ok();
+    RESET_HELD.store(ok, std::sync::atomic::Ordering::Relaxed);
+    ok
 }
 
+/// Whether the last [`reset`] took (true before any): after one that did
+/// not, the high-water mark is the whole process's, not the row's.
+static RESET_HELD: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
+
 /// Peak resident set size \[bytes\] since the start or the last [`reset`];
-/// `None` where unsupported.
+/// `None` where unsupported or where the last reset did not take (the
+/// bench then prints `n/a`, not the process's peak as the row's; a
+/// reviewer's find).
 pub fn peak() -> Option<u64> {
+    if !RESET_HELD.load(std::sync::atomic::Ordering::Relaxed) {
+        return None;
+    }
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     parse_hwm(&status)
 }
@@ -63,5 +74,9 @@ mod tests {
         if cfg!(target_os = "linux") {
             assert!(peak().is_some_and(|b| b >= 4096));
         }
+        // After a reset that did not take, no peak (not the process's).
+        RESET_HELD.store(false, std::sync::atomic::Ordering::Relaxed);
+        assert_eq!(peak(), None);
+        RESET_HELD.store(true, std::sync::atomic::Ordering::Relaxed);
     }
 }
