@@ -88,10 +88,11 @@
 //!   lands near the point. The `sparse` check
 //!   ([`crate::tally::Diagnostics`]) flags exactly that (fewer than 10
 //!   collisions scored from the ball that holds 99.5 % of the point's
-//!   view); `sparse` alone is these rows' expected flag, so they are
-//!   `expected-flag`, not silent (at `rho1 rho2 = 0.9` the batch checks
-//!   fire as well, the flag is not `sparse` alone, and the rows are
-//!   z-tested: `FAIL`, then `explained`). **Remedy**:
+//!   view); `sparse;near` (the planes also lie within a tenth of the
+//!   distance to the light) is these rows' expected flag, so they are
+//!   `expected-flag`, not silent; where the batch checks fire as well the
+//!   flag is not the expected one and the rows are z-tested (`FAIL`, then
+//!   `explained`). **Remedy**:
 //!   `--near-radius auto` (case label `near-radius=auto`, points at
 //!   `r >= 100`), whose recursive near part joins its paths' vertices to
 //!   the batch's collisions around the source
