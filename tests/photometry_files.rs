@@ -45,16 +45,15 @@ fn analytic(file: &str, d: DVec3) -> f64 {
         "sym_c90_c270.ies" | "isym3.ldt" => "c90270",
         "sym_full.ies" | "isym0.ldt" | "pair.ies" | "pair.ldt" => "full",
         "type_b.ies" | "type_a.ies" => {
-            // B-beta: V the plane's angle about the luminaire's transverse
-            // axis (y for type B, x for type A), H the lateral angle out of
-            // the beam's plane towards it (LM-63, Radiance's source.cal).
-            let (t, l) = if file == "type_b.ies" {
-                (d.x, d.y)
+            // Type B: V the plane's angle about the transverse axis y, H
+            // the lateral angle out of it (LM-63, Radiance's ies2rad). Type
+            // A: H the plane's angle about x, V the angle out of it.
+            let (h, v) = if file == "type_b.ies" {
+                (d.y.clamp(-1.0, 1.0).asin(), d.x.atan2(-d.z))
             } else {
-                (d.y, d.x)
+                (d.y.atan2(-d.z), d.x.clamp(-1.0, 1.0).asin())
             };
-            let (v, h) = (t.atan2(-d.z), l.clamp(-1.0, 1.0).asin());
-            return if v.abs() <= PI / 2.0 {
+            return if h.abs() <= PI / 2.0 && v.abs() <= PI / 2.0 {
                 I0 * h.cos() * v.cos() * (1.0 + 0.4 * h.sin())
             } else {
                 0.0

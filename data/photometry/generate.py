@@ -7,7 +7,8 @@ the parsed intensities and flux against it. Run from the repository root:
 Type C files: I = I0 cos(gamma) (1 + f(C)) for gamma <= 90 deg, zero above,
 with f depending on the symmetry the file stores; every f integrates to
 zero over C, so the flux is pi I0. Types B and A: I = I0 cos(H) cos(V)
-(1 + 0.4 sin H), V the plane angle and H the lateral one, flux pi I0.
+(1 + 0.4 sin H), flux pi I0 (type B: V the plane's angle, H the lateral
+one; type A: H the plane's angle, V the one out of it).
 I0 = 1000 cd.
 """
 import math
@@ -79,8 +80,9 @@ def ies(name, header, sym, ptype=1, lumens=-1, tilt="TILT=NONE", h=None, v=None,
 
 
 def type_ba(h_deg, v_deg):
-    # Asymmetric in the lateral angle H (not in the plane angle V), so that
-    # a reader swapping the two gives other values; the flux stays pi I0.
+    # Asymmetric in H (not in V), so that a reader swapping the two gives
+    # other values; the flux stays pi I0 in either reading (sin H
+    # integrates to 0 against cos H and cos^2 H over [-90, 90]).
     return [[I0 * math.cos(math.radians(hh)) * math.cos(math.radians(vv))
              * (1.0 + 0.4 * math.sin(math.radians(hh))) for vv in v_deg] for hh in h_deg]
 

@@ -26,19 +26,24 @@
 //! component; a laterally symmetric floodlight lists `H` from 0 to 90); the
 //! signs follow the type C frame here, as the usual B-to-C conversion
 //! `tan V = cos C tan gamma`, `sin H = sin C sin gamma` gives them (Radiance's
-//! own frame is mirrored, its type B too). Type A swaps the roles of `x` and `y`:
-//! `d = (sin H, cos H sin V, -cos H cos V)`. Internally the table of types
-//! A and B is transposed: its rows (the "horizontal" angles of the code
-//! below) are the planes `V`, its columns (the "vertical" ones, with the
-//! measure `cos beta d beta`) the laterals `H`.
+//! own frame is mirrored, its type B too). Internally a type B table is
+//! transposed: its rows (the "horizontal" angles of the code below) are
+//! the planes `V`, its columns (the "vertical" ones, with the measure
+//! `cos beta d beta`) the laterals `H`. Type A (the A-alpha system) turns
+//! its planes about the other transverse axis, `x`, a floodlight aimed
+//! level's vertical one: there the plane's angle is the horizontal angle
+//! `H`, from the beam towards `+y`, and `V` the angle out of the plane
+//! towards `+x`, `d = (sin V, cos V sin H, -cos V cos H)` (the names hold:
+//! `H` horizontal, `V` vertical, as Blender's reader takes type A); its
+//! table is not transposed.
 //!
 //! # Interpolation
 //!
 //! Bilinear in (horizontal angle, vertical angle), the de-facto rule of
 //! photometric software, after expanding the stored planes by the file's
-//! symmetry to a full turn (type C) or the laterals `H` to `[-90, 90]`
-//! (types A, B), periodic in `C`. **Zero outside the measured range** of
-//! `gamma` (type C) or `V` (types A, B): a downlight measured over 0-90
+//! symmetry to a full turn (type C) or `H` to `[-90, 90]` (types A, B),
+//! periodic in `C`. **Zero outside the measured range** of `gamma` (type
+//! C) or `V` (types A, B): a downlight measured over 0-90
 //! degrees emits nothing upward (extrapolating the last value would add
 //! flux the file does not have).
 //!
@@ -69,10 +74,12 @@ const POLE_SIN: f64 = 1e-12;
 pub struct Goniometric {
     kind: PhotometricType,
     /// Row angles \[rad\], ascending: the C-planes over a full turn (type
-    /// C), the planes `V` as measured (types A, B; module docs).
+    /// C), the planes: `V` as measured (type B), `H` over `[-90, 90]` deg
+    /// (type A; module docs).
     h: Vec<f64>,
     /// Column angles \[rad\], ascending: `gamma` as measured (type C), the
-    /// laterals `H` over `[-90, 90]` deg (types A, B).
+    /// angle out of the planes: `H` over `[-90, 90]` deg (type B), `V` as
+    /// measured (type A).
     v: Vec<f64>,
     /// Intensity \[cd\] at `(h[i], v[k])`: `i[i * v.len() + k]`.
     i: Vec<f64>,
@@ -268,8 +275,8 @@ impl Goniometric {
     }
 
     /// (row, column) angles \[rad\] of a unit direction in the luminaire's
-    /// frame: `(C, gamma)` for type C, `(V, H)` for types A and B (module
-    /// docs).
+    /// frame: `(C, gamma)` for type C, `(V, H)` for type B, `(H, V)` for
+    /// type A (module docs).
     pub fn angles(&self, d: DVec3) -> (f64, f64) {
         match self.kind {
             PhotometricType::C => {
@@ -285,8 +292,7 @@ impl Goniometric {
         }
     }
 
-    /// The unit direction of (row, column) angles \[rad\]: `(C, gamma)` or
-    /// `(V, H)` ([`Self::angles`]).
+    /// The unit direction of (row, column) angles \[rad\] ([`Self::angles`]).
     pub fn direction(&self, h: f64, v: f64) -> DVec3 {
         match self.kind {
             PhotometricType::C => {
@@ -546,11 +552,12 @@ fn locate(xs: &[f64], x: f64) -> (usize, f64) {
 /// The table in the layout of [`Goniometric`]: its row angles, column
 /// angles \[deg\] and one row per row angle. Type C: the C-planes over a
 /// full turn `[0, 360]` (periodic) by the file's symmetry, by `gamma`.
-/// Types A and B: transposed, the planes `V` as stored by the laterals `H`
-/// expanded to `[-90, 90]` (a file from `H = 0` is laterally symmetric; one
-/// lateral angle, the same at every lateral).
+/// Type B: transposed, the planes `V` as stored by the laterals `H`
+/// expanded to `[-90, 90]`. Type A: the planes `H` expanded to `[-90, 90]`
+/// by `V`. In both a file from `H = 0` is symmetric in `H`; one `H`, the
+/// same at every `H`.
 fn expand(p: &Photometry) -> (Vec<f64>, Vec<f64>, Vec<Vec<f64>>) {
-    if p.kind != PhotometricType::C {
+    if p.kind == PhotometricType::B {
         let mut lat: Vec<(f64, usize)> = p.h_angles.iter().copied().zip(0..).collect();
         if lat.len() == 1 {
             lat = vec![(-90.0, 0), (90.0, 0)];
@@ -596,7 +603,15 @@ fn expand(p: &Photometry) -> (Vec<f64>, Vec<f64>, Vec<Vec<f64>>) {
             }
             Symmetry::None => close_turn(&mut planes),
         },
-        PhotometricType::A | PhotometricType::B => unreachable!("transposed above"),
+        PhotometricType::A => {
+            if p.h_angles.first().is_some_and(|&a| a >= 0.0) && p.h_angles.len() > 1 {
+                mirror(&mut planes, &|a| -a);
+            } else if p.h_angles.len() == 1 {
+                let r = planes[0].1.clone();
+                planes = vec![(-90.0, r.clone()), (90.0, r)];
+            }
+        }
+        PhotometricType::B => unreachable!("transposed above"),
     }
     planes.sort_by(|a, b| a.0.total_cmp(&b.0));
     planes.dedup_by(|a, b| a.0 == b.0);
@@ -891,17 +906,19 @@ mod tests {
         assert!((g.power() / q - 1.0).abs() < 2e-4);
     }
 
-    /// Types A and B follow the B-beta system as LM-63 and Radiance's
-    /// `source.cal` read it: the file's `V` is the plane's angle about the
-    /// transverse axis, `H` the lateral angle out of the beam's plane, `d =
-    /// (cos H sin V, sin H, -cos H cos V)` for type B, `x` and `y` swapped
-    /// for type A. A table of `I = f(H, V)`, bilinear in the two so that
-    /// the interpolant is `f` itself, reads `f` in those directions at random
-    /// angles (the transposed reading, `H` as the plane, gives other values
-    /// wherever `f(H, V) != f(V, H)`); a laterally symmetric file (`H` from
-    /// 0) gives `I(-H) = I(H)`; the power is the sphere's quadrature.
+    /// Type B reads the file's `V` as the plane's angle about the
+    /// transverse axis `y` and `H` as the lateral angle out of it, `d =
+    /// (cos H sin V, sin H, -cos H cos V)` (LM-63, Radiance's `ies2rad`);
+    /// type A reads `H` as the plane's angle about `x` and `V` as the angle
+    /// out of it, `d = (sin V, cos V sin H, -cos V cos H)` (`H` horizontal
+    /// and `V` vertical for a luminaire aimed level in both). A table of
+    /// `I = f(H, V)`, bilinear in the two so that the interpolant is `f`
+    /// itself, reads `f` in those directions at random angles (the other
+    /// reading gives other values wherever `f(H, V) != f(V, H)`); a file
+    /// from `H = 0` gives `I(-H) = I(H)`; the power is the sphere's
+    /// quadrature.
     #[test]
-    fn types_a_and_b_read_v_as_the_plane_and_h_as_the_lateral_angle() {
+    fn types_a_and_b_read_their_planes_and_angles_out_of_them() {
         let f = |h: f64, v: f64| 1000.0 + 5.0 * h + 2.0 * v + 0.02 * h * v;
         let hs = [-90.0, -40.0, -10.0, 0.0, 25.0, 60.0, 90.0];
         let vs = [-90.0, -50.0, 0.0, 30.0, 70.0, 90.0];
@@ -910,12 +927,13 @@ mod tests {
             let g = Goniometric::new(&table(kind, &hs, &vs, f), 1.0);
             for _ in 0..2000 {
                 let u = rng.next_2d();
-                let (h, v) = (178.0 * u[0] - 89.0, 180.0 * u[1] - 90.0);
+                // Off the poles (H = +-90 for type B, V = +-90 for type A).
+                let (h, v) = (178.0 * u[0] - 89.0, 178.0 * u[1] - 89.0);
                 let (sh, ch) = h.to_radians().sin_cos();
                 let (sv, cv) = v.to_radians().sin_cos();
                 let d = match kind {
                     PhotometricType::B => DVec3::new(ch * sv, sh, -ch * cv),
-                    _ => DVec3::new(sh, ch * sv, -ch * cv),
+                    _ => DVec3::new(sv, cv * sh, -cv * ch),
                 };
                 let (got, want) = (g.intensity(d), f(h, v));
                 assert!(
@@ -928,15 +946,21 @@ mod tests {
             assert_eq!(g.intensity(DVec3::new(0.3, 0.2, 0.9).normalize()), 0.0);
         }
         let half = [0.0, 30.0, 60.0, 90.0];
-        let g = Goniometric::new(&table(PhotometricType::B, &half, &vs, f), 1.0);
-        for (h, v) in [(30.0f64, 20.0f64), (45.0, -60.0), (80.0, 85.0)] {
-            let at = |h: f64| {
-                let (sh, ch) = h.to_radians().sin_cos();
-                let (sv, cv) = v.to_radians().sin_cos();
-                g.intensity(DVec3::new(ch * sv, sh, -ch * cv))
-            };
-            let want = f(h, v);
-            assert!((at(h) - want).abs() < 1e-9 * want && (at(-h) - want).abs() < 1e-9 * want);
+        for kind in [PhotometricType::B, PhotometricType::A] {
+            let g = Goniometric::new(&table(kind, &half, &vs, f), 1.0);
+            for (h, v) in [(30.0f64, 20.0f64), (45.0, -60.0), (80.0, 85.0)] {
+                let at = |h: f64| {
+                    let (sh, ch) = h.to_radians().sin_cos();
+                    let (sv, cv) = v.to_radians().sin_cos();
+                    g.intensity(match kind {
+                        PhotometricType::B => DVec3::new(ch * sv, sh, -ch * cv),
+                        _ => DVec3::new(sv, cv * sh, -cv * ch),
+                    })
+                };
+                let want = f(h, v);
+                let ok = |x: f64| (x - want).abs() < 1e-9 * want;
+                assert!(ok(at(h)) && ok(at(-h)), "{kind:?} H{h} V{v}");
+            }
         }
     }
 
