@@ -50,7 +50,7 @@
 //! # Power and sampling
 //!
 //! `power = int I dOmega` \[lm\] is integrated exactly for the bilinear
-//! interpolant, cell by cell (`dOmega = cos H dH dV` for types A and B,
+//! interpolant, cell by cell (`dOmega = cos H dH dV` for type B, `cos V dV dH` for A,
 //! `sin gamma dgamma dC` for type C). Emission directions are drawn from a
 //! piecewise-constant density: a cell is picked in proportion to its
 //! largest corner intensity times its solid angle (an alias-free binary
@@ -237,8 +237,8 @@ impl Goniometric {
     }
 
     /// `int_{v0}^{v1}` of the column measure: `cos v0 - cos v1` for type C
-    /// (`sin gamma dgamma`), `sin v1 - sin v0` for types A and B (`cos H dH`,
-    /// `H` the lateral angle).
+    /// (`sin gamma dgamma`), `sin v1 - sin v0` for types A and B (the cosine
+    /// of the angle out of the planes: `cos H dH` for B, `cos V dV` for A).
     fn measure(&self, v0: f64, v1: f64) -> f64 {
         match self.kind {
             PhotometricType::C => v0.cos() - v1.cos(),
