@@ -64,7 +64,7 @@ const RATIO: f64 = 8.0;
 /// part's share twice with an error bar that missed it, z 11-22 flagged
 /// `ok` over 40-80 seeds 1e-5-1e-3 m above a lit floor; at 2, mean z^2
 /// 0.6-1.4 there at 2000 and 20,000 chains, the error bars 1.8-3.4 times
-/// smaller under the lamp and the sun, within 10 % 1 m off the lamp's
+/// smaller under the lamp and the sun, within 11 % 1 m off the lamp's
 /// axis). The stratum above it ends at [`RATIO`] times the share, where the
 /// strata ended before: narrowing the grazing stratum alone widened the
 /// strata above it, whose few paths then spanned a third of the lobe
