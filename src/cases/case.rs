@@ -129,14 +129,7 @@ pub fn run_case(name: &str, title: &str, case: &Case, a: &CaseArgs) -> anyhow::R
     )?;
     let batches = result.tallies.batches();
     let bound = sidak_bound(a.alpha, n, Some(batches));
-    let pass = zcheck::within(max_z, bound) && flagged.is_empty();
-    if !flagged.is_empty() {
-        println!(
-            "{} flagged receiver(s), not passed: {}",
-            flagged.len(),
-            flagged.join("; ")
-        );
-    }
+    let pass = zcheck::within(max_z, bound) && none_flagged(&flagged);
     if zeros > 0 {
         println!("{zeros} receiver(s) with exact value 0 (checked to be estimated as exactly 0)");
     }
@@ -146,4 +139,18 @@ pub fn run_case(name: &str, title: &str, case: &Case, a: &CaseArgs) -> anyhow::R
         if pass { "PASS" } else { "FAIL" }
     );
     Ok(pass)
+}
+
+/// Print the receivers flagged against their case's expectation
+/// (`"receiver j: flag"` each), if any; whether there are none (a gate's
+/// verdict needs that as well as its z test).
+pub(crate) fn none_flagged(flagged: &[String]) -> bool {
+    if !flagged.is_empty() {
+        println!(
+            "{} flagged receiver(s), not passed: {}",
+            flagged.len(),
+            flagged.join("; ")
+        );
+    }
+    flagged.is_empty()
 }

@@ -698,7 +698,7 @@ pub fn validate_luminaires(a: &LuminairesArgs) -> anyhow::Result<()> {
     // its points), not at `alpha` each (8 cases: 7.7 % for 1 %).
     let all = cases(&dir)?;
     let per_case = CaseArgs {
-        alpha: -((-a.case.alpha).ln_1p() / all.len().max(1) as f64).exp_m1(),
+        alpha: crate::tally::check_bounds::per_receiver_level(a.case.alpha, all.len()),
         ..a.case.clone()
     };
     for (name, title, case) in all {

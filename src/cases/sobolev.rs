@@ -299,14 +299,7 @@ pub fn validate_sobolev(a: &ValidateSobolevArgs) -> anyhow::Result<()> {
     let last = result.progress();
     let fin = checkpoint(&last, &exact, 0..exact.len());
     let bound = sidak_bound(a.case.alpha, exact.len(), Some(fin.batches));
-    let pass = zcheck::within(fin.max_z, bound) && flagged.is_empty();
-    if !flagged.is_empty() {
-        println!(
-            "{} flagged receiver(s), not passed: {}",
-            flagged.len(),
-            flagged.join("; ")
-        );
-    }
+    let pass = zcheck::within(fin.max_z, bound) && super::case::none_flagged(&flagged);
     println!(
         "max |z| = {:.3} against the Sidak bound {:.3} (alpha {}, {} receivers, {} batches): {}",
         fin.max_z,
