@@ -113,9 +113,7 @@ impl Ctx<'_> {
         }
         let mut cfg = self.opts.config(self.opts.seed, tuned);
         if split {
-            // `--near-radius auto`
-            cfg.near = (0.0, NEAR_PATHS);
-            cfg.near_auto = true;
+            split_auto(&mut cfg);
         }
         let all = 0..exact.len();
         let (res, tables) = convergence(
@@ -175,8 +173,19 @@ fn sobolev_points(
         .collect()
 }
 
+/// The near/far split of `--near-radius auto` on `cfg`, with
+/// [`NEAR_PATHS`] paths per point.
+fn split_auto(cfg: &mut crate::run::RunConfig) {
+    cfg.near = (0.0, NEAR_PATHS);
+    cfg.near_auto = true;
+}
+
 /// Run the plain room ([`BoxRoom::plain`]) scaled by `s` with `seed`
-/// (32768 chains in the quick subset) at its points ([`plain_room_points`]).
+/// (32768 chains in the quick subset) at its points ([`plain_room_points`]),
+/// with the near/far split of `--near-radius auto`, as users run it: the
+/// floor point in the desk's shadow lies 0.1 m from the desk's side and 2.9 m
+/// from the light, where the plain estimate is not to be trusted (the
+/// `near` check), and what is tested here is the scaling, not that.
 fn run_plain_room(
     ctx: &Ctx,
     s: f64,
@@ -186,12 +195,9 @@ fn run_plain_room(
     let pts = plain_room_points(s);
     let rec: Vec<Receiver> = pts.iter().map(|p| p.1).collect();
     let receivers = Receivers::from_receivers(&scene, &rec).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let res = run(
-        &scene,
-        &receivers,
-        &ctx.opts.config(seed, 32768),
-        &mut |_| true,
-    );
+    let mut cfg = ctx.opts.config(seed, 32768);
+    split_auto(&mut cfg);
+    let res = run(&scene, &receivers, &cfg, &mut |_| true);
     Ok((res, pts))
 }
 

@@ -13,7 +13,7 @@
 //! | `integrating-sphere` | [`sphere_case`](crate::cases::integrating_sphere::sphere_case) with `rho = 0.999`, radius 1 m, 100 cd off centre, 6 wall points | closed form |
 //! | `near-wall` | [`box_room`](crate::cases::box_room::box_room) (`rho = 0.8`): points 1e-6 m from a wall (facing the room, and with the normal along the wall), 1e-6 m from each face of a floor corner and of a ceiling corner (diagonal normals), 1e-6 m in front of the glossy partition, and one floor point | backward estimator ([`crate::backward::run`]), independent streams |
 //! | `near-source` | the Sobolev planes with the source 1e-6 m above plane 1 (`h1 = 1e-6`, `h2 = 1 - h1`, `rho = 0.5`): floor points at `r` in {0, 1e-6, 1e-3, 1, 10} m, ceiling points at {0, 1} m | exact |
-//! | `scaled` | Sobolev case A (`h1 = h2 = 0.5`, `rho = 0.5`, 1 cd) with every length times `s` in {1e-3, 1e4}: `E_s(s r) = E_1(r) / s^2`; a plain 5 x 4 x 3 m room with a desk and a point light, times `s` in {1e-3, 1e4} | exact; the unscaled room (another seed) times `1/s^2` |
+//! | `scaled` | Sobolev case A (`h1 = h2 = 0.5`, `rho = 0.5`, 1 cd) with every length times `s` in {1e-3, 1e4}: `E_s(s r) = E_1(r) / s^2`; a plain 5 x 4 x 3 m room with a desk and a point light, times `s` in {1e-3, 1e4}, with the near/far split of `--near-radius auto` (as users run it) | exact; the unscaled room (another seed) times `1/s^2` |
 //!
 //! # Verdicts
 //!
