@@ -139,7 +139,7 @@ fn sample_mean(
     let (mut sum, mut sum2) = (0.0, 0.0);
     for i in 0..n {
         let mut rng = Philox4x32::new(seed, i);
-        let v = direct::sample(s, set, r, &frame, strategy, &mut rng);
+        let v = direct::sample(s, set, r, &frame, strategy, None, &mut rng);
         sum += v;
         sum2 += v * v;
     }
@@ -789,7 +789,7 @@ fn a_ring_of_zero_luminance_keeps_light_sampling_s_spread() {
         let v: Vec<f64> = (0..n)
             .map(|s| {
                 let mut rng = Philox4x32::new(11, s);
-                direct::sample(&sc, &set, &rec, &frame, strategy, &mut rng)
+                direct::sample(&sc, &set, &rec, &frame, strategy, None, &mut rng)
             })
             .collect();
         let m = v.iter().sum::<f64>() / n as f64;

@@ -85,7 +85,7 @@ fn sample_mean(s: &Scene, rec: &Receivers, j: usize, n: u64, seed: u64) -> (f64,
     let (mut sum, mut sum2) = (0.0, 0.0);
     for i in 0..n {
         let mut rng = Philox4x32::new(seed, i);
-        let v = direct::sample(s, set, r, &frame, Strategy::Balance, &mut rng);
+        let v = direct::sample(s, set, r, &frame, Strategy::Balance, None, &mut rng);
         sum += v;
         sum2 += v * v;
     }

@@ -295,7 +295,7 @@ material = { type = "lambertian", reflectance = 0.5 }
             let (mut sum, mut sum2) = (0.0, 0.0);
             for i in 0..samples {
                 let mut rng = Philox4x32::new(0x006d_6973, i);
-                let v = direct::sample(&scene, set, rec, &frame, strategy, &mut rng);
+                let v = direct::sample(&scene, set, rec, &frame, strategy, None, &mut rng);
                 sum += v;
                 sum2 += v * v;
             }

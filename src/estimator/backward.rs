@@ -879,7 +879,7 @@ fn next_event(
             // One source kept by RIS (target: its unoccluded illuminance
             // at the vertex), `N = W N_k` (see `crate::light::array`).
             // Strategy B's density stays the exact sum over the sources.
-            if let Some(pick) = array.pick(&scene.lights, h.p, Some(h.n), rng) {
+            if let Some(pick) = array.pick(&scene.lights, h.p, Some(h.n), None, rng) {
                 nee = pick.w * v.nee(pick.k as usize, rng);
                 for x in v.seat.borrow_mut().iter_mut() {
                     x.1 *= pick.w;

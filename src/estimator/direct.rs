@@ -51,6 +51,7 @@
 use super::{Receiver, Response};
 use crate::light::Light;
 use crate::light::array::LightArray;
+use crate::light::hot_sources::Hot;
 use crate::sampling::Philox4x32;
 use crate::sampling::warp::{Frame, sample_cosine_hemisphere, sin_cos_turns};
 use crate::scene::Scene;
@@ -136,6 +137,11 @@ impl LightSet {
         self.array.is_some()
     }
 
+    /// The light array that keeps the set's source, if it is picked by RIS.
+    pub fn array(&self) -> Option<&LightArray> {
+        self.array.as_ref()
+    }
+
     /// Whether the set holds no source that emits.
     pub fn is_empty(&self) -> bool {
         self.lights.is_empty() || self.prob.iter().all(|&p| p <= 0.0)
@@ -161,12 +167,13 @@ impl LightSet {
         scene: &Scene,
         x: DVec3,
         n: Option<DVec3>,
+        hot: Option<Hot<'_>>,
         rng: &mut Philox4x32,
     ) -> Option<(u32, f64)> {
         match &self.array {
             None => Some((self.pick(rng.next_f64()), 1.0)),
             Some(a) => a
-                .pick(&scene.lights, x, n, rng)
+                .pick(&scene.lights, x, n, hot, rng)
                 .map(|p| (p.k, p.w * self.prob[p.k as usize])),
         }
     }
@@ -445,13 +452,15 @@ fn emitters_along(
 
 /// One estimate of the direct light [lx, or cd/m^2 for a luminance
 /// receiver] at `rec` (frame `frame` of its normal) from the sources in
-/// `set`, drawing from `rng`.
+/// `set` (with RIS, the receiver's `hot` sources mixed into its
+/// candidates, [`crate::light::hot_sources`]), drawing from `rng`.
 pub fn sample(
     scene: &Scene,
     set: &LightSet,
     rec: &Receiver,
     frame: &Frame,
     strategy: Strategy,
+    hot: Option<Hot<'_>>,
     rng: &mut Philox4x32,
 ) -> f64 {
     if set.is_empty() {
@@ -463,6 +472,7 @@ pub fn sample(
             scene,
             rec.p,
             rec.solid_kind().is_none().then_some(rec.n),
+            hot,
             rng,
         )
     {

@@ -305,6 +305,56 @@ pub fn exact_direct(scene: &Scene, k: usize) -> bool {
     }
 }
 
+/// The hot sources of every receiver whose direct set is picked by RIS
+/// (`direct_set[j]` into `direct_sets`), flattened: start offsets (empty
+/// when no set uses RIS), scene indices, cumulative probabilities and
+/// shares ([`crate::light::hot_sources`]). Each receiver's list depends on
+/// it alone, so it is the same whatever the threads or the other receivers.
+type HotLists = (Vec<u32>, Vec<u32>, Vec<f64>, Vec<f64>);
+fn hot_lists(
+    scene: &Scene,
+    receivers: &[Receiver],
+    direct_sets: &[direct::LightSet],
+    direct_set: &[Option<u8>],
+) -> HotLists {
+    use crate::light::hot_sources::{HotSources, SourceTree};
+    use rayon::prelude::*;
+    let trees: Vec<Option<SourceTree>> = direct_sets
+        .iter()
+        .map(|set| set.array().map(|a| SourceTree::new(a, &scene.lights)))
+        .collect();
+    if trees.iter().all(Option::is_none) {
+        return Default::default();
+    }
+    let lists: Vec<HotSources> = receivers
+        .par_iter()
+        .zip(direct_set)
+        .map(|(rec, s)| {
+            let Some(s) = s.map(usize::from) else {
+                return HotSources::default();
+            };
+            match (direct_sets[s].array(), &trees[s]) {
+                (Some(a), Some(t)) => HotSources::find(
+                    a,
+                    t,
+                    &scene.lights,
+                    rec.p,
+                    rec.solid_kind().is_none().then_some(rec.n),
+                ),
+                _ => HotSources::default(),
+            }
+        })
+        .collect();
+    let mut out: HotLists = (vec![0], Vec::new(), Vec::new(), Vec::new());
+    for h in lists {
+        out.1.extend_from_slice(&h.k);
+        out.2.extend_from_slice(&h.cum);
+        out.3.push(h.beta);
+        out.0.push(out.1.len() as u32);
+    }
+    out
+}
+
 /// Emitted luminance [cd/m^2] seen along the ray `o + t d` (unit `d`) from
 /// an observer at `o`: that of the sphere lights and the luminous shapes
 /// of luminaires ([`Light::shape_luminance`]) it enters before `t_max`
@@ -515,6 +565,14 @@ pub struct Receivers {
     direct_sets: Vec<direct::LightSet>,
     /// Per receiver: its set in `direct_sets`, if any source is sampled there.
     direct_set: Vec<Option<u8>>,
+    /// Per receiver whose set is picked by RIS, its hot sources
+    /// ([`crate::light::hot_sources`]): `hot_k[hot_start[j]..hot_start[j +
+    /// 1]]` with their cumulative probabilities in `hot_cum` and the share
+    /// `hot_beta[j]` (all empty without RIS).
+    hot_start: Vec<u32>,
+    hot_k: Vec<u32>,
+    hot_cum: Vec<f64>,
+    hot_beta: Vec<f64>,
     /// How the sampled direct light is drawn.
     direct_strategy: direct::Strategy,
 }
@@ -789,7 +847,7 @@ impl Receivers {
                 }
             })
             .collect();
-        let direct_set = receivers
+        let direct_set: Vec<Option<u8>> = receivers
             .iter()
             .map(|rec| {
                 let s = if rec.constant_weight().is_some() {
@@ -1038,6 +1096,8 @@ impl Receivers {
             .zip(&frames)
             .map(|(rec, frame)| near_need(scene, rec.p, frame, rec.solid_kind().is_some()))
             .collect();
+        let (hot_start, hot_k, hot_cum, hot_beta) =
+            hot_lists(scene, receivers, &direct_sets, &direct_set);
         let mut r = Self {
             near_paths: 0,
             near_per: Vec::new(),
@@ -1057,6 +1117,10 @@ impl Receivers {
             direct,
             direct_sets,
             direct_set,
+            hot_start,
+            hot_k,
+            hot_cum,
+            hot_beta,
             direct_strategy: direct::Strategy::Power,
             lifted,
         };
@@ -1138,6 +1202,17 @@ impl Receivers {
         self.direct_set[j].map(|s| &self.direct_sets[s as usize])
     }
 
+    /// Receiver `j`'s hot sources, where its direct light is kept by RIS
+    /// ([`crate::light::hot_sources`]).
+    pub fn hot(&self, j: usize) -> Option<crate::light::hot_sources::Hot<'_>> {
+        let r = *self.hot_start.get(j)? as usize..*self.hot_start.get(j + 1)? as usize;
+        Some(crate::light::hot_sources::Hot {
+            k: &self.hot_k[r.clone()],
+            cum: &self.hot_cum[r],
+            beta: self.hot_beta[j],
+        })
+    }
+
     /// Whether some receiver has sampled direct light.
     pub fn has_sampled_direct(&self) -> bool {
         self.direct_set.iter().any(Option::is_some)
@@ -1178,6 +1253,7 @@ impl Receivers {
                     rec,
                     &self.frames[j],
                     self.direct_strategy,
+                    self.hot(j),
                     &mut rng,
                 );
             }

@@ -7,7 +7,9 @@
 //! shadow test per source and receiver. The array instead
 //!
 //! 1. draws `M` candidates `k_1..k_M` independently from a cheap *source*
-//!    distribution `q(k)` (power `Phi_k / sum Phi`, an alias table: O(1));
+//!    distribution `q(k)` (power `Phi_k / sum Phi`, an alias table: O(1);
+//!    at a receiver with *hot* sources, which power would under-sample
+//!    there, a mixture with them, [`super::hot_sources`]);
 //! 2. weighs each by `w_i = p^(k_i) / q(k_i)`, with the *target*
 //!    `p^(k)` an unoccluded estimate of `D_k` ([`target`]: solid angle
 //!    times brightness times the clamped cosine at the receiver);
@@ -46,6 +48,7 @@
 //! `int w_B f`: the sum is unbiased.
 
 use super::Light;
+use super::hot_sources::Hot;
 use crate::sampling::Philox4x32;
 use crate::sampling::alias::AliasTable;
 use glam::DVec3;
@@ -142,6 +145,8 @@ pub struct LightArray {
     lights: Vec<u32>,
     /// Alias table of their powers.
     table: AliasTable,
+    /// Per scene light, its index in `lights` (`u32::MAX`: not in the set).
+    slot: Vec<u32>,
     /// Candidates per pick.
     m: usize,
 }
@@ -165,11 +170,28 @@ impl LightArray {
     pub fn new(all: &[Light], lights: Vec<u32>, m: usize) -> Option<Self> {
         let powers: Vec<f64> = lights.iter().map(|&k| all[k as usize].power()).collect();
         let table = AliasTable::new(&powers)?;
+        let mut slot = vec![u32::MAX; all.len()];
+        for (i, &k) in lights.iter().enumerate() {
+            slot[k as usize] = i as u32;
+        }
         Some(Self {
             lights,
             table,
+            slot,
             m: m.clamp(1, RIS_MAX_CANDIDATES),
         })
+    }
+
+    /// Scene indices of the array's sources.
+    pub fn lights(&self) -> &[u32] {
+        &self.lights
+    }
+
+    /// A source drawn in proportion to power with one uniform `u`: its
+    /// scene index and probability `q(k)`.
+    pub fn draw_power(&self, u: f64) -> (u32, f64) {
+        let i = self.table.sample(u);
+        (self.lights[i], self.table.pmf(i))
     }
 
     /// Candidates per pick.
@@ -189,17 +211,19 @@ impl LightArray {
 
     /// Keep one source for the receiver at `x` \[m\] with unit normal `n`
     /// (`None`: a solid receiver, lit from every side) by RIS over `M`
-    /// power-drawn candidates, drawing `M + 1` uniforms from `rng` (always,
-    /// so streams stay aligned); `None` when no candidate has a positive
-    /// target (the estimate is then 0).
+    /// candidates drawn by power, or from the mixture with the receiver's
+    /// `hot` sources ([`super::hot_sources`]), drawing `M + 1` uniforms from
+    /// `rng` (always, so streams stay aligned); `None` when no candidate has
+    /// a positive target (the estimate is then 0).
     pub fn pick(
         &self,
         all: &[Light],
         x: DVec3,
         n: Option<DVec3>,
+        hot: Option<Hot<'_>>,
         rng: &mut Philox4x32,
     ) -> Option<RisPick> {
-        self.pick_with(all, x, n, rng, 1.0)
+        self.pick_with(all, x, n, hot, rng, 1.0)
     }
 
     /// [`Self::pick`] with the weight `W` scaled by `bias` (1: unbiased);
@@ -210,14 +234,33 @@ impl LightArray {
         all: &[Light],
         x: DVec3,
         n: Option<DVec3>,
+        hot: Option<Hot<'_>>,
         rng: &mut Philox4x32,
         bias: f64,
     ) -> Option<RisPick> {
+        let hot = hot.filter(|h| !h.k.is_empty());
         let mut cand = [(0u32, 0.0f64, 0.0f64); RIS_MAX_CANDIDATES];
         let mut sum = 0.0;
         for c in cand.iter_mut().take(self.m) {
-            let i = self.table.sample(rng.next_f64());
-            let q = self.table.pmf(i);
+            let u = rng.next_f64();
+            // The candidate and its density: by power, or from the mixture
+            // `(1 - beta) q + beta h` (one uniform either way).
+            let (i, q) = match hot {
+                None => {
+                    let i = self.table.sample(u);
+                    (i, self.table.pmf(i))
+                }
+                Some(h) => {
+                    let i = if u < h.beta {
+                        self.slot[h.draw(u / h.beta) as usize] as usize
+                    } else {
+                        self.table
+                            .sample(((u - h.beta) / (1.0 - h.beta)).min(1.0 - f64::EPSILON))
+                    };
+                    let k = self.lights[i];
+                    (i, (1.0 - h.beta) * self.table.pmf(i) + h.beta * h.prob(k))
+                }
+            };
             let k = self.lights[i];
             let t = target(&all[k as usize], x, n);
             let w = if q > 0.0 { t / q } else { 0.0 };
@@ -365,7 +408,7 @@ mod tests {
             let n_s = 200_000;
             for _ in 0..n_s {
                 let v = arr
-                    .pick_with(&lights, x, Some(n), &mut rng, bias)
+                    .pick_with(&lights, x, Some(n), None, &mut rng, bias)
                     .map_or(0.0, |p| lights[p.k as usize].direct_illuminance(x, n) * p.w);
                 s += v;
                 s2 += v * v;

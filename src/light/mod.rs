@@ -20,6 +20,7 @@ pub mod array;
 pub mod distant;
 pub mod environment;
 pub mod goniometric;
+pub mod hot_sources;
 pub mod lambert;
 pub mod luminous_parts;
 pub mod median_cut;

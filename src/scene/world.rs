@@ -878,11 +878,12 @@ impl Scene {
                  (one shadow test per source and receiver)"
             ),
             Some(_) if collimated > 0 => format!(
-                "sampled by RIS ({m} candidates drawn by power, one shadow test per sample), but for \
-                 {collimated} collimated light(s) at infinity, exact"
+                "sampled by RIS ({m} candidates drawn by power, mixed with each point's hot sources, one \
+                 shadow test per sample), but for {collimated} collimated light(s) at infinity, exact"
             ),
             Some(_) => format!(
-                "sampled by RIS ({m} candidates drawn by power, one shadow test per sample)"
+                "sampled by RIS ({m} candidates drawn by power, mixed with each point's hot sources, one \
+                 shadow test per sample)"
             ),
             None => {
                 let sampled = (0..n)
