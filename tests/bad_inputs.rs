@@ -992,10 +992,30 @@ fn ies_cases() -> Vec<Case> {
         ies_line("negative candela", 8, "100 -80 50", Error("f.ies:8")),
         ies_line("candela nan", 8, "100 nan 50", Error("f.ies:8")),
         ies_line(
-            "candela 1e300 (shown short)",
+            "candela 1e300 (shown short; above a scene's limit)",
             8,
             "100 1e300 50",
-            Accept("max intensity 1.0e300 cd"),
+            Error("largest is 1e300 cd"),
+        ),
+        // Finite numbers whose product overflows: no NaN, no infinity, and
+        // `--plot` does not stall on an infinite axis.
+        ies_line(
+            "candela 1.7e308",
+            8,
+            "100 1.7e308 50",
+            Error("intensities out of range"),
+        ),
+        ies_line(
+            "candela multiplier 1e308",
+            4,
+            "1 1000 1e308 3 1 1 2 0 0 0",
+            Error("intensities out of range"),
+        ),
+        ies_line(
+            "lamp lumens 1e-308",
+            4,
+            "1 1e-308 1 3 1 1 2 0 0 0",
+            Accept("light output ratio out of range"),
         ),
         ies_line("candela not a number", 8, "100 eighty 50", Error("f.ies:8")),
         ies_line(
@@ -1108,6 +1128,12 @@ fn ldt_cases() -> Vec<Case> {
             Error("f.ldt"),
         ),
         ldt_line("Isym 7", 3, "7", Error("f.ldt:3")),
+        ldt_line(
+            "conversion factor 1e308",
+            24,
+            "1e308",
+            Error("intensities out of range"),
+        ),
         ldt_line("Ityp 9", 2, "9", Error("f.ldt:2")),
         ldt_line("Mc 0", 4, "0", Error("f.ldt:4")),
         ldt_line("Ng 0", 6, "0", Error("f.ldt:6")),
@@ -1124,10 +1150,10 @@ fn ldt_cases() -> Vec<Case> {
         ldt_line("an intensity negative", 90, "-5.0", Error("f.ldt:90")),
         ldt_line("an intensity nan", 90, "nan", Error("f.ldt:90")),
         ldt_line(
-            "an intensity 1e300 (shown short)",
+            "an intensity 1e300 (shown short; above a scene's limit)",
             90,
             "1e300",
-            Accept("max intensity 1.0e300 cd"),
+            Error("largest is 1e300 cd"),
         ),
         ldt_line(
             "a gamma angle 1e300 (shown short)",

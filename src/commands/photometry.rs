@@ -96,7 +96,10 @@ pub fn summary(p: &Photometry) -> Vec<String> {
                 "flux of the table {} lm; lamps {} lm; light output ratio {}",
                 format_fixed(g.power(), 1),
                 format_number(lm),
-                format_fixed(g.power() / lm, 4)
+                match g.power() / lm {
+                    r if r.is_finite() => format_fixed(r, 4),
+                    _ => "out of range".to_string(),
+                }
             ),
             None => format!(
                 "flux of the table {} lm (absolute photometry)",
@@ -235,6 +238,19 @@ pub fn photometry(a: &PhotometryArgs) -> anyhow::Result<()> {
         super::outputs::check_outputs(&[a.file.as_path()], &[("--plot", Path::new(out))])?;
     }
     let p = crate::io::photometry::read(&a.file)?;
+    // As a scene refuses it (an infinite axis would also stall the plot).
+    let g = Goniometric::new(&p, p.upright_tilt_factor());
+    if let Some(e) = g.range_error() {
+        let here = match g.max_intensity() {
+            m if m.is_finite() => format!("the largest is {} cd", format_number(m)),
+            _ => "the intensities overflow".to_string(),
+        };
+        anyhow::bail!(
+            "{}: {e}; here {here} (check the candela multiplier, the ballast and conversion \
+             factors and the candela values)",
+            a.file.display(),
+        );
+    }
     for line in summary(&p) {
         println!("{line}");
     }

@@ -274,6 +274,23 @@ impl Goniometric {
         self.i.iter().copied().fold(0.0, f64::max)
     }
 
+    /// Why the table cannot be used, if it cannot: its flux is not finite,
+    /// or its largest intensity lies above [`crate::scene::MAX_INTENSITY`]
+    /// or is positive but below [`crate::scene::MIN_INTENSITY`] (a
+    /// candela multiplier, ballast or conversion factor near 1e308 makes
+    /// infinite intensities out of finite numbers).
+    pub fn range_error(&self) -> Option<String> {
+        use crate::scene::{MAX_INTENSITY, MIN_INTENSITY};
+        let m = self.max_intensity();
+        let ok = self.power().is_finite() && m <= MAX_INTENSITY && (m == 0.0 || m >= MIN_INTENSITY);
+        (!ok).then(|| {
+            format!(
+                "intensities out of range: the largest must be 0 or between {MIN_INTENSITY:e} and \
+                 {MAX_INTENSITY:e} cd"
+            )
+        })
+    }
+
     /// (row, column) angles \[rad\] of a unit direction in the luminaire's
     /// frame: `(C, gamma)` for type C, `(V, H)` for type B, `(H, V)` for
     /// type A (module docs).

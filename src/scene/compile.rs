@@ -1850,15 +1850,8 @@ fn goniometric(
         (None, None) => 1.0,
     };
     let dist = table(scale * tilt_factor);
-    if !(dist.power().is_finite()
-        && dist.max_intensity() <= MAX_INTENSITY
-        && (dist.max_intensity() == 0.0 || dist.max_intensity() >= MIN_INTENSITY))
-    {
-        return Err(ctx.invalid(
-            fs.span(),
-            "file",
-            format!("intensities out of range: the largest must be 0 or between {MIN_INTENSITY:e} and {MAX_INTENSITY:e} cd"),
-        ));
+    if let Some(e) = dist.range_error() {
+        return Err(ctx.invalid(fs.span(), "file", e));
     }
     let lamps = photometry.lamp_lumens.map_or_else(
         || "absolute photometry".to_string(),
