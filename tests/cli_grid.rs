@@ -476,3 +476,43 @@ fn solid_receivers_on_a_surface_are_left_out() {
         "{e}"
     );
 }
+
+/// A grid that no light reaches (the lamp switched off): U0 and Ud are
+/// undefined (0 / 0), and the summary and the report say so instead of
+/// printing NaN.
+#[test]
+fn an_unlit_grid_has_undefined_ratios_not_nan() {
+    let dir = tempfile::tempdir().unwrap();
+    let dark = SCENE.replace("intensity = 300", "intensity = 0");
+    let (scene, points) = grid_points(dir.path(), &dark, "work plane");
+    let (res, figs, report) = (
+        dir.path().join("e.csv"),
+        dir.path().join("f.csv"),
+        dir.path().join("r.html"),
+    );
+    let out = illuminance(
+        "2048",
+        &scene,
+        &points,
+        &res,
+        &[
+            "--figures-out".as_ref(),
+            figs.as_ref(),
+            "--report".as_ref(),
+            report.as_ref(),
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    for f in ["U0 = E_min/E_avg", "Ud = E_min/E_max"] {
+        assert!(
+            err.contains(&format!("{f} undefined: no light reaches the grid")),
+            "{err}"
+        );
+    }
+    let html = std::fs::read_to_string(&report).unwrap();
+    for (what, text) in [("summary", err.to_string()), ("report", html.clone())] {
+        assert!(!text.contains("NaN"), "{what}: {text}");
+    }
+    assert!(html.contains("undefined"));
+}

@@ -211,11 +211,18 @@ fn rectangle_and_road() {
 /// Bad keys get the file, the line and the field.
 #[test]
 fn bad_grid_keys() {
-    let cases: [(&str, &str, &str); 12] = [
+    let cases: [(&str, &str, &str); 13] = [
         (
             "[[grid]]\nname = \"a\"\nsurface = \"room.z_min\"\nspacng = 1\n",
             "spacng",
             "unknown field `spacng`",
+        ),
+        // Behind the floor, outside the room (the run then kept 20 of its
+        // 64 points at E = 0 and printed U0 = NaN).
+        (
+            "[[grid]]\nname = \"a\"\nsurface = \"room.z_min\"\noffset = -1\n",
+            "offset",
+            "puts the grid behind `room.z_min`",
         ),
         (
             "[[grid]]\nname = \"a\"\nsurface = \"room.z_min\"\nborder = -1\n",

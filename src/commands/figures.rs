@@ -254,6 +254,10 @@ pub fn summary_lines(g: &GridFigures, equal_weights: bool) -> Vec<String> {
         },
     ));
     let line = |name: &str, unit: &str, x: &Figure, digits: i32| {
+        // A ratio over E_avg or E_max = 0: no light reaches the grid.
+        if !x.value.is_finite() {
+            return format!("  {name} undefined: no light reaches the grid");
+        }
         format!(
             "  {name} = {}{unit} (std error {}, 95 % interval {} .. {}{})",
             sig(x.value, digits),

@@ -146,7 +146,11 @@ fn figure_rows(g: &GridFigures) -> Vec<FigureRow> {
     ];
     figs.into_iter()
         .map(|(name, unit, x, req, digits)| {
-            let both = |v: f64, d: i32| (sig(v, d), format_number(v));
+            // A ratio over E_avg or E_max = 0 (no light reaches the grid).
+            let both = |v: f64, d: i32| match v.is_finite() {
+                true => (sig(v, d), format_number(v)),
+                false => ("undefined".to_string(), String::new()),
+            };
             FigureRow {
                 figure: name.into(),
                 unit: unit.into(),

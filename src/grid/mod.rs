@@ -163,6 +163,22 @@ fn compile(scene: &SceneDesc, g: &GridDesc, ctx: &SourceCtx) -> Result<Grid, Sce
         .map(|v| number(ctx, v, "offset", |_| true, "a finite length [m]"))
         .transpose()?
         .unwrap_or(0.0);
+    // A named surface's normal points to its lit side: a negative offset
+    // puts the grid behind it (below the floor, inside the desk).
+    if let (Some(v), Some(s)) = (&g.offset, &g.surface)
+        && offset < 0.0
+    {
+        return Err(invalid(
+            ctx,
+            v.span(),
+            "offset",
+            format!(
+                "{offset} m puts the grid behind `{}`, on the side its normal does not face: \
+                 give an offset >= 0 (along the normal, into the lit side)",
+                s.get_ref()
+            ),
+        ));
+    }
     let receiver = match &g.receiver {
         Some(r) if !RECEIVERS.contains(&r.get_ref().as_str()) => {
             return Err(invalid(
