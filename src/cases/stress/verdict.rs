@@ -10,8 +10,9 @@ use crate::tally::{sidak_bound, zcheck};
 pub enum Verdict {
     /// Finite, no flag, and `|z|` within the Sidak bound.
     Pass,
-    /// The row carries exactly its expected flag ([`ExpectedFlag`]) and
-    /// nothing else, which excuses it from the z test.
+    /// The row carries its expected flag ([`ExpectedFlag`]), and nothing
+    /// else but the statistical checks' flags ([`SYMPTOMS`]), which excuses
+    /// it from the z test.
     ExpectedFlag,
     /// Finite and `|z|` within the Sidak bound, but the diagnostics raise a
     /// flag that is not the row's expected one: reported, not passed.
@@ -19,8 +20,10 @@ pub enum Verdict {
     /// Not finite, an error or a panic, a failed check of the row's own,
     /// or `|z|` beyond the bound, whatever flags the row carries.
     Fail,
-    /// A `Fail` of the plain local estimate at a point whose remedy row (the
-    /// same point with the near/far split, `--near-radius`) is `Pass`.
+    /// A `Fail` of the plain local estimate that carries `near` (the check
+    /// that says the plain estimate is not to be trusted there) at a point
+    /// whose remedy row (the same point with the near/far split,
+    /// `--near-radius`) is `Pass`.
     Explained,
 }
 
@@ -46,15 +49,24 @@ impl Verdict {
     ];
 }
 
-/// The one diagnostics flag a row may carry instead of passing its z test,
+/// The diagnostics flag a row may carry instead of passing its z test,
 /// and the physical reason it is expected there.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ExpectedFlag {
-    /// The whole flag string the row must carry to be excused (one check).
+    /// The checks the row must raise to be excused (`;`-separated, in the
+    /// order the flag string lists them).
     pub flag: &'static str,
     /// Why that check must fire on that row.
     pub reason: &'static str,
 }
+
+/// Flags that may come with an expected flag without costing the row its
+/// excuse: the statistical checks of the batch means (`R`, `VOV`, `FOM`,
+/// `tail`) and `sparse`, symptoms of the cause the expected flag names
+/// (an estimate that misses, or rarely samples, what carries its mean has
+/// heavy-tailed batch means). Any other flag (`near` where it is not
+/// expected, `batches`, `enclosed`, `approx`, a reference's `ref:`) is not.
+pub const SYMPTOMS: [&str; 5] = ["R", "VOV", "FOM", "tail", "sparse"];
 
 /// The expected flag of a row of `family`, `case` and `point`, if any.
 ///
@@ -71,8 +83,23 @@ pub struct ExpectedFlag {
 ///   with a small, steady error bar, so its z is meaningless, and `sparse`
 ///   is the check that exists to say so. The same point with
 ///   `near-radius=auto` is z-tested.
+/// - `near` on the plain local estimate at `plane 1 r=100` of the `sobolev`
+///   family: the planes lie 100 times closer than the light, so `near`
+///   fires there by geometry, whatever the run; the estimate's heavy tail
+///   (chains that cross 100 plane spacings) raises the batch checks on
+///   some runs (`R;VOV;tail;near`).
+/// - `sparse` on the split (`near-radius=auto`) at `plane 1 r=100` of the
+///   `sobolev` family: some of the near part's paths come within reach of
+///   the light's core, but fewer than 10 enter it, so the part of the
+///   light fetched there rests on few samples and the check says so (on
+///   every case of the full matrix, and in 38 of 40 runs of 65,536 chains
+///   at `rho1 rho2 = 0.9`, whose estimates agreed with the exact value:
+///   mean z^2 0.83). README, "The far field between highly reflecting
+///   surfaces": at r = 100 m no setting gives a precise, unflagged estimate
+///   in seconds.
 pub fn expected_flag(family: &str, case: &str, point: &str) -> Option<ExpectedFlag> {
     let plain = !case.contains("near-radius=");
+    let auto = case.ends_with("near-radius=auto");
     match family {
         "sobolev" if plain && point == "plane 1 r=10000" => Some(ExpectedFlag {
             flag: "sparse;near",
@@ -80,6 +107,16 @@ pub fn expected_flag(family: &str, case: &str, point: &str) -> Option<ExpectedFl
                      the mean never land near the point (`sparse`), and the planes lie \
                      far closer than a tenth of the distance to the light, where the \
                      plain estimate is not to be trusted (`near`)",
+        }),
+        "sobolev" if plain && point == "plane 1 r=100" => Some(ExpectedFlag {
+            flag: "near",
+            reason: "the plain local estimate with the planes 100 times closer than \
+                     the light, where it is not to be trusted (`near`, by geometry)",
+        }),
+        "sobolev" if auto && point == "plane 1 r=100" => Some(ExpectedFlag {
+            flag: "sparse",
+            reason: "the near part's paths reach the light's core but rarely enter it \
+                     at r = 100 m: the light fetched there rests on few samples",
         }),
         _ => None,
     }
@@ -129,6 +166,7 @@ pub(super) fn explain(rows: &mut [StressRow]) {
             || r.case.contains("near-radius=")
             || r.batches == 0
             || !finite
+            || !r.flag.split(';').any(|f| f == "near")
         {
             continue;
         }
@@ -151,10 +189,17 @@ pub(super) fn explain(rows: &mut [StressRow]) {
     }
 }
 
-/// Whether row `r` carries exactly its expected flag, which excuses it
-/// from the z test.
+/// Whether row `r` carries its expected flag, with no other flag but the
+/// statistical checks' ([`SYMPTOMS`]), which excuses it from the z test.
 fn excused(r: &StressRow) -> bool {
-    r.expected.is_some_and(|e| r.flag == e.flag)
+    r.expected.is_some_and(|e| {
+        let flags: Vec<&str> = r.flag.split(';').collect();
+        let want: Vec<&str> = e.flag.split(';').collect();
+        want.iter().all(|w| flags.contains(w))
+            && flags
+                .iter()
+                .all(|f| want.contains(f) || SYMPTOMS.contains(f))
+    })
 }
 
 /// Judge every row (module doc, "Verdicts"): finiteness; a failed check of
@@ -191,13 +236,13 @@ pub(super) fn judge(rows: &mut [StressRow], alpha: f64) {
         };
         // What became of the expected flag, for the notes.
         let expected = match r.expected {
-            Some(e) if r.flag != e.flag => format!(
+            Some(e) if !excused(r) => format!(
                 " (expected flag `{}` {}, so the row is z-tested)",
                 e.flag,
                 if r.flag == "ok" {
                     "absent"
                 } else {
-                    "not alone"
+                    "absent or with other flags"
                 }
             ),
             _ => String::new(),
@@ -372,13 +417,14 @@ mod tests {
             row("near-source", "c", "d", 0.5, "tail"),
             // 4: the expected flag alone excuses any z.
             row("sobolev", "rho1rho2=0.99 h1=0.5", far, -4e6, "sparse;near"),
-            // 5: the expected flag together with others does not.
+            // 5: the expected flag with a flag that is not a statistical
+            // symptom does not.
             row(
                 "sobolev",
                 "rho1rho2=0.9 h1=0.5",
                 far,
                 -4e6,
-                "VOV;sparse;near",
+                "batches;sparse;near",
             ),
             // 6: the expected flag absent: tested like any row.
             row("sobolev", "rho1rho2=0.9 h1=0.01", far, -4e6, "ok"),
@@ -394,6 +440,33 @@ mod tests {
             // 9: not finite.
             row("near-source", "c", "e", f64::NAN, "ok"),
             row("near-source", "c", "f", f64::INFINITY, "tail"),
+            // 11: the expected flag with the statistical checks' flags
+            // excuses the row; 12: part of the expected flag does not.
+            row(
+                "sobolev",
+                "rho1rho2=0.99 h1=0.01",
+                far,
+                -4e6,
+                "VOV;tail;sparse;near",
+            ),
+            row("sobolev", "rho1rho2=0.99 h1=0.001", far, -4e6, "VOV;near"),
+            // 13: `near` is expected at r = 100 (with symptoms), `sparse`
+            // on the split there, and neither elsewhere.
+            row(
+                "sobolev",
+                "rho1rho2=0.9 h1=0.5",
+                "plane 1 r=100",
+                -1.7,
+                "R;VOV;tail;near",
+            ),
+            row(
+                "sobolev",
+                "rho1rho2=0.9 h1=0.5 near-radius=auto",
+                "plane 1 r=100",
+                1.2,
+                "sparse",
+            ),
+            row("sobolev", "rho1rho2=0.9 h1=0.5", "plane 1 r=0", 0.5, "near"),
         ];
         judge(&mut rows, 0.01);
         use Verdict::*;
@@ -410,14 +483,23 @@ mod tests {
                 Pass,
                 Fail,
                 Fail,
-                Fail
+                Fail,
+                ExpectedFlag,
+                Fail,
+                ExpectedFlag,
+                ExpectedFlag,
+                Flagged
             ]
         );
-        // One excused row: the others are the Sidak family.
-        let bound = sidak_bound(0.01, rows.len() - 1, Some(128));
+        // Four excused rows: the others are the Sidak family.
+        let bound = sidak_bound(0.01, rows.len() - 4, Some(128));
         assert!(rows.iter().all(|r| r.bound == bound), "{bound}");
         assert!(rows[1].note.contains("flags: VOV"), "{}", rows[1].note);
-        assert!(rows[5].note.contains("not alone"), "{}", rows[5].note);
+        assert!(
+            rows[5].note.contains("with other flags"),
+            "{}",
+            rows[5].note
+        );
         assert!(rows[6].note.contains("absent"), "{}", rows[6].note);
     }
 
@@ -441,19 +523,23 @@ mod tests {
         let wall = "box room rho=0.8";
         let fixed = format!("{wall} {NEAR_WALL_LABEL}");
         let mut rows = vec![
-            row("near-wall", wall, "a", -100.0, "ok"),
+            row("near-wall", wall, "a", -100.0, "VOV;near"),
             row("near-wall", &fixed, "a", 0.5, "ok"),
-            row("near-wall", wall, "b", -100.0, "ok"),
+            row("near-wall", wall, "b", -100.0, "near"),
             row("near-wall", &fixed, "b", 0.5, "VOV"),
-            row("near-wall", wall, "c", -100.0, "ok"),
+            row("near-wall", wall, "c", -100.0, "near"),
             row("near-wall", &fixed, "c", 80.0, "ok"),
             // No remedy row.
-            row("near-wall", wall, "d", -100.0, "ok"),
+            row("near-wall", wall, "d", -100.0, "near"),
             // A remedy of another case does not count.
-            row("near-wall", "box room rho=0.9", "a", -100.0, "ok"),
+            row("near-wall", "box room rho=0.9", "a", -100.0, "near"),
             // A NaN is a bug, not the known failure, whatever the remedy.
-            row("near-wall", wall, "e", f64::NAN, "ok"),
+            row("near-wall", wall, "e", f64::NAN, "near"),
             row("near-wall", &fixed, "e", 0.5, "ok"),
+            // A failure without `near`, the plain estimate's warning, is
+            // an unflagged wrong answer, whatever the remedy.
+            row("near-wall", wall, "f", -100.0, "ok"),
+            row("near-wall", &fixed, "f", 0.5, "ok"),
         ];
         judge(&mut rows, 0.01);
         explain(&mut rows);
@@ -461,7 +547,7 @@ mod tests {
         assert_eq!(
             verdicts(&rows),
             [
-                Explained, Pass, Fail, Flagged, Fail, Fail, Fail, Fail, Fail, Pass
+                Explained, Pass, Fail, Flagged, Fail, Fail, Fail, Fail, Fail, Pass, Fail, Pass
             ]
         );
         let csv = String::from_utf8(summary_csv(&rows)).unwrap();
@@ -473,7 +559,7 @@ mod tests {
                 .starts_with("family,rows,pass,expected-flag,flagged,explained,FAIL,")
         );
         assert!(
-            lines.next().unwrap().starts_with("near-wall,10,2,0,1,1,6,"),
+            lines.next().unwrap().starts_with("near-wall,12,3,0,1,1,7,"),
             "{csv}"
         );
     }
