@@ -10,9 +10,10 @@ use crate::tally::{sidak_bound, zcheck};
 pub enum Verdict {
     /// Finite, no flag, and `|z|` within the Sidak bound.
     Pass,
-    /// The row carries its expected flag ([`ExpectedFlag`]), and nothing
-    /// else but the statistical checks' flags ([`SYMPTOMS`]), which excuses
-    /// it from the z test.
+    /// The row carries its expected flag ([`ExpectedFlag`]): exactly,
+    /// where that flag excuses the z test (a z that means nothing there),
+    /// or with no other flag but the batch checks' ([`SYMPTOMS`]) and `|z|`
+    /// within the Sidak bound, where the row stays z-tested.
     ExpectedFlag,
     /// Finite and `|z|` within the Sidak bound, but the diagnostics raise a
     /// flag that is not the row's expected one: reported, not passed.
@@ -49,24 +50,30 @@ impl Verdict {
     ];
 }
 
-/// The diagnostics flag a row may carry instead of passing its z test,
-/// and the physical reason it is expected there.
+/// The diagnostics flag a row is expected to carry, the physical reason it
+/// is expected there, and whether the row is still z-tested.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ExpectedFlag {
-    /// The checks the row must raise to be excused (`;`-separated, in the
-    /// order the flag string lists them).
+    /// The checks the row must raise (`;`-separated, in the order the flag
+    /// string lists them).
     pub flag: &'static str,
     /// Why that check must fire on that row.
     pub reason: &'static str,
+    /// `false`: the flag, alone and exactly, excuses the row from the z
+    /// test (the estimate provably misses its mean there, so its z means
+    /// nothing); `true`: the row is z-tested like any other, and the flag,
+    /// with no other but the batch checks' [`SYMPTOMS`], does not make it
+    /// `flagged`.
+    pub z_tested: bool,
 }
 
-/// Flags that may come with an expected flag without costing the row its
-/// excuse: the statistical checks of the batch means (`R`, `VOV`, `FOM`,
-/// `tail`) and `sparse`, symptoms of the cause the expected flag names
-/// (an estimate that misses, or rarely samples, what carries its mean has
-/// heavy-tailed batch means). Any other flag (`near` where it is not
-/// expected, `batches`, `enclosed`, `approx`, a reference's `ref:`) is not.
-pub const SYMPTOMS: [&str; 5] = ["R", "VOV", "FOM", "tail", "sparse"];
+/// Flags that may come with a z-tested row's expected flag: the batch
+/// checks (`R`, `VOV`, `FOM`, `tail`), which a heavy-tailed estimate of the
+/// cause the expected flag names raises on some runs and not others (the
+/// row's z test still guards its value). Any other flag (`sparse`, `near`
+/// where it is not expected, `batches`, `enclosed`, `approx`, a
+/// reference's `ref:`) is not.
+pub const SYMPTOMS: [&str; 4] = ["R", "VOV", "FOM", "tail"];
 
 /// The expected flag of a row of `family`, `case` and `point`, if any.
 ///
@@ -84,14 +91,14 @@ pub const SYMPTOMS: [&str; 5] = ["R", "VOV", "FOM", "tail", "sparse"];
 ///   is the check that exists to say so. The same point with
 ///   `near-radius=auto` is z-tested.
 /// - `near` on the plain local estimate at `plane 1 r=100` of the `sobolev`
-///   family: the planes lie 100 times closer than the light, so `near`
-///   fires there by geometry, whatever the run; the estimate's heavy tail
-///   (chains that cross 100 plane spacings) raises the batch checks on
+///   family, z-tested: the planes lie 100 times closer than the light, so
+///   `near` fires there by geometry, whatever the run; the estimate's heavy
+///   tail (chains that cross 100 plane spacings) raises the batch checks on
 ///   some runs (`R;VOV;tail;near`).
 /// - `sparse` on the split (`near-radius=auto`) at `plane 1 r=100` of the
-///   `sobolev` family: some of the near part's paths come within reach of
-///   the light's core, but fewer than 10 enter it, so the part of the
-///   light fetched there rests on few samples and the check says so (on
+///   `sobolev` family, z-tested: some of the near part's paths come within
+///   reach of the light's core, but fewer than 10 enter it, so the part of
+///   the light fetched there rests on few samples and the check says so (on
 ///   every case of the full matrix, and in 38 of 40 runs of 65,536 chains
 ///   at `rho1 rho2 = 0.9`, whose estimates agreed with the exact value:
 ///   mean z^2 0.83). README, "The far field between highly reflecting
@@ -107,16 +114,19 @@ pub fn expected_flag(family: &str, case: &str, point: &str) -> Option<ExpectedFl
                      the mean never land near the point (`sparse`), and the planes lie \
                      far closer than a tenth of the distance to the light, where the \
                      plain estimate is not to be trusted (`near`)",
+            z_tested: false,
         }),
         "sobolev" if plain && point == "plane 1 r=100" => Some(ExpectedFlag {
             flag: "near",
             reason: "the plain local estimate with the planes 100 times closer than \
                      the light, where it is not to be trusted (`near`, by geometry)",
+            z_tested: true,
         }),
         "sobolev" if auto && point == "plane 1 r=100" => Some(ExpectedFlag {
             flag: "sparse",
             reason: "the near part's paths reach the light's core but rarely enter it \
                      at r = 100 m: the light fetched there rests on few samples",
+            z_tested: true,
         }),
         _ => None,
     }
@@ -189,13 +199,20 @@ pub(super) fn explain(rows: &mut [StressRow]) {
     }
 }
 
-/// Whether row `r` carries its expected flag, with no other flag but the
-/// statistical checks' ([`SYMPTOMS`]), which excuses it from the z test.
+/// Whether row `r` carries exactly its expected flag where that excuses
+/// it from the z test.
 fn excused(r: &StressRow) -> bool {
+    r.expected.is_some_and(|e| !e.z_tested && r.flag == e.flag)
+}
+
+/// Whether z-tested row `r` carries its expected flag, with no other flag
+/// but the batch checks' ([`SYMPTOMS`]).
+fn carries_expected(r: &StressRow) -> bool {
     r.expected.is_some_and(|e| {
         let flags: Vec<&str> = r.flag.split(';').collect();
         let want: Vec<&str> = e.flag.split(';').collect();
-        want.iter().all(|w| flags.contains(w))
+        e.z_tested
+            && want.iter().all(|w| flags.contains(w))
             && flags
                 .iter()
                 .all(|f| want.contains(f) || SYMPTOMS.contains(f))
@@ -203,10 +220,12 @@ fn excused(r: &StressRow) -> bool {
 }
 
 /// Judge every row (module doc, "Verdicts"): finiteness; a failed check of
-/// the row's own stays `FAIL`; a row carrying exactly its expected flag is
-/// `expected-flag`; every other row is z-tested against the Sidak bound
-/// over the `m` z-tested rows: beyond it `FAIL` whatever the flags, within
-/// it `pass` when unflagged and `flagged` otherwise.
+/// the row's own stays `FAIL`; a row carrying exactly an expected flag that
+/// excuses the z test is `expected-flag`; every other row is z-tested
+/// against the Sidak bound over the `m` z-tested rows: beyond it `FAIL`
+/// whatever the flags, within it `pass` when unflagged, `expected-flag`
+/// with its z-tested expected flag (and only the batch checks' besides),
+/// and `flagged` otherwise.
 pub(super) fn judge(rows: &mut [StressRow], alpha: f64) {
     let m = rows.iter().filter(|r| r.batches > 0 && !excused(r)).count();
     for r in rows.iter_mut() {
@@ -236,13 +255,15 @@ pub(super) fn judge(rows: &mut [StressRow], alpha: f64) {
         };
         // What became of the expected flag, for the notes.
         let expected = match r.expected {
-            Some(e) if !excused(r) => format!(
+            Some(e) if !excused(r) && !carries_expected(r) => format!(
                 " (expected flag `{}` {}, so the row is z-tested)",
                 e.flag,
                 if r.flag == "ok" {
                     "absent"
+                } else if e.z_tested {
+                    "absent or with flags other than the batch checks'"
                 } else {
-                    "absent or with other flags"
+                    "not alone"
                 }
             ),
             _ => String::new(),
@@ -270,6 +291,18 @@ pub(super) fn judge(rows: &mut [StressRow], alpha: f64) {
                         if !expected.is_empty() {
                             r.note = note(r, format!("z within the bound{expected}"));
                         }
+                    } else if let (true, Some(e)) = (carries_expected(r), r.expected) {
+                        r.verdict = Verdict::ExpectedFlag;
+                        r.note = note(
+                            r,
+                            format!(
+                                "expected flag `{}`: {}; |z| = {:.2} within the bound {:.2}",
+                                e.flag,
+                                e.reason,
+                                z.abs(),
+                                r.bound
+                            ),
+                        );
                     } else {
                         r.verdict = Verdict::Flagged;
                         r.note = note(
@@ -440,8 +473,8 @@ mod tests {
             // 9: not finite.
             row("near-source", "c", "e", f64::NAN, "ok"),
             row("near-source", "c", "f", f64::INFINITY, "tail"),
-            // 11: the expected flag with the statistical checks' flags
-            // excuses the row; 12: part of the expected flag does not.
+            // 11: an excusing expected flag with the batch checks' flags
+            // does not excuse; 12: nor does part of it.
             row(
                 "sobolev",
                 "rho1rho2=0.99 h1=0.01",
@@ -450,8 +483,9 @@ mod tests {
                 "VOV;tail;sparse;near",
             ),
             row("sobolev", "rho1rho2=0.99 h1=0.001", far, -4e6, "VOV;near"),
-            // 13: `near` is expected at r = 100 (with symptoms), `sparse`
-            // on the split there, and neither elsewhere.
+            // 13: `near` is expected at r = 100, z-tested (with the batch
+            // checks' flags); 14: `sparse` on the split there, z-tested;
+            // 15: neither elsewhere.
             row(
                 "sobolev",
                 "rho1rho2=0.9 h1=0.5",
@@ -467,6 +501,22 @@ mod tests {
                 "sparse",
             ),
             row("sobolev", "rho1rho2=0.9 h1=0.5", "plane 1 r=0", 0.5, "near"),
+            // 16: a z-tested expected flag does not excuse a large z; 17:
+            // `sparse` is not a symptom that may come with `near`.
+            row(
+                "sobolev",
+                "rho1rho2=0.99 h1=0.5",
+                "plane 1 r=100",
+                -4e6,
+                "near",
+            ),
+            row(
+                "sobolev",
+                "rho1rho2=0.99 h1=0.01",
+                "plane 1 r=100",
+                -1.0,
+                "sparse;near",
+            ),
         ];
         judge(&mut rows, 0.01);
         use Verdict::*;
@@ -484,21 +534,24 @@ mod tests {
                 Fail,
                 Fail,
                 Fail,
-                ExpectedFlag,
+                Fail,
                 Fail,
                 ExpectedFlag,
                 ExpectedFlag,
+                Flagged,
+                Fail,
                 Flagged
             ]
         );
-        // Four excused rows: the others are the Sidak family.
-        let bound = sidak_bound(0.01, rows.len() - 4, Some(128));
+        // One excused row: the others are the Sidak family.
+        let bound = sidak_bound(0.01, rows.len() - 1, Some(128));
         assert!(rows.iter().all(|r| r.bound == bound), "{bound}");
         assert!(rows[1].note.contains("flags: VOV"), "{}", rows[1].note);
+        assert!(rows[5].note.contains("not alone"), "{}", rows[5].note);
         assert!(
-            rows[5].note.contains("with other flags"),
+            rows[14].note.contains("within the bound"),
             "{}",
-            rows[5].note
+            rows[14].note
         );
         assert!(rows[6].note.contains("absent"), "{}", rows[6].note);
     }
