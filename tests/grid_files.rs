@@ -286,6 +286,18 @@ fn bad_grid_keys() {
         assert!(e.starts_with(&format!("S.toml:{line}:")), "{key}: {e}");
         assert!(e.contains(msg), "{key}: {e}");
     }
+    // A negative offset under a two-sided surface (a shelf lit from below)
+    // is a place like any other.
+    let shelf = "[[surface]]\ntype = \"rectangle\"\nname = \"shelf\"\ncorner = [0.5, 0.5, 1.5]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nsides = \"both\"\nmaterial = { type = \"lambertian\", reflectance = 0.5 }\n[[grid]]\nname = \"under\"\nsurface = \"shelf\"\noffset = -0.2\n";
+    let g = one(shelf);
+    assert!(g.points.iter().all(|q| (q.p.z - 1.3).abs() < 1e-12));
+    // A rectangle named like a box face of the scene: which one is meant?
+    let extra = "[[surface]]\ntype = \"rectangle\"\nname = \"room.z_min\"\ncorner = [0, 0, 1]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nmaterial = { type = \"lambertian\", reflectance = 0.5 }\n[[grid]]\nname = \"a\"\nsurface = \"room.z_min\"\n";
+    let e = grids(extra).unwrap_err();
+    assert!(
+        e.contains("field `surface`") && e.contains("names both"),
+        "{e}"
+    );
     // Two grids of one name; a grid without a place.
     let extra = "[[grid]]\nname = \"a\"\nsurface = \"room.z_min\"\n[[grid]]\nname = \"a\"\nsurface = \"desk.z_max\"\n";
     let e = grids(extra).unwrap_err();

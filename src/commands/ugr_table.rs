@@ -123,7 +123,7 @@ pub fn ugr_table_command(a: &UgrTableArgs) -> anyhow::Result<()> {
     anyhow::ensure!(
         a.spacing.is_finite() && a.spacing > 0.0,
         "--spacing {}: must be a positive number",
-        a.spacing
+        crate::io::format_number(a.spacing)
     );
     // Below 0.05 H the grid grows as 1 / spacing^2 and the floor's offset
     // integral as 1 / spacing^4 (measured: 0.24 s at 0.25 H, 3.2 s at
@@ -131,7 +131,7 @@ pub fn ugr_table_command(a: &UgrTableArgs) -> anyhow::Result<()> {
     anyhow::ensure!(
         (MIN_SPACING..=2.0).contains(&a.spacing),
         "--spacing {}: the tabular method here covers spacings from {MIN_SPACING} H to 2 H",
-        a.spacing
+        crate::io::format_number(a.spacing)
     );
     let p = crate::io::photometry::read(&a.file)?;
     let shown = a.file.display();

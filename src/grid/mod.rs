@@ -163,10 +163,16 @@ fn compile(scene: &SceneDesc, g: &GridDesc, ctx: &SourceCtx) -> Result<Grid, Sce
         .map(|v| number(ctx, v, "offset", |_| true, "a finite length [m]"))
         .transpose()?
         .unwrap_or(0.0);
-    // A named surface's normal points to its lit side: a negative offset
-    // puts the grid behind it (below the floor, inside the desk).
+    // A one-sided named surface's normal points to its lit side: a
+    // negative offset puts the grid behind it (below the floor, inside the
+    // desk). A two-sided one (`sides = "both"`, a shelf) is lit on both.
     if let (Some(v), Some(s)) = (&g.offset, &g.surface)
         && offset < 0.0
+        && !scene.surface.iter().any(|d| {
+            let d = d.get_ref();
+            d.name.as_ref().is_some_and(|n| n.get_ref() == s.get_ref())
+                && d.sides.as_ref().is_some_and(|x| x.get_ref() == "both")
+        })
     {
         return Err(invalid(
             ctx,

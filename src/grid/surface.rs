@@ -194,6 +194,16 @@ pub(super) fn patch_of_surface(
     };
     let err = |m: String| invalid(ctx, name.span(), "surface", m);
     let found = named(wanted);
+    if !found.is_empty()
+        && let Some((base, face)) = wanted.rsplit_once('.')
+        && FACES.iter().any(|f| f.0 == face)
+        && named(base).iter().any(|b| b.kind.get_ref() == "box")
+    {
+        return Err(err(format!(
+            "`{wanted}` names both a surface and face `{face}` of box `{base}`: rename the \
+             surface (a `.` in a surface's name is read as a box face)"
+        )));
+    }
     if found.len() > 1 {
         return Err(err(format!(
             "{} surfaces are named `{wanted}`; a grid needs a unique name",
