@@ -112,6 +112,16 @@ fn sampled_direct(scene: &Scene, rec: &Receivers, batches: u64, seed: u64) -> Ve
         .collect()
 }
 
+/// Largest |z| of the sampled estimates `est` (mean, standard error) times
+/// `scale` against the exact values.
+fn scaled_max_z(est: &[(f64, f64)], exact: &[f64], scale: f64) -> f64 {
+    max_abs_z(
+        est.iter()
+            .zip(exact)
+            .map(|(&(m, se), &e)| zcheck::z_score(scale * m, scale * se, e)),
+    )
+}
+
 /// Sampled RIS direct light against the exact sum (closed forms at set-up)
 /// over 200 point and area sources, Sidak-corrected z over the points; the
 /// same estimates 2 % off, or with the `1/M` factor dropped, fail.
@@ -128,13 +138,7 @@ fn ris_direct_is_unbiased_against_exact_sum() {
     assert!(ris.direct().iter().all(|&d| d == 0.0), "all sampled");
     let est = sampled_direct(&ris_scene, &ris, 1000, 11);
     let bound = sidak(pts.len());
-    let z = |scale: f64| {
-        max_abs_z(
-            est.iter()
-                .zip(exact.direct())
-                .map(|(&(m, se), &e)| zcheck::z_score(scale * m, scale * se, e)),
-        )
-    };
+    let z = |scale: f64| scaled_max_z(&est, exact.direct(), scale);
     assert!(exact.direct().iter().all(|&e| e > 1.0), "every point lit");
     let z1 = z(1.0);
     assert!(zcheck::within(z1, bound), "max |z| = {z1} > {bound}");
@@ -192,13 +196,7 @@ fn ris_finds_a_weak_lamp_next_to_the_point() {
     assert!(weak / exact.direct()[0] > 0.03);
     let est = sampled_direct(&ris_scene, &ris, 300, 3);
     let bound = sidak(pts.len());
-    let z = |scale: f64| {
-        max_abs_z(
-            est.iter()
-                .zip(exact.direct())
-                .map(|(&(m, se), &e)| zcheck::z_score(scale * m, scale * se, e)),
-        )
-    };
+    let z = |scale: f64| scaled_max_z(&est, exact.direct(), scale);
     let z1 = z(1.0);
     assert!(
         zcheck::within(z1, bound),

@@ -378,6 +378,37 @@ pub fn cos_bound(x: DVec3, n: DVec3, c: DVec3, r: f64) -> f64 {
     (ct * ca + st * sa).max(0.0)
 }
 
+/// For tests: `count` picks at the receiver (`x`, `n`) from a stream of
+/// `seed`, each kept source `k` estimated as `value(k) W` with the weight
+/// scaled by `bias`: the z of their mean against `exact`, and the relative
+/// standard error.
+#[cfg(test)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn pick_z(
+    arr: &LightArray,
+    lights: &[Light],
+    (x, n): (DVec3, DVec3),
+    hot: Option<Hot<'_>>,
+    (seed, count): (u64, u64),
+    bias: f64,
+    value: &dyn Fn(u32) -> f64,
+    exact: f64,
+) -> (f64, f64) {
+    let mut rng = Philox4x32::new(seed, 0);
+    let (mut s, mut s2) = (0.0, 0.0);
+    for _ in 0..count {
+        let v = arr
+            .pick_with(lights, x, Some(n), hot, &mut rng, bias)
+            .map_or(0.0, |p| value(p.k) * p.w);
+        s += v;
+        s2 += v * v;
+    }
+    let m = count as f64;
+    let mean = s / m;
+    let se = ((s2 / m - mean * mean) / (m - 1.0)).sqrt();
+    ((mean - exact) / se, se / exact)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -402,20 +433,18 @@ mod tests {
         let arr = LightArray::new(&lights, (0..200).collect(), 8).unwrap();
         let (x, n) = (DVec3::new(0.3, -0.2, 0.0), DVec3::Z);
         let exact: f64 = lights.iter().map(|l| l.direct_illuminance(x, n)).sum();
+        let value = |k: u32| lights[k as usize].direct_illuminance(x, n);
         let est = |bias: f64| {
-            let mut rng = Philox4x32::new(7, 0);
-            let (mut s, mut s2) = (0.0, 0.0);
-            let n_s = 200_000;
-            for _ in 0..n_s {
-                let v = arr
-                    .pick_with(&lights, x, Some(n), None, &mut rng, bias)
-                    .map_or(0.0, |p| lights[p.k as usize].direct_illuminance(x, n) * p.w);
-                s += v;
-                s2 += v * v;
-            }
-            let mean = s / n_s as f64;
-            let se = ((s2 / n_s as f64 - mean * mean) / (n_s as f64 - 1.0)).sqrt();
-            ((mean - exact) / se, se / exact)
+            pick_z(
+                &arr,
+                &lights,
+                (x, n),
+                None,
+                (7, 200_000),
+                bias,
+                &value,
+                exact,
+            )
         };
         let (z, r) = est(1.0);
         assert!(z.abs() < 4.0, "z = {z}");

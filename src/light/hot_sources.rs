@@ -508,20 +508,20 @@ mod tests {
         assert!(power > 300.0, "power density: {power}");
         assert!(mixed < 2.0, "mixture: {mixed}");
         // The picks themselves: unbiased, and a 2 % error is resolved.
+        let value = |k: u32| t[k as usize];
         let est = |bias: f64| {
-            let mut rng = Philox4x32::new(5, 0);
-            let (mut s, mut s2) = (0.0, 0.0);
-            let m = 100_000;
-            for _ in 0..m {
-                let v = array
-                    .pick_with(&lights, x, Some(n), Some(h), &mut rng, bias)
-                    .map_or(0.0, |p| t[p.k as usize] * p.w);
-                s += v;
-                s2 += v * v;
-            }
-            let mean = s / m as f64;
-            let se = ((s2 / m as f64 - mean * mean) / (m as f64 - 1.0)).sqrt();
-            (mean - total) / se
+            let at = (x, n);
+            super::super::array::pick_z(
+                &array,
+                &lights,
+                at,
+                Some(h),
+                (5, 100_000),
+                bias,
+                &value,
+                total,
+            )
+            .0
         };
         let z = est(1.0);
         assert!(z.abs() < 4.0, "z = {z}");
