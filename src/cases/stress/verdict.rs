@@ -99,9 +99,9 @@ pub const SYMPTOMS: [&str; 4] = ["R", "VOV", "FOM", "tail"];
 ///   `sobolev` family, z-tested: some of the near part's paths come within
 ///   reach of the light's core, but fewer than 10 enter it, so the part of
 ///   the light fetched there rests on few samples and the check says so (on
-///   every case of the full matrix, and in 38 of 40 runs of 65,536 chains
-///   at `rho1 rho2 = 0.9`, whose estimates agreed with the exact value:
-///   mean z^2 0.83). README, "The far field between highly reflecting
+///   every case of the full matrix, and in 20 runs of 65,536 chains at
+///   `rho1 rho2 = 0.9` at 38 of their 40 points at r = 100 and 70.7, whose
+///   estimates agreed with the exact value: mean z^2 0.83). README, "The far field between highly reflecting
 ///   surfaces": at r = 100 m no setting gives a precise, unflagged estimate
 ///   in seconds.
 pub fn expected_flag(family: &str, case: &str, point: &str) -> Option<ExpectedFlag> {
