@@ -211,7 +211,7 @@ fn rectangle_and_road() {
 /// Bad keys get the file, the line and the field.
 #[test]
 fn bad_grid_keys() {
-    let cases: [(&str, &str, &str); 13] = [
+    let cases: [(&str, &str, &str); 14] = [
         (
             "[[grid]]\nname = \"a\"\nsurface = \"room.z_min\"\nspacng = 1\n",
             "spacng",
@@ -261,6 +261,12 @@ fn bad_grid_keys() {
         ),
         (
             "[[grid]]\nname = \"a\"\nsurface = \"sofa\"\n",
+            "surface",
+            "no surface named `sofa`",
+        ),
+        // The surface's own error comes before the offset's.
+        (
+            "[[grid]]\nname = \"a\"\nsurface = \"sofa\"\noffset = -1\n",
             "surface",
             "no surface named `sofa`",
         ),

@@ -161,8 +161,6 @@ fn quick_stress_matrix_passes_its_z_tests_and_fails_only_where_known() {
                 assert!(zcheck::within(z, bound), "{what}: |z| = {z} > {bound}");
                 assert_eq!(r.flag == "ok", r.verdict == Verdict::Pass, "{what}");
             }
-            // The expected flag's checks all raised, and besides them only
-            // the statistical checks' symptoms.
             // Exactly an expected flag that excuses the z test; or a
             // z-tested one, with nothing else but the batch checks' flags
             // (listed here, not taken from the library), within the bound.

@@ -163,28 +163,6 @@ fn compile(scene: &SceneDesc, g: &GridDesc, ctx: &SourceCtx) -> Result<Grid, Sce
         .map(|v| number(ctx, v, "offset", |_| true, "a finite length [m]"))
         .transpose()?
         .unwrap_or(0.0);
-    // A one-sided named surface's normal points to its lit side: a
-    // negative offset puts the grid behind it (below the floor, inside the
-    // desk). A two-sided one (`sides = "both"`, a shelf) is lit on both.
-    if let (Some(v), Some(s)) = (&g.offset, &g.surface)
-        && offset < 0.0
-        && !scene.surface.iter().any(|d| {
-            let d = d.get_ref();
-            d.name.as_ref().is_some_and(|n| n.get_ref() == s.get_ref())
-                && d.sides.as_ref().is_some_and(|x| x.get_ref() == "both")
-        })
-    {
-        return Err(invalid(
-            ctx,
-            v.span(),
-            "offset",
-            format!(
-                "{offset} m puts the grid behind `{}`, on the side its normal does not face: \
-                 give an offset >= 0 (along the normal, into the lit side)",
-                s.get_ref()
-            ),
-        ));
-    }
     let receiver = match &g.receiver {
         Some(r) if !RECEIVERS.contains(&r.get_ref().as_str()) => {
             return Err(invalid(
@@ -323,6 +301,38 @@ fn refuse<T>(
     }
 }
 
+/// Refuse a negative `offset` on the named surface `s` (found, so the
+/// surface's own errors come first) unless it is two-sided: a one-sided
+/// surface's normal points to its lit side, and a negative offset puts the
+/// grid behind it (below the floor, inside the desk); a two-sided one
+/// (`sides = "both"`, a shelf) is lit on both.
+fn behind_surface(
+    scene: &SceneDesc,
+    g: &GridDesc,
+    s: &Spanned<String>,
+    offset: f64,
+    ctx: &SourceCtx,
+) -> Result<(), SceneError> {
+    let two_sided = scene.surface.iter().any(|d| {
+        let d = d.get_ref();
+        d.name.as_ref().is_some_and(|n| n.get_ref() == s.get_ref())
+            && d.sides.as_ref().is_some_and(|x| x.get_ref() == "both")
+    });
+    match &g.offset {
+        Some(v) if offset < 0.0 && !two_sided => Err(invalid(
+            ctx,
+            v.span(),
+            "offset",
+            format!(
+                "{offset} m puts the grid behind `{}`, on the side its normal does not face: \
+                 give an offset >= 0 (along the normal, into the lit side)",
+                s.get_ref()
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// A grid over a rectangle or a named surface (EN 12464-1 cells).
 fn area_grid(
     scene: &SceneDesc,
@@ -346,7 +356,9 @@ fn area_grid(
                     "give either `surface` or `corner`, `edge1`, `edge2`",
                 )?;
             }
-            surface::patch_of_surface(scene, s, ctx)?
+            let patch = surface::patch_of_surface(scene, s, ctx)?;
+            behind_surface(scene, g, s, offset, ctx)?;
+            patch
         }
         (None, Some(_)) => surface::patch_of_edges(g, ctx, "grid")?,
         (Some(s), Some(_)) => {

@@ -24,7 +24,8 @@
 //! their rows z-tested: such a row within its bound, carrying its expected
 //! flag and nothing else but the batch checks' ([`SYMPTOMS`]: `R`, `VOV`,
 //! `FOM`, `tail`, which a heavy-tailed estimate raises on some runs and
-//! not others), is `expected-flag` rather than `flagged`. Every other row, flagged or not, is z-tested: with `m` such rows,
+//! not others), is `expected-flag` rather than `flagged`. Every row not
+//! excused, flagged or not, is z-tested: with `m` such rows,
 //! each row's bound is the Sidak bound at family-wise rate `alpha` over `m`
 //! tests (Student t with the row's batches minus one degrees of freedom;
 //! for a Monte Carlo reference the fewer batches of the two). The
@@ -49,8 +50,10 @@
 //!   (the check that tells the user not to trust the plain estimate there)
 //!   and whose remedy row, the same point with the near/far split (a case
 //!   label extended by `near-radius=...`), is `pass` ("Known failures"
-//!   below); a remedy that is itself flagged explains nothing, and a
-//!   failure without `near` is an unflagged wrong answer, `FAIL`;
+//!   below); a remedy that is itself flagged explains nothing, a failure
+//!   without `near` of its own (a reference's does not count) is an
+//!   unflagged wrong answer, `FAIL`, and so is the failure of a row whose
+//!   z-tested expected flag says it is meant to be right (r = 100);
 //! - `FAIL`: a number that is not finite (estimate, error, reference or
 //!   z, where a zero error with an inexact value is an infinite z, see
 //!   [`zcheck`](crate::tally::zcheck)), an error or a panic while the case is built or run, a

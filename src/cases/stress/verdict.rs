@@ -149,7 +149,8 @@ fn known_failure(family: &str) -> &'static str {
 
 /// Mark `explained` every `FAIL` row of the plain local estimate (a run
 /// that ran, with finite numbers: a failed z test, not an error or a NaN)
-/// whose remedy row passes: the same family and
+/// that carries `near` itself (not its reference) and has no z-tested
+/// expected flag, whose remedy row passes: the same family and
 /// point in a case that extends the row's case label by a `near-radius=`
 /// label, with verdict `pass` (a flagged or failed remedy explains nothing).
 pub(super) fn explain(rows: &mut [StressRow]) {
@@ -172,11 +173,20 @@ pub(super) fn explain(rows: &mut [StressRow]) {
             .chain(r.reference)
             .chain(r.z)
             .all(f64::is_finite);
+        // The estimate's own flags: those before the reference's (`ref:`).
+        let own_near = r
+            .flag
+            .split(';')
+            .take_while(|f| !f.starts_with("ref:"))
+            .any(|f| f == "near");
+        // A row whose expected flag keeps it z-tested is meant to be right:
+        // its failure is a failure, whatever its remedy does.
         if r.verdict != Verdict::Fail
             || r.case.contains("near-radius=")
             || r.batches == 0
             || !finite
-            || !r.flag.split(';').any(|f| f == "near")
+            || !own_near
+            || r.expected.is_some_and(|e| e.z_tested)
         {
             continue;
         }
@@ -590,9 +600,28 @@ mod tests {
             row("near-wall", wall, "e", f64::NAN, "near"),
             row("near-wall", &fixed, "e", 0.5, "ok"),
             // A failure without `near`, the plain estimate's warning, is
-            // an unflagged wrong answer, whatever the remedy.
+            // an unflagged wrong answer, whatever the remedy; so is one
+            // whose `near` is its reference's.
             row("near-wall", wall, "f", -100.0, "ok"),
             row("near-wall", &fixed, "f", 0.5, "ok"),
+            row("near-wall", wall, "g", -100.0, "ref:R;near"),
+            row("near-wall", &fixed, "g", 0.5, "ok"),
+            // A plain row whose `near` is expected and z-tested (r = 100)
+            // is meant to be right: a passing split explains nothing.
+            row(
+                "sobolev",
+                "rho1rho2=0.9 h1=0.5",
+                "plane 1 r=100",
+                -50.0,
+                "near",
+            ),
+            row(
+                "sobolev",
+                "rho1rho2=0.9 h1=0.5 near-radius=auto",
+                "plane 1 r=100",
+                0.5,
+                "ok",
+            ),
         ];
         judge(&mut rows, 0.01);
         explain(&mut rows);
@@ -600,7 +629,8 @@ mod tests {
         assert_eq!(
             verdicts(&rows),
             [
-                Explained, Pass, Fail, Flagged, Fail, Fail, Fail, Fail, Fail, Pass, Fail, Pass
+                Explained, Pass, Fail, Flagged, Fail, Fail, Fail, Fail, Fail, Pass, Fail, Pass,
+                Fail, Pass, Fail, Pass
             ]
         );
         let csv = String::from_utf8(summary_csv(&rows)).unwrap();
@@ -612,7 +642,7 @@ mod tests {
                 .starts_with("family,rows,pass,expected-flag,flagged,explained,FAIL,")
         );
         assert!(
-            lines.next().unwrap().starts_with("near-wall,12,3,0,1,1,7,"),
+            lines.next().unwrap().starts_with("near-wall,14,4,0,1,1,8,"),
             "{csv}"
         );
     }
