@@ -278,6 +278,7 @@ fn scene_cases() -> Vec<Case> {
         surface("glass: transmittance missing", "rectangle", "corner = [10, 10, 3]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nmaterial = { type = \"glass\" }", Error("field `transmittance`: missing field")),
         surface("glass on a sphere", "sphere", "center = [10, 10, 3]\nradius = 1\nmaterial = { type = \"glass\", transmittance = 0.8 }", Error("only `rectangle` and `disc` surfaces take it")),
         surface("glass pane out of the way", "rectangle", "corner = [10, 10, 3]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nmaterial = { type = \"glass\", transmittance = 0.8 }", Accept("E_avg")),
+        surface("glass pane through the lamp", "rectangle", "corner = [-0.5, -0.5, 2.5]\nedge1 = [1, 0, 0]\nedge2 = [0, 1, 0]\nmaterial = { type = \"glass\", transmittance = 0.8 }", Warn("WARNING: lamp lies in the plane of glass pane")),
         surface("plane: normal zero", "plane", &format!("point = [0, 0, 0]\nnormal = [0, 0, 0]\n{LAMB}"), Error("field `normal`: direction must have a non-zero length")),
         surface("plane: normal with nan", "plane", &format!("point = [0, 0, 0]\nnormal = [nan, 0, 1]\n{LAMB}"), Error("field `normal`")),
         // (Any non-zero length is a direction: scaled before it is normalised.)

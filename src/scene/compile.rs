@@ -233,6 +233,21 @@ pub fn compile(desc: &SceneDesc, ctx: &SourceCtx) -> Result<Scene, SceneError> {
                 "WARNING: {name} is sealed inside a solid: most rays from it meet the back of a surface, so its light hardly reaches a point in front of one"
             ));
         }
+        // A light in a pane's plane: a ray that starts on a pane never
+        // meets it, so the pane dims its light on neither side.
+        let p = scene.lights[k].position();
+        if scene.lights[k].is_point_like()
+            && let Some(pane) = scene
+                .panes()
+                .iter()
+                .find(|g| g.plane().side(p) == 0 && g.contains(p))
+        {
+            scene.notes.push(format!(
+                "WARNING: {name} lies in the plane of glass pane `{}`: its light passes the pane \
+                 undimmed on both sides (neither side is behind it); move it off the pane",
+                scene.surfaces[pane.surface as usize].name
+            ));
+        }
         let cut = scene.luminous_shape_cut(k);
         if cut >= 0.01 && matches!(scene.lights[k], Light::Sphere { .. }) {
             scene.notes.push(format!(
