@@ -313,11 +313,9 @@ fn behind_surface(
     offset: f64,
     ctx: &SourceCtx,
 ) -> Result<(), SceneError> {
-    let two_sided = scene.surface.iter().any(|d| {
-        let d = d.get_ref();
-        d.name.as_ref().is_some_and(|n| n.get_ref() == s.get_ref())
-            && d.sides.as_ref().is_some_and(|x| x.get_ref() == "both")
-    });
+    let two_sided = surface::named(scene, s.get_ref())
+        .iter()
+        .any(|d| d.sides.as_ref().is_some_and(|x| x.get_ref() == "both"));
     match &g.offset {
         Some(v) if offset < 0.0 && !two_sided => Err(invalid(
             ctx,

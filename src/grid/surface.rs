@@ -175,6 +175,16 @@ const FACES: [(&str, usize, usize); 6] = [
     ("z_max", 2, 1),
 ];
 
+/// The surfaces of `scene` named `n`.
+pub(super) fn named<'a>(scene: &'a SceneDesc, n: &str) -> Vec<&'a SurfaceDesc> {
+    scene
+        .surface
+        .iter()
+        .map(|s| s.get_ref())
+        .filter(|s| s.name.as_ref().is_some_and(|m| m.get_ref() == n))
+        .collect()
+}
+
 /// The patch of a named surface: a rectangle or disc by its name, a box
 /// face as `"BOX.FACE"`. Its normal is the surface's reflecting side (the
 /// front of a two-sided one).
@@ -184,14 +194,7 @@ pub(super) fn patch_of_surface(
     ctx: &SourceCtx,
 ) -> Result<Patch, SceneError> {
     let wanted = name.get_ref().as_str();
-    let named = |n: &str| -> Vec<&SurfaceDesc> {
-        scene
-            .surface
-            .iter()
-            .map(|s| s.get_ref())
-            .filter(|s| s.name.as_ref().is_some_and(|m| m.get_ref() == n))
-            .collect()
-    };
+    let named = |n: &str| named(scene, n);
     let err = |m: String| invalid(ctx, name.span(), "surface", m);
     let found = named(wanted);
     if !found.is_empty()
